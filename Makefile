@@ -1,0 +1,28 @@
+# motionlab: two commands do everything (`make course`, `make test`); `make bench` measures speed.
+# Each target bootstraps .venv (editable install with pinned dependencies) when it is missing or
+# when pyproject.toml changed since the last install.
+PYTHON ?= python3
+VENV   := .venv
+BIN    := $(VENV)/bin
+STAMP  := $(VENV)/.motionlab-installed
+
+.PHONY: course test bench clean-build setup
+
+setup: $(STAMP)
+
+$(STAMP): pyproject.toml
+	@test -x $(BIN)/python || $(PYTHON) -m venv $(VENV)
+	$(BIN)/python -m pip install --quiet -e .
+	@touch $@
+
+course: $(STAMP)
+	MOTIONLAB_PROFILE=full $(BIN)/python -m motionlab.course
+
+test: $(STAMP)
+	MOTIONLAB_PROFILE=quick $(BIN)/python -m pytest
+
+bench: $(STAMP)
+	$(BIN)/python -m motionlab.bench
+
+clean-build:
+	rm -rf build
