@@ -1,0 +1,51 @@
+import numpy as np
+import pytest
+import torch
+
+from motionlab import config
+
+
+def test_profile_defaults_to_full(monkeypatch):
+    monkeypatch.delenv("MOTIONLAB_PROFILE", raising=False)
+    assert config.profile() == "full"
+    assert config.choose(quick=1, full=2) == 2
+
+
+def test_quick_profile_is_case_insensitive(monkeypatch):
+    monkeypatch.setenv("MOTIONLAB_PROFILE", " Quick ")
+    assert config.is_quick()
+    assert config.choose(quick=1, full=2) == 1
+    assert config.course_dir().name == "course-quick"
+
+
+def test_unknown_profile_is_rejected(monkeypatch):
+    monkeypatch.setenv("MOTIONLAB_PROFILE", "fast")
+    with pytest.raises(ValueError, match="MOTIONLAB_PROFILE"):
+        config.profile()
+
+
+def test_build_dir_override(monkeypatch, tmp_path):
+    monkeypatch.setenv("MOTIONLAB_BUILD", str(tmp_path))
+    assert config.checkpoint_dir() == tmp_path / "checkpoints"
+
+
+def test_seed_everything_is_reproducible():
+    gen = config.seed_everything(7)
+    a = (torch.rand(3, generator=gen), torch.rand(3), np.random.rand(3))
+    gen = config.seed_everything(7)
+    b = (torch.rand(3, generator=gen), torch.rand(3), np.random.rand(3))
+    for x, y in zip(a, b):
+        assert np.array_equal(np.asarray(x), np.asarray(y))
+
+
+@pytest.mark.parametrize("bad", [-1, 1.5, "3"])
+def test_seed_must_be_a_non_negative_integer(bad):
+    with pytest.raises(ValueError, match="seed"):
+        config.seed_everything(bad)
+
+
+def test_set_threads():
+    assert config.set_threads(1) == 1
+    assert torch.get_num_threads() == 1
+    with pytest.raises(ValueError, match="thread"):
+        config.set_threads(0)
