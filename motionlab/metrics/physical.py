@@ -1,0 +1,171 @@
+"""Physical plausibility of joint-position motion: foot skating and bone-length error.
+
+Positions are world coordinates in metres, ``(..., T, J, 3)``, z up (so "horizontal" means x and y),
+sampled at ``fps`` frames per second.
+
+**Foot skating**: the mean horizontal speed (m/s) of the foot joints while they are in contact with the
+ground. A foot frame interval ``t → t+1`` counts when the foot is in contact at both ends. Real planted
+feet barely move, so lower is better. When contacts are not given they are inferred per frame: the foot
+is low (less than ``height_threshold`` above the lowest height that joint reaches in the clip) and slow
+(horizontal speed, by central differences, below ``speed_threshold``). Heights are relative to each
+joint's own minimum so that ankles, which never touch the floor, are handled like toes.
+
+**Bone-length error**: the mean absolute difference, over frames and bones, between the distances of each
+joint to its parent and the skeleton's reference bone lengths. Rigid bones give 0.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+import numpy as np
+
+from motionlab.metrics._inputs import ArrayLike, as_float_array, check_positive
+
+#: Foot joints of the default 22-joint skeleton: left/right ankle (7, 8) and left/right foot (10, 11).
+FOOT_JOINTS = (7, 8, 10, 11)
+
+
+def _positions(positions: ArrayLike, func: str, min_frames: int = 1) -> np.ndarray:
+    x = as_float_array(positions, "positions", func, min_ndim=3, layout="(..., T, J, 3)")
+    if x.shape[-1] != 3:
+        raise ValueError(f"{func}: positions must end in 3 coordinates (x, y, z), got shape {x.shape}")
+    if x.shape[-3] < min_frames:
+        raise ValueError(f"{func}: positions needs at least {min_frames} frames, got {x.shape[-3]}")
+    return x
+
+
+def _foot_indices(feet: Sequence[int], n_joints: int, func: str) -> list[int]:
+    indices = [int(j) for j in feet]
+    if not indices or len(set(indices)) != len(indices) or min(indices) < 0 or max(indices) >= n_joints:
+        raise ValueError(f"{func}: feet must be distinct joint indices in [0, {n_joints}), got {list(feet)}")
+    return indices
+
+
+def infer_foot_contacts(
+    positions: ArrayLike,
+    *,
+    fps: float = 30.0,
+    height_threshold: float = 0.05,
+    speed_threshold: float = 1.0,
+    feet: Sequence[int] = FOOT_JOINTS,
+) -> np.ndarray:
+    """Per-frame contact flags of the foot joints, ``(..., T, F)`` booleans (``F = len(feet)``).
+
+    A foot is in contact on a frame when its height above its own lowest point in the clip is below
+    ``height_threshold`` (m) and its horizontal speed (central differences) is below ``speed_threshold`` (m/s).
+    """
+    func = "infer_foot_contacts"
+    x = _positions(positions, func, min_frames=2)
+    indices = _foot_indices(feet, x.shape[-2], func)
+    return _contacts(x, indices, check_positive(fps, "fps", func), height_threshold, speed_threshold, func)
+
+
+def _contacts(
+    x: np.ndarray, feet: list[int], fps: float, height_threshold: float, speed_threshold: float, func: str
+) -> np.ndarray:
+    """Contact flags ``(..., T, F)`` of the joints ``feet`` in positions ``x`` ``(..., T, J, 3)``."""
+    max_height = check_positive(height_threshold, "height_threshold", func)
+    max_speed = check_positive(speed_threshold, "speed_threshold", func)
+    foot = x[..., feet, :]
+    height = foot[..., 2] - foot[..., 2].min(axis=-2, keepdims=True)
+    speed = np.linalg.norm(np.gradient(foot[..., :2], axis=-3), axis=-1) * fps
+    return (height < max_height) & (speed < max_speed)
+
+
+def foot_skating(
+    positions: ArrayLike,
+    contacts: ArrayLike | None = None,
+    *,
+    fps: float = 30.0,
+    height_threshold: float = 0.05,
+    speed_threshold: float = 1.0,
+    feet: Sequence[int] = FOOT_JOINTS,
+) -> float:
+    """Mean horizontal speed (m/s) of the foot joints over frame intervals where the foot is planted.
+
+    Args:
+        positions: joint positions ``(..., T, J, 3)``, z up, metres.
+        contacts: per-frame contact flags ``(..., T, F)`` for the joints in ``feet`` (booleans or 0/1);
+            ``None`` infers them with :func:`infer_foot_contacts` and the thresholds below.
+        fps: frame rate.
+        height_threshold, speed_threshold: contact inference thresholds (m, m/s); unused with ``contacts``.
+        feet: the foot joints (default :data:`FOOT_JOINTS`, the default skeleton's ankles and feet).
+
+    Raises:
+        ValueError: when no foot is in contact on two consecutive frames (the metric is undefined).
+    """
+    func = "foot_skating"
+    x = _positions(positions, func, min_frames=2)
+    indices = _foot_indices(feet, x.shape[-2], func)
+    rate = check_positive(fps, "fps", func)
+    if contacts is None:
+        planted = _contacts(x, indices, rate, height_threshold, speed_threshold, func)
+    else:
+        flags = as_float_array(contacts, "contacts", func, ndim=x.ndim - 1, layout="(..., T, F)")
+        expected = x.shape[:-2] + (len(indices),)
+        if flags.shape != expected:
+            raise ValueError(f"{func}: contacts must have shape {expected} (frames x feet), got {flags.shape}")
+        if not np.isin(flags, (0.0, 1.0)).all():
+            raise ValueError(f"{func}: contacts must be booleans or 0/1")
+        planted = flags.astype(bool)
+    both_ends = planted[..., 1:, :] & planted[..., :-1, :]
+    if not both_ends.any():
+        raise ValueError(f"{func}: no foot is in contact on two consecutive frames, so there is nothing to measure")
+    horizontal = x[..., indices, :2]
+    speed = np.linalg.norm(np.diff(horizontal, axis=-3), axis=-1) * rate
+    return float(speed[both_ends].mean())
+
+
+def _parents(parents: ArrayLike | Sequence[int], n_joints: int, func: str) -> np.ndarray:
+    p = np.asarray(parents)
+    if p.ndim != 1 or p.shape[0] != n_joints or p.dtype.kind not in "iu":
+        raise ValueError(f"{func}: parents must be {n_joints} integers (one per joint), got {p.tolist()}")
+    joints = np.arange(n_joints)
+    if (p < -1).any() or (p >= n_joints).any() or (p == joints).any() or not (p == -1).any():
+        raise ValueError(f"{func}: parents must lie in [-1, {n_joints}), name no joint as its own parent, "
+                         f"and have a root (-1); got {p.tolist()}")
+    return p
+
+
+def _bone_lengths(positions: ArrayLike, parents: ArrayLike | Sequence[int], func: str) -> np.ndarray:
+    x = as_float_array(positions, "positions", func, min_ndim=2, layout="(..., J, 3)")
+    if x.shape[-1] != 3:
+        raise ValueError(f"{func}: positions must end in 3 coordinates, got shape {x.shape}")
+    p = _parents(parents, x.shape[-2], func)
+    children = np.flatnonzero(p >= 0)
+    return np.linalg.norm(x[..., children, :] - x[..., p[children], :], axis=-1)
+
+
+def bone_lengths(positions: ArrayLike, parents: ArrayLike | Sequence[int]) -> np.ndarray:
+    """Distance of every non-root joint to its parent, ``(..., B)``, non-root joints in joint order.
+
+    Args:
+        positions: joint positions ``(..., J, 3)``.
+        parents: parent index of each joint ``(J,)``, ``-1`` for roots.
+    """
+    return _bone_lengths(positions, parents, "bone_lengths")
+
+
+def bone_length_error(
+    positions: ArrayLike, parents: ArrayLike | Sequence[int], reference_offsets_or_lengths: ArrayLike
+) -> float:
+    """Mean absolute deviation (m) of the bone lengths in ``positions`` from the reference skeleton.
+
+    Args:
+        positions: joint positions ``(..., J, 3)``.
+        parents: parent index of each joint ``(J,)``, ``-1`` for roots.
+        reference_offsets_or_lengths: either rest offsets ``(J, 3)`` of each joint from its parent, or bone
+            lengths ``(J,)`` indexed by child joint. Root entries are ignored.
+    """
+    func = "bone_length_error"
+    measured = _bone_lengths(positions, parents, func)
+    n_joints = len(parents)
+    ref = as_float_array(reference_offsets_or_lengths, "reference_offsets_or_lengths", func, min_ndim=1)
+    if ref.shape == (n_joints, 3):
+        ref = np.linalg.norm(ref, axis=-1)
+    elif ref.shape != (n_joints,):
+        raise ValueError(f"{func}: reference_offsets_or_lengths must be offsets ({n_joints}, 3) or lengths "
+                         f"({n_joints},), got {ref.shape}")
+    reference = ref[np.asarray(parents) >= 0]
+    return float(np.abs(measured - reference).mean())
