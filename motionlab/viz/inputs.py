@@ -1,0 +1,87 @@
+"""Input checks for the plotting functions: positions and parent lists, as NumPy, with clear errors.
+
+Every plotting function accepts NumPy arrays or torch tensors (any device, with or without grad) and
+raises ``ValueError`` naming the function, the argument and the shape it got, for example
+``animate: motion 1 must have shape (T, 22, 3), got (30, 21, 3)``.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from typing import Union
+
+import numpy as np
+import torch
+
+ArrayLike = Union[np.ndarray, torch.Tensor]
+"""Joint positions as a NumPy array or a torch tensor."""
+
+
+def to_numpy(x: ArrayLike | Sequence, name: str, func: str) -> np.ndarray:
+    """``x`` as a float64 NumPy array; rejects non-numeric, ragged and non-finite input."""
+    if isinstance(x, torch.Tensor):
+        array = x.detach().cpu().to(torch.float64).numpy()
+    else:
+        try:
+            array = np.asarray(x, dtype=np.float64)
+        except (TypeError, ValueError) as exc:
+            raise ValueError(f"{func}: {name} is not a numeric array ({exc})") from exc
+    if not np.isfinite(array).all():
+        raise ValueError(f"{func}: {name} contains NaN or infinite values")
+    return array
+
+
+def as_sequence(positions: ArrayLike, name: str, func: str) -> np.ndarray:
+    """Positions ``(T, J, 3)`` or one pose ``(J, 3)`` as a ``(T, J, 3)`` array (T >= 1, J >= 1)."""
+    array = to_numpy(positions, name, func)
+    if array.ndim == 2:
+        array = array[None]
+    if array.ndim != 3 or array.shape[-1] != 3 or array.shape[0] == 0 or array.shape[1] == 0:
+        raise ValueError(f"{func}: {name} must have shape (T, J, 3) or (J, 3), got {tuple(np.shape(positions))}")
+    return array
+
+
+def as_pose(pose: ArrayLike, name: str, func: str) -> np.ndarray:
+    """One pose ``(J, 3)`` (J >= 1)."""
+    array = to_numpy(pose, name, func)
+    if array.ndim != 2 or array.shape[-1] != 3 or array.shape[0] == 0:
+        raise ValueError(f"{func}: {name} must have shape (J, 3) (one pose; use filmstrip or animate for "
+                         f"a sequence), got {tuple(array.shape)}")
+    return array
+
+
+def as_sequence_list(motions: ArrayLike | Sequence[ArrayLike], func: str) -> list[np.ndarray]:
+    """Several motions: a list of ``(T_i, J, 3)``, one ``(N, T, J, 3)`` array, or one ``(T, J, 3)`` motion.
+
+    All motions must have the same joint count J; their lengths may differ.
+    """
+    if isinstance(motions, (np.ndarray, torch.Tensor)):
+        ndim = motions.ndim
+        if ndim == 4:
+            items = list(motions)
+        elif ndim in (2, 3):
+            items = [motions]
+        else:
+            raise ValueError(f"{func}: expected positions (T, J, 3), (N, T, J, 3) or a list of (T, J, 3), "
+                             f"got shape {tuple(motions.shape)}")
+    else:
+        items = list(motions)
+    if not items:
+        raise ValueError(f"{func}: no motions given")
+    out = [as_sequence(m, f"motion {i}", func) for i, m in enumerate(items)]
+    joints = out[0].shape[1]
+    for i, m in enumerate(out):
+        if m.shape[1] != joints:
+            raise ValueError(f"{func}: motion {i} must have shape (T, {joints}, 3) like motion 0, got {m.shape}")
+    return out
+
+
+def as_parents(parents: Sequence[int] | ArrayLike, num_joints: int, func: str) -> np.ndarray:
+    """Parent indices ``(J,)``: ``-1`` for roots, otherwise another joint's index."""
+    values = parents.tolist() if isinstance(parents, (np.ndarray, torch.Tensor)) else list(parents)
+    if len(values) != num_joints:
+        raise ValueError(f"{func}: parents has {len(values)} entries but the positions have {num_joints} joints")
+    for j, p in enumerate(values):
+        if isinstance(p, bool) or not isinstance(p, (int, np.integer)) or not -1 <= p < num_joints or p == j:
+            raise ValueError(f"{func}: parents[{j}] must be -1 or the index of another joint, got {p!r}")
+    return np.asarray(values, dtype=np.int64)
