@@ -44,7 +44,8 @@ def plot_interpolation(q0: torch.Tensor, q1: torch.Tensor, t: float, n: int = 21
         raise ValueError(f"plot_interpolation: t must be in [0, 1], got {t!r}")
     for name, q in (("q0", q0), ("q1", q1)):
         if not isinstance(q, torch.Tensor) or tuple(q.shape) != (4,):
-            raise ValueError(f"plot_interpolation: {name} must be one quaternion of shape (4,), got {getattr(q, 'shape', q)!r}")
+            shape = tuple(q.shape) if isinstance(q, torch.Tensor) else type(q).__name__
+            raise ValueError(f"plot_interpolation: {name} must be one quaternion of shape (4,), got {shape}")
     q0, q1 = q0.double(), q1.double()
     paths = interpolation_paths(q0, q1, n)
     forward = torch.tensor([1.0, 0.0, 0.0], dtype=torch.float64)
@@ -56,11 +57,13 @@ def plot_interpolation(q0: torch.Tensor, q1: torch.Tensor, t: float, n: int = 21
     for name in ("slerp", "nlerp"):
         trace = quat_apply(getattr(paths, name), forward).numpy()
         ax.plot(*trace.T, linestyle="-", markersize=4, label=name, **_PATH_STYLES[name])
-        ax.scatter(*quat_apply(at_t[name], forward).numpy(), s=80, color=_PATH_STYLES[name]["color"])
+        ax.scatter(*quat_apply(at_t[name], forward).numpy(), s=90, color=_PATH_STYLES[name]["color"], edgecolor="k")
     _draw_frame(ax, q0, length=0.6, alpha=0.35)
     _draw_frame(ax, q1, length=0.6, alpha=0.35)
     _draw_frame(ax, at_t["slerp"])
-    ax.set(xlim=(-1, 1), ylim=(-1, 1), zlim=(-1, 1), xlabel="x", ylabel="y", zlabel="z")
+    ticks = (-1, 0, 1)
+    ax.set(xlim=(-1, 1), ylim=(-1, 1), zlim=(-1, 1), xticks=ticks, yticks=ticks, zticks=ticks)
+    ax.set(xlabel="x", ylabel="y", zlabel="z")
     ax.set_box_aspect((1, 1, 1))
     ax.set_title(f"forward axis along the paths; frame at t = {float(t):.2f}")
     ax.legend(loc="upper left")

@@ -1,0 +1,122 @@
+"""Euler angles for all 12 axis orders, with scipy's naming.
+
+``order`` is three letters: upper case ``"XYZ"`` is intrinsic (rotate about the body's x, then its new
+y, then its new z: ``R = Rx(a) Ry(b) Rz(c)``), lower case ``"xyz"`` is extrinsic (about the fixed
+world x, then y, then z: ``R = Rz(c) Ry(b) Rx(a)``). Tait–Bryan orders use three different axes
+(``"XYZ"``, ``"ZYX"``, ...), proper Euler orders repeat the first (``"ZXZ"``, ``"xyx"``, ...).
+Angles are radians, shape ``(..., 3)``, in the order the letters are written.
+
+Extracting angles (:func:`quat_to_euler`) works on the quaternion directly. For a proper order
+``(i, j, i)`` with third axis ``k`` and parity ``ε = ±1`` of the permutation ``(i, j, k)``,
+``q = q_i(a) ⊗ q_j(b) ⊗ q_i(c)`` multiplies out to
+
+``w = cos(b/2) cos((a+c)/2)``, ``q_i = cos(b/2) sin((a+c)/2)``,
+``q_j = sin(b/2) cos((a-c)/2)``, ``ε q_k = sin(b/2) sin((a-c)/2)``,
+
+so two ``atan2`` give the half sum and half difference of the outer angles, and a third gives ``b``.
+A Tait–Bryan order ``(i, j, k)`` becomes the proper order ``(i, j, i)`` after rotating by a quarter
+turn about ``j`` (``R_k(c) = P R_i(c) Pᵀ`` with ``P = R_j(-ε π/2)``), which is a fixed linear map of the
+quaternion's components. In gimbal lock (middle angle ``0`` or ``π`` for proper orders, ``±π/2`` for
+Tait–Bryan ones) only the sum or the difference of the outer angles is defined; like scipy we then
+set the third angle to zero.
+"""
+
+from __future__ import annotations
+
+import math
+
+import torch
+
+from motionlab.geometry._checks import check_finite, check_positive_finite, check_shape
+from motionlab.geometry._numerics import safe_hypot, wrap_angle
+from motionlab.geometry.quaternion import hamilton_product
+
+_AXES = {"x": 0, "y": 1, "z": 2}
+_EVEN_PERMUTATIONS = ((0, 1, 2), (1, 2, 0), (2, 0, 1))
+
+
+def _parse_order(order: object, where: str) -> tuple[tuple[int, int, int], bool]:
+    """``"XYZ"`` → ``((0, 1, 2), True)``: axis indices and whether the order is intrinsic."""
+    valid = (
+        isinstance(order, str)
+        and len(order) == 3
+        and (order.isupper() or order.islower())
+        and set(order.lower()) <= set(_AXES)
+    )
+    if not valid:
+        raise ValueError(
+            f"{where}: order must be three letters from x, y, z, all upper case (intrinsic) or all lower "
+            f"case (extrinsic), e.g. 'XYZ' or 'zxz'; got {order!r}"
+        )
+    axes = tuple(_AXES[letter] for letter in order.lower())
+    if axes[0] == axes[1] or axes[1] == axes[2]:
+        raise ValueError(f"{where}: consecutive axes of an Euler order must differ, got {order!r}")
+    return axes, order.isupper()
+
+
+def _elementary(angle: torch.Tensor, axis: int) -> torch.Tensor:
+    """Quaternions ``(..., 4)`` of rotations by ``angle`` ``(...)`` about coordinate axis ``axis``."""
+    zero = torch.zeros_like(angle)
+    parts = [torch.cos(angle / 2), zero, zero, zero]
+    parts[1 + axis] = torch.sin(angle / 2)
+    return torch.stack(parts, dim=-1)
+
+
+def euler_to_quat(angles: torch.Tensor, order: str) -> torch.Tensor:
+    """Unit quaternions ``(..., 4)`` of Euler angles ``(..., 3)`` (radians) in ``order`` (e.g. ``"XYZ"``, ``"zxz"``)."""
+    axes, intrinsic = _parse_order(order, "euler_to_quat")
+    check_shape(angles, (3,), "euler_to_quat", "angles")
+    check_finite(angles, "euler_to_quat", "angles")
+    first, second, third = (_elementary(angles[..., n], axis) for n, axis in enumerate(axes))
+    if intrinsic:
+        return hamilton_product(hamilton_product(first, second), third)
+    return hamilton_product(hamilton_product(third, second), first)
+
+
+def quat_to_euler(q: torch.Tensor, order: str) -> torch.Tensor:
+    """Euler angles ``(..., 3)`` in ``order`` of quaternions ``(..., 4)`` (any non-zero ``q``).
+
+    Ranges as in scipy: outer angles in ``[-pi, pi]``; the middle angle in ``[0, pi]`` for proper
+    orders and in ``[-pi/2, pi/2]`` for Tait–Bryan orders. In gimbal lock the third angle is 0.
+    Differentiable, with finite gradients everywhere (also in gimbal lock).
+    """
+    axes, intrinsic = _parse_order(order, "quat_to_euler")
+    check_shape(q, (4,), "quat_to_euler", "q")
+    # An extrinsic order is the intrinsic order of the reversed axes, with the angles reversed.
+    i, j, k = axes if intrinsic else axes[::-1]
+    proper = i == k
+    if proper:
+        k = 3 - i - j
+    parity = 1 if (i, j, k) in _EVEN_PERMUTATIONS else -1
+
+    w, q_i, q_j, q_k = q[..., 0], q[..., 1 + i], q[..., 1 + j], q[..., 1 + k]
+    if proper:
+        p0, p1, p2, p3 = w, q_i, q_j, parity * q_k
+    else:  # components of q ⊗ q_j(-ε π/2), up to a factor 1/√2 and signs that fold the angle range
+        p0, p1, p2, p3 = w + parity * q_j, q_i + q_k, w - parity * q_j, q_i - q_k
+    norm_sq = p0 * p0 + p1 * p1 + p2 * p2 + p3 * p3
+    check_positive_finite(norm_sq, "quat_to_euler", "the squared norm of q")
+
+    half_sum = torch.atan2(p1, p0)
+    half_diff = torch.atan2(p3, p2)
+    outer, inner = safe_hypot(p0, p1), safe_hypot(p2, p3)
+    half_middle = torch.atan2(inner, outer)  # in [0, pi/2]
+    middle = 2 * half_middle if proper else parity * (math.pi / 2 - 2 * half_middle)
+
+    tolerance = 8 * torch.finfo(q.dtype).eps * torch.sqrt(norm_sq)
+    sum_only = inner <= tolerance  # sin(half middle) = 0: only a + c is defined
+    diff_only = (outer <= tolerance) & ~sum_only  # cos(half middle) = 0: only a - c is defined
+    locked_angle = torch.where(sum_only, 2 * half_sum, 2 * half_diff)
+    locked = sum_only | diff_only
+    zero = torch.zeros_like(half_sum)
+    first = half_sum + half_diff
+    last = half_sum - half_diff
+    if intrinsic:  # the third angle of the order is `last`
+        first = torch.where(locked, locked_angle, first)
+        last = torch.where(locked, zero, last)
+        angles = (first, middle, last)
+    else:  # reversed: the third angle of the order is `first`
+        last = torch.where(sum_only, locked_angle, torch.where(diff_only, -locked_angle, last))
+        first = torch.where(locked, zero, first)
+        angles = (last, middle, first)
+    return wrap_angle(torch.stack(angles, dim=-1))
