@@ -1,0 +1,190 @@
+"""The frozen evaluation classifiers every chapter measures its samples with.
+
+:func:`load_evaluator` trains a :class:`~motionlab.models.classifiers.MotionClassifier` on the training
+split of the synthetic data set (through the one training loop, so it is cached and trained once), and
+wraps it with its input standardisation in an :class:`Evaluator` that takes global joint positions::
+
+    evaluator = load_evaluator(motion_set, split.train, kind="gru")
+    probs = evaluator.probs(generated_positions, head="action")     # (N, 6)
+    feats = evaluator.features(generated_positions)                 # (N, 30), for FID
+"""
+
+from __future__ import annotations
+
+import hashlib
+from dataclasses import dataclass
+from typing import Literal
+
+import numpy as np
+import torch
+import torch.nn.functional as F
+from torch import Tensor, nn
+
+from motionlab import config
+from motionlab.data.datasets import Standardizer
+from motionlab.evaluation.inputs import EVAL_FEATURES, body_frame_features
+from motionlab.models.classifiers import HEADS, ClassifierConfig, MotionClassifier
+from motionlab.train import TrainConfig, TrainResult, train_or_load
+
+#: Clips are evaluated in chunks of this many to bound memory.
+CHUNK = 256
+
+
+@dataclass(frozen=True)
+class EvaluatorConfig:
+    """How an evaluation classifier is built and trained.
+
+    Attributes:
+        kind: ``"conv"`` (Motion Cell paper) or ``"gru"`` (Action2Motion / ODMO).
+        steps: training steps; batch_size: clips per step; lr: AdamW learning rate.
+        min_crop: each batch is a random window of between ``min_crop`` frames and the whole clip, so the
+            classifier recognises clips of any length in that range (models generate various lengths).
+        hidden: conv channels or GRU width; feature_dim: the GRU's feature size (Action2Motion: 30).
+        seed: seeds initialisation and batch order.
+    """
+
+    kind: Literal["conv", "gru"] = "gru"
+    steps: int = 300
+    batch_size: int = 64
+    lr: float = 2e-3
+    min_crop: int = 40
+    hidden: int = 128
+    feature_dim: int = 30
+    seed: int = 0
+
+
+def default_evaluator_config(kind: Literal["conv", "gru"]) -> EvaluatorConfig:
+    """The course's evaluator settings for the active profile."""
+    return EvaluatorConfig(kind=kind, steps=config.choose(quick=40, full=300),
+                           hidden=config.choose(quick=32, full=128))
+
+
+class Evaluator(nn.Module):
+    """A trained classifier plus its input standardisation; reads global positions ``(N, T, 22, 3)``."""
+
+    def __init__(self, classifier: MotionClassifier, standardizer: Standardizer) -> None:
+        super().__init__()
+        self.classifier = classifier
+        self.standardizer = standardizer
+
+    def inputs(self, positions: Tensor | np.ndarray) -> Tensor:
+        """Standardised classifier input ``(N, T, 67)`` from positions ``(N, T, 22, 3)``."""
+        positions = torch.as_tensor(positions, dtype=torch.float32)
+        if positions.dim() != 4:
+            raise ValueError(f"Evaluator: positions must be (N, T, 22, 3), got {tuple(positions.shape)}")
+        return self.standardizer.transform(body_frame_features(positions))
+
+    @torch.no_grad()
+    def _chunked(self, positions: Tensor | np.ndarray, fn) -> Tensor:
+        positions = torch.as_tensor(positions, dtype=torch.float32)
+        if positions.dim() != 4 or positions.shape[0] == 0:
+            raise ValueError(f"Evaluator: positions must be a non-empty (N, T, 22, 3), got {tuple(positions.shape)}")
+        self.eval()
+        return torch.cat([fn(self.inputs(positions[i:i + CHUNK])) for i in range(0, positions.shape[0], CHUNK)])
+
+    def logits(self, positions: Tensor | np.ndarray, head: str = "action") -> Tensor:
+        """Class logits ``(N, C)`` of one head (``action``, ``mode`` or ``body``)."""
+        if head not in self.classifier.heads:
+            raise KeyError(f"Evaluator has heads {list(self.classifier.heads)}, not {head!r}")
+        return self._chunked(positions, lambda x: self.classifier(x)[head])
+
+    def probs(self, positions: Tensor | np.ndarray, head: str = "action") -> Tensor:
+        """Class probabilities ``(N, C)`` of one head."""
+        return torch.softmax(self.logits(positions, head).double(), dim=-1)
+
+    def predict(self, positions: Tensor | np.ndarray, head: str = "action") -> Tensor:
+        """Predicted class ``(N,)`` of one head."""
+        return self.logits(positions, head).argmax(dim=-1)
+
+    def features(self, positions: Tensor | np.ndarray) -> Tensor:
+        """Feature vectors ``(N, D)`` for FID, Diversity and Multimodality (deterministic)."""
+        return self._chunked(positions, self.classifier.features)
+
+    def accuracy(self, positions: Tensor | np.ndarray, labels: Tensor | np.ndarray, head: str = "action") -> float:
+        """Fraction of clips whose predicted ``head`` class equals ``labels`` ``(N,)``."""
+        labels = torch.as_tensor(np.asarray(labels), dtype=torch.int64)
+        predicted = self.predict(positions, head)
+        if labels.shape != predicted.shape:
+            raise ValueError(f"Evaluator.accuracy: labels {tuple(labels.shape)} do not match {tuple(predicted.shape)} clips")
+        return float((predicted == labels).double().mean())
+
+
+def _crop_batches(inputs: Tensor, labels: dict[str, Tensor], min_crop: int):
+    """A batch source of random windows: every batch has one random length in ``[min_crop, T]``."""
+    n, n_frames = inputs.shape[:2]
+
+    def batches(epoch: int, generator: torch.Generator, batch_size: int):
+        order = torch.randperm(n, generator=generator)
+        for begin in range(0, n - batch_size + 1, batch_size):
+            index = order[begin:begin + batch_size]
+            length = int(torch.randint(min(min_crop, n_frames), n_frames + 1, (1,), generator=generator))
+            start = torch.randint(0, n_frames - length + 1, (batch_size,), generator=generator)
+            frames = start[:, None] + torch.arange(length)
+            window = inputs[index[:, None], frames]
+            yield window, {name: value[index] for name, value in labels.items()}
+
+    return batches
+
+
+def _classification_loss(model: MotionClassifier, batch, step: int, coeffs: dict[str, float]) -> dict[str, Tensor]:
+    inputs, labels = batch
+    logits = model(inputs)
+    terms = {f"ce_{name}": F.cross_entropy(logits[name], labels[name]) for name in logits}
+    return {"loss": sum(terms.values()), **terms}
+
+
+def data_fingerprint(positions: np.ndarray | Tensor) -> str:
+    """A short hash of a positions array (part of a trained evaluator's cache key)."""
+    array = np.ascontiguousarray(np.asarray(positions, dtype=np.float32))
+    return hashlib.sha256(array.tobytes()).hexdigest()[:16] + f"-{array.shape}"
+
+
+def load_evaluator(
+    positions: np.ndarray | Tensor,
+    labels: dict[str, np.ndarray | Tensor],
+    cfg: EvaluatorConfig | None = None,
+    kind: Literal["conv", "gru"] = "gru",
+    progress: bool | None = None,
+) -> tuple[Evaluator, TrainResult]:
+    """Train (or load from the cache) an evaluation classifier on training clips.
+
+    Args:
+        positions: training clips ``(N, T, 22, 3)``, global positions in metres.
+        labels: ``{"action": (N,), "mode": (N,), "body": (N,)}`` integer labels (any subset of these heads).
+        cfg: the settings; by default :func:`default_evaluator_config` of ``kind``.
+        progress: show a progress bar (default: in the full profile only).
+
+    Returns:
+        The frozen :class:`Evaluator` (eval mode, no gradients needed) and the training result.
+    """
+    cfg = default_evaluator_config(kind) if cfg is None else cfg
+    unknown = set(labels) - set(HEADS)
+    if unknown:
+        raise ValueError(f"load_evaluator: unknown label heads {sorted(unknown)}; use {HEADS}")
+    positions = torch.as_tensor(np.asarray(positions), dtype=torch.float32)
+    label_tensors = {name: torch.as_tensor(np.asarray(value), dtype=torch.int64) for name, value in labels.items()}
+    for name, value in label_tensors.items():
+        if value.shape != positions.shape[:1]:
+            raise ValueError(f"load_evaluator: labels[{name!r}] has shape {tuple(value.shape)}, expected ({positions.shape[0]},)")
+    features = body_frame_features(positions)
+    standardizer = Standardizer(EVAL_FEATURES).fit(features)
+    classes = {name: int(value.max()) + 1 for name, value in label_tensors.items()}
+    classifier_cfg = ClassifierConfig(cfg.kind, EVAL_FEATURES, classes, cfg.hidden, cfg.feature_dim)
+    torch.manual_seed(cfg.seed)
+    evaluator = Evaluator(MotionClassifier(classifier_cfg), standardizer)
+    train_cfg = TrainConfig(steps=cfg.steps, batch_size=min(cfg.batch_size, positions.shape[0]), lr=cfg.lr,
+                            grad_clip=1.0, seed=cfg.seed, checkpoint_every=None)
+    batches = _crop_batches(standardizer.transform(features), label_tensors, cfg.min_crop)
+    result = train_or_load(
+        f"evaluator_{cfg.kind}",
+        {"evaluator": cfg, "classifier": classifier_cfg},
+        evaluator,
+        lambda model, batch, step, coeffs: _classification_loss(model.classifier, batch, step, coeffs),
+        batches,
+        train_cfg,
+        data_config={"positions": data_fingerprint(positions),
+                     "labels": {k: data_fingerprint(v.numpy()) for k, v in label_tensors.items()}},
+        progress=progress,
+    )
+    evaluator.requires_grad_(False)
+    return evaluator.eval(), result

@@ -1,0 +1,100 @@
+import math
+
+import numpy as np
+import pytest
+import torch
+
+from motionlab.data.representations import rotate_xy
+from motionlab.data.synthetic import generate
+from motionlab.evaluation import EVAL_FEATURES, body_frame_features, hip_heading
+from motionlab.evaluation.benchmark import labels_of, sample_metrics
+from motionlab.evaluation.evaluator import EvaluatorConfig, load_evaluator
+from motionlab.models.classifiers import ClassifierConfig, MotionClassifier
+
+
+@pytest.fixture(scope="module")
+def clips():
+    return generate(seed=3, n_per_mode=4)
+
+
+@pytest.fixture(autouse=True)
+def build(monkeypatch, tmp_path):
+    monkeypatch.setenv("MOTIONLAB_BUILD", str(tmp_path))
+
+
+def _turn(positions: torch.Tensor, angle: float, shift=(0.0, 0.0)) -> torch.Tensor:
+    xy = rotate_xy(positions[..., :2], torch.tensor(angle)) + torch.tensor(shift)
+    return torch.cat([xy, positions[..., 2:]], dim=-1)
+
+
+def test_hip_heading_of_a_character_facing_x_is_zero(clips):
+    pos = torch.as_tensor(clips.positions[:1, :1])
+    yaw = hip_heading(pos)
+    turned = hip_heading(_turn(pos, 0.7))
+    assert torch.allclose(torch.remainder(turned - yaw - 0.7 + math.pi, 2 * math.pi) - math.pi, torch.zeros(1), atol=1e-5)
+
+
+def test_features_ignore_where_and_which_way_the_clip_happens(clips):
+    pos = torch.as_tensor(clips.positions[:3])
+    feats = body_frame_features(pos)
+    assert feats.shape == (3, clips.n_frames, EVAL_FEATURES)
+    moved = body_frame_features(_turn(pos, 2.0, shift=(5.0, -3.0)))
+    assert torch.allclose(feats, moved, atol=1e-4)
+
+
+def test_features_reject_bad_input():
+    with pytest.raises(ValueError, match="positions"):
+        body_frame_features(torch.zeros(2, 10, 21, 3))
+    bad = torch.zeros(1, 2, 22, 3)
+    bad[..., 1, 1] = 0.1
+    bad[0, 0, 5, 0] = float("nan")
+    with pytest.raises(ValueError, match="NaN"):
+        body_frame_features(bad)
+
+
+@pytest.mark.parametrize("kind", ["conv", "gru"])
+def test_classifier_shapes_and_deterministic_features(kind):
+    torch.manual_seed(0)
+    model = MotionClassifier(ClassifierConfig(kind, 7, {"action": 3, "body": 2}, hidden=16, feature_dim=5)).eval()
+    x = torch.randn(4, 9, 7)
+    logits = model(x)
+    assert logits["action"].shape == (4, 3) and logits["body"].shape == (4, 2)
+    assert torch.equal(model.features(x), model.features(x))
+    assert model.features(x).shape == (4, model.feature_dim)
+    acts = model.layer_activations(x)
+    assert len(acts) == (4 if kind == "conv" else 2)
+    with pytest.raises(ValueError, match="expected frames"):
+        model(torch.randn(4, 9, 6))
+
+
+def test_classifier_config_is_validated():
+    with pytest.raises(ValueError, match="kind"):
+        ClassifierConfig("rnn", 3, {"a": 2})
+    with pytest.raises(ValueError, match="classes"):
+        ClassifierConfig("gru", 3, {"a": 1})
+
+
+def test_evaluator_learns_actions_and_is_cached(clips):
+    cfg = EvaluatorConfig(kind="conv", steps=60, batch_size=24, hidden=32)
+    evaluator, result = load_evaluator(clips.positions, labels_of(clips), cfg, progress=False)
+    assert not result.loaded_from_cache
+    held_out = generate(seed=4, n_per_mode=2, split="test")
+    assert evaluator.accuracy(held_out.positions, held_out.action) >= 0.8
+    again, cached = load_evaluator(clips.positions, labels_of(clips), cfg, progress=False)
+    assert cached.loaded_from_cache
+    assert torch.equal(again.features(held_out.positions), evaluator.features(held_out.positions))
+    probs = evaluator.probs(held_out.positions)
+    assert torch.allclose(probs.sum(-1), torch.ones(len(probs), dtype=probs.dtype))
+    row = sample_metrics(evaluator, held_out.positions, held_out.action, evaluator.features(clips.positions),
+                         np.random.default_rng(0))
+    assert set(row) == {"accuracy", "fid", "diversity", "multimodality", "is"}
+    assert all(np.isfinite(v) for v in row.values())
+    with pytest.raises(KeyError, match="heads"):
+        evaluator.logits(held_out.positions, "style")
+
+
+def test_evaluator_rejects_mismatched_labels(clips):
+    with pytest.raises(ValueError, match="labels"):
+        load_evaluator(clips.positions, {"action": clips.action[:-1]}, EvaluatorConfig(steps=1), progress=False)
+    with pytest.raises(ValueError, match="unknown label heads"):
+        load_evaluator(clips.positions, {"style": clips.action}, EvaluatorConfig(steps=1), progress=False)
