@@ -10,6 +10,16 @@ from typing import Any
 import torch
 
 
+def best_seconds(call: Callable[[], Any], repeats: int = 5) -> float:
+    """Fastest of ``repeats`` runs of ``call()`` (the one least disturbed by other processes)."""
+    times = []
+    for _ in range(repeats):
+        start = time.perf_counter()
+        call()
+        times.append(time.perf_counter() - start)
+    return min(times)
+
+
 def median_seconds(fn: Callable[[], Any], repeats: int = 5, warmup: int = 1) -> float:
     """Median wall time of ``fn()`` over ``repeats`` calls after ``warmup`` untimed ones (no autograd)."""
     with torch.inference_mode():

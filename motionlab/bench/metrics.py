@@ -2,25 +2,14 @@
 
 from __future__ import annotations
 
-import time
-from typing import Callable
 
 import numpy as np
 
 from motionlab import config
+from motionlab.bench._timing import best_seconds
 from motionlab.metrics import apd, fid
 
-REPEATS = 5
 
-
-def _best_seconds(call: Callable[[], float]) -> float:
-    """Fastest of :data:`REPEATS` runs (the least disturbed by other processes)."""
-    times = []
-    for _ in range(REPEATS):
-        start = time.perf_counter()
-        call()
-        times.append(time.perf_counter() - start)
-    return min(times)
 
 
 def run() -> dict:
@@ -29,6 +18,6 @@ def run() -> dict:
     real, generated = rng.normal(size=(2000, 30)), rng.normal(size=(2000, 30)) + 0.1
     clips = rng.normal(size=(50, 120, 22 * 3))  # 50 samples of 4 s at 30 fps
     return {
-        "fid_2000x30_seconds": _best_seconds(lambda: fid(real, generated)),
-        "apd_50x120x66_seconds": _best_seconds(lambda: apd(clips)),
+        "fid_2000x30_seconds": best_seconds(lambda: fid(real, generated)),
+        "apd_50x120x66_seconds": best_seconds(lambda: apd(clips)),
     }

@@ -8,12 +8,11 @@ with forward kinematics), so the timing includes drawing a moving figure on a fl
 from __future__ import annotations
 
 import math
-import time
-from typing import Callable
 
 import torch
 
 from motionlab import config, skeleton
+from motionlab.bench._timing import best_seconds
 from motionlab.geometry import axis_angle_to_quat
 from motionlab.viz import animate, compare_animation
 
@@ -37,23 +36,14 @@ def sine_gait(frames: int = FRAMES, fps: int = FPS, phase: float = 0.0) -> torch
     return skeleton.forward_kinematics(axis_angle_to_quat(axis_angles), root, offsets, skeleton.PARENTS)[0]
 
 
-def _best_seconds(call: Callable[[], object]) -> float:
-    """Fastest of :data:`REPEATS` runs (the least disturbed by other processes)."""
-    times = []
-    for _ in range(REPEATS):
-        start = time.perf_counter()
-        call()
-        times.append(time.perf_counter() - start)
-    return min(times)
-
 
 def run() -> dict:
     config.set_threads()
     real, generated = sine_gait(), sine_gait(phase=1.0)
     return {
-        "animate_4s_clip_seconds": _best_seconds(lambda: animate(real, skeleton.PARENTS, fps=FPS)),
-        "compare_animation_4s_clip_seconds": _best_seconds(
-            lambda: compare_animation(real, generated, skeleton.PARENTS, fps=FPS)
+        "animate_4s_clip_seconds": best_seconds(lambda: animate(real, skeleton.PARENTS, fps=FPS), REPEATS),
+        "compare_animation_4s_clip_seconds": best_seconds(
+            lambda: compare_animation(real, generated, skeleton.PARENTS, fps=FPS), REPEATS
         ),
         "frames": FRAMES,
     }
