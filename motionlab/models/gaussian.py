@@ -1,0 +1,156 @@
+"""Diagonal-Gaussian helpers shared by the latent-variable models (VAE, Motion Cell, TrajeVAE, ODMO).
+
+A diagonal Gaussian is carried as two tensors of the same shape ``(..., D)``: its mean ``mu`` and its
+log-variance ``logvar`` (natural log of sigma squared). Every function is batched over the leading dims,
+works with autograd, and raises ``ValueError`` naming the function and the argument for bad input
+(wrong shape, NaN or infinity) instead of returning silent NaNs.
+"""
+
+from __future__ import annotations
+
+import math
+
+import torch
+
+_LOG_2PI = math.log(2.0 * math.pi)
+
+
+def _check_tensor(x: object, where: str, name: str) -> torch.Tensor:
+    if not isinstance(x, torch.Tensor):
+        raise TypeError(f"{where}: {name} must be a torch.Tensor, got {type(x).__name__}")
+    if not x.is_floating_point():
+        raise TypeError(f"{where}: {name} must have a floating-point dtype, got {x.dtype}")
+    if x.numel() and not bool(torch.isfinite(x.detach()).all()):
+        first = tuple(int(i) for i in (~torch.isfinite(x.detach())).nonzero()[0])
+        raise ValueError(f"{where}: {name} contains NaN or infinite values (first at index {first})")
+    return x
+
+
+def _check_same_shape(a: torch.Tensor, b: torch.Tensor, where: str, names: str) -> None:
+    if a.shape != b.shape:
+        raise ValueError(f"{where}: {names} must have the same shape, got {tuple(a.shape)} and {tuple(b.shape)}")
+
+
+def _prior_tensor(value: torch.Tensor | float | None, like: torch.Tensor, where: str, name: str) -> torch.Tensor:
+    """``value`` as a tensor broadcastable to ``like`` (``None`` means 0, the standard normal's value)."""
+    if value is None:
+        return torch.zeros((), dtype=like.dtype, device=like.device)
+    if not isinstance(value, torch.Tensor):
+        value = torch.tensor(float(value), dtype=like.dtype, device=like.device)
+    _check_tensor(value, where, name)
+    try:
+        torch.broadcast_shapes(value.shape, like.shape)
+    except RuntimeError as exc:
+        raise ValueError(
+            f"{where}: {name} of shape {tuple(value.shape)} does not broadcast to {tuple(like.shape)}"
+        ) from exc
+    return value
+
+
+def reparameterize(mu: torch.Tensor, logvar: torch.Tensor, generator: torch.Generator | None = None) -> torch.Tensor:
+    """Draw ``z = mu + sigma * eps`` with ``eps ~ N(0, I)``: a sample that gradients flow through.
+
+    Args:
+        mu, logvar: ``(..., D)`` mean and log-variance of q(z | x).
+        generator: optional ``torch.Generator`` for reproducible noise.
+
+    Returns:
+        ``(..., D)`` samples, differentiable with respect to ``mu`` and ``logvar``.
+    """
+    _check_tensor(mu, "reparameterize", "mu")
+    _check_tensor(logvar, "reparameterize", "logvar")
+    _check_same_shape(mu, logvar, "reparameterize", "mu and logvar")
+    eps = torch.randn(mu.shape, generator=generator, dtype=mu.dtype, device=mu.device)
+    return mu + torch.exp(0.5 * logvar) * eps
+
+
+def gaussian_kl(
+    mu: torch.Tensor,
+    logvar: torch.Tensor,
+    prior_mu: torch.Tensor | float | None = None,
+    prior_logvar: torch.Tensor | float | None = None,
+) -> torch.Tensor:
+    r"""Closed-form KL(N(mu, sigma^2) || N(prior_mu, sigma_p^2)) per dimension.
+
+    .. math::
+        \mathrm{KL} = \tfrac12\Big(\log\sigma_p^2 - \log\sigma^2
+                      + \frac{\sigma^2 + (\mu - \mu_p)^2}{\sigma_p^2} - 1\Big)
+
+    With the defaults (``prior_mu = 0``, ``prior_logvar = 0``) the prior is the standard normal and this is
+    the familiar ``-0.5 * (1 + logvar - mu**2 - exp(logvar))``.
+
+    Args:
+        mu, logvar: ``(..., D)`` posterior mean and log-variance.
+        prior_mu, prior_logvar: prior mean and log-variance, tensors broadcastable to ``mu`` or floats;
+            ``None`` means 0.
+
+    Returns:
+        ``(..., D)`` KL per dimension, in nats (sum over the last dim for the KL of the whole vector).
+    """
+    _check_tensor(mu, "gaussian_kl", "mu")
+    _check_tensor(logvar, "gaussian_kl", "logvar")
+    _check_same_shape(mu, logvar, "gaussian_kl", "mu and logvar")
+    p_mu = _prior_tensor(prior_mu, mu, "gaussian_kl", "prior_mu")
+    p_logvar = _prior_tensor(prior_logvar, mu, "gaussian_kl", "prior_logvar")
+    return 0.5 * (p_logvar - logvar + (torch.exp(logvar) + (mu - p_mu) ** 2) * torch.exp(-p_logvar) - 1.0)
+
+
+def kl_per_dimension(
+    mu: torch.Tensor,
+    logvar: torch.Tensor,
+    prior_mu: torch.Tensor | float | None = None,
+    prior_logvar: torch.Tensor | float | None = None,
+) -> torch.Tensor:
+    """KL of each latent dimension averaged over the data: ``(N, D)`` posteriors -> ``(D,)`` nats.
+
+    A dimension whose average KL is near zero carries no information about x: its posterior equals the
+    prior for every input (posterior collapse of that unit).
+    """
+    if mu.dim() != 2:
+        raise ValueError(f"kl_per_dimension: mu must be 2-D (N, D), got shape {tuple(mu.shape)}")
+    return gaussian_kl(mu, logvar, prior_mu, prior_logvar).mean(dim=0)
+
+
+def unit_activity(mu: torch.Tensor) -> torch.Tensor:
+    """Variance over the data of the posterior mean E_q[z | x], per dimension: ``(N, D)`` -> ``(D,)``.
+
+    Burda et al. (2016), "Importance Weighted Autoencoders": a unit whose posterior mean does not move
+    with x is inactive, whatever its posterior variance.
+    """
+    _check_tensor(mu, "unit_activity", "mu")
+    if mu.dim() != 2 or mu.shape[0] < 2:
+        raise ValueError(f"unit_activity: mu must be 2-D (N, D) with N >= 2, got shape {tuple(mu.shape)}")
+    return mu.detach().var(dim=0, unbiased=True)
+
+
+def active_units(mu: torch.Tensor, threshold: float = 0.01) -> int:
+    """Number of latent dimensions whose :func:`unit_activity` exceeds ``threshold`` (Burda et al.: 0.01).
+
+    Args:
+        mu: ``(N, D)`` posterior means of N data points.
+        threshold: activity above which a unit counts as active (positive).
+    """
+    if not threshold > 0:
+        raise ValueError(f"active_units: threshold must be positive, got {threshold}")
+    return int((unit_activity(mu) > threshold).sum())
+
+
+def gaussian_nll(x: torch.Tensor, mean: torch.Tensor, logvar: torch.Tensor | float = 0.0) -> torch.Tensor:
+    r"""Negative log-density of ``x`` under N(mean, exp(logvar)), element-wise.
+
+    .. math:: -\log p(x) = \tfrac12\big(\log 2\pi + \log\sigma^2 + (x - \mu)^2 / \sigma^2\big)
+
+    With a fixed ``logvar`` this is a scaled squared error plus a constant: the usual VAE reconstruction term.
+
+    Args:
+        x, mean: tensors of the same shape.
+        logvar: log-variance broadcastable to ``x`` (tensor or float; default 0, unit variance).
+
+    Returns:
+        Tensor of ``x``'s shape, in nats.
+    """
+    _check_tensor(x, "gaussian_nll", "x")
+    _check_tensor(mean, "gaussian_nll", "mean")
+    _check_same_shape(x, mean, "gaussian_nll", "x and mean")
+    lv = _prior_tensor(logvar, x, "gaussian_nll", "logvar")
+    return 0.5 * (_LOG_2PI + lv + (x - mean) ** 2 * torch.exp(-lv))

@@ -1,0 +1,377 @@
+"""Variational autoencoders for poses and clips: an MLP (C)VAE and a recurrent CVAE with an autoregressive decoder.
+
+Both models share one interface, so one loss function (:func:`elbo_loss`) trains either through
+:func:`motionlab.train.train_or_load`:
+
+* ``encode(x, label) -> (mu, logvar)``: the Gaussian posterior q(z | x, c), ``(B, latent_dim)`` each;
+* ``decode(z, label) -> mean``: the mean of the likelihood p(x | z, c) = N(mean, sigma_x^2 I), shaped like x;
+* ``forward(x, label, generator) -> VAEOutput``: both, with a reparameterised draw of z in between;
+* ``sample(label, generator)``: decode draws from the prior p(z) = N(0, sigma_p^2 I).
+
+``label`` is the class c of a conditional VAE (``(B,)`` int64, one-hot encoded inside) and must be ``None``
+for an unconditional one. Inputs are standardised features (see :class:`motionlab.data.datasets.Standardizer`).
+
+With ``variational=False`` the MLP model is a plain autoencoder: the code is ``mu`` itself, no noise, no KL.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import NamedTuple
+
+import torch
+import torch.nn.functional as F
+from torch import Tensor, nn
+
+from motionlab.models.gaussian import gaussian_kl, gaussian_nll, reparameterize
+
+
+class VAEOutput(NamedTuple):
+    """What a forward pass gives: the likelihood mean ``(B, ...)`` (x's shape), and ``mu``, ``logvar``, ``z``
+    ``(B, latent_dim)`` (for an autoencoder ``logvar`` is ``None`` and ``z`` is ``mu``)."""
+
+    mean: Tensor
+    mu: Tensor
+    logvar: Tensor | None
+    z: Tensor
+
+
+def _check_common(latent_dim: int, hidden: int, n_classes: int, obs_logvar: float, prior_logvar: float,
+                  owner: str) -> None:
+    for name, value, least in (("latent_dim", latent_dim, 1), ("hidden", hidden, 1), ("n_classes", n_classes, 0)):
+        if isinstance(value, bool) or not isinstance(value, int) or value < least:
+            raise ValueError(f"{owner}.{name} must be an integer >= {least}, got {value!r}")
+    for name, value in (("obs_logvar", obs_logvar), ("prior_logvar", prior_logvar)):
+        if not isinstance(value, (int, float)) or not math.isfinite(value):
+            raise ValueError(f"{owner}.{name} must be a finite number, got {value!r}")
+
+
+@dataclass(frozen=True)
+class VAEConfig:
+    """An MLP (conditional) VAE on inputs of a fixed shape (a pose ``(D,)`` or a clip ``(L, D)``, flattened inside).
+
+    Attributes:
+        input_shape: shape of one input, e.g. ``(64,)`` or ``(60, 67)``.
+        latent_dim: size of z.
+        hidden: width of the hidden layers; depth: hidden layers in the encoder and in the decoder.
+        n_classes: number of classes of the condition c (0: unconditional).
+        variational: False gives a plain autoencoder (deterministic code, no KL term).
+        obs_logvar: log sigma_x^2 of the likelihood N(decoder(z), sigma_x^2 I), in standardised units.
+        prior_logvar: log sigma_p^2 of the prior N(0, sigma_p^2 I) (ODMO's knob; 0 is the standard normal).
+    """
+
+    input_shape: tuple[int, ...]
+    latent_dim: int = 16
+    hidden: int = 256
+    depth: int = 2
+    n_classes: int = 0
+    variational: bool = True
+    obs_logvar: float = 0.0
+    prior_logvar: float = 0.0
+
+    def __post_init__(self) -> None:
+        shape = tuple(self.input_shape)
+        if not shape or any(isinstance(s, bool) or not isinstance(s, int) or s < 1 for s in shape):
+            raise ValueError(f"VAEConfig.input_shape must be a non-empty tuple of positive ints, got {self.input_shape!r}")
+        object.__setattr__(self, "input_shape", shape)
+        if isinstance(self.depth, bool) or not isinstance(self.depth, int) or self.depth < 1:
+            raise ValueError(f"VAEConfig.depth must be an integer >= 1, got {self.depth!r}")
+        _check_common(self.latent_dim, self.hidden, self.n_classes, self.obs_logvar, self.prior_logvar, "VAEConfig")
+
+    @property
+    def input_size(self) -> int:
+        """Number of numbers in one input."""
+        return math.prod(self.input_shape)
+
+
+@dataclass(frozen=True)
+class RecurrentVAEConfig:
+    """A recurrent (conditional) VAE on clips ``(L, n_features)`` with a GRU encoder and a GRU decoder.
+
+    Attributes:
+        n_features: features per frame.
+        length: frames the decoder generates when sampling (the training clips' length).
+        latent_dim, hidden: size of z and of the GRU states.
+        n_classes: number of classes of the condition c (0: unconditional).
+        autoregressive: the decoder also reads the previous frame (teacher forcing in training, its own
+            output when sampling). This makes it a *strong* decoder, one that can model a clip without z.
+        frame_dropout: in training, the probability that the decoder's previous-frame input is hidden
+            (zeroed), independently per frame: Bowman et al.'s word dropout for frames (0: off).
+        obs_logvar, prior_logvar: as in :class:`VAEConfig`.
+    """
+
+    n_features: int
+    length: int = 60
+    latent_dim: int = 16
+    hidden: int = 128
+    n_classes: int = 0
+    autoregressive: bool = True
+    frame_dropout: float = 0.0
+    obs_logvar: float = 0.0
+    prior_logvar: float = 0.0
+
+    def __post_init__(self) -> None:
+        if not isinstance(self.frame_dropout, (int, float)) or not 0.0 <= self.frame_dropout < 1.0:
+            raise ValueError(f"RecurrentVAEConfig.frame_dropout must lie in [0, 1), got {self.frame_dropout!r}")
+        for name in ("n_features", "length"):
+            value = getattr(self, name)
+            if isinstance(value, bool) or not isinstance(value, int) or value < 1:
+                raise ValueError(f"RecurrentVAEConfig.{name} must be an integer >= 1, got {value!r}")
+        _check_common(self.latent_dim, self.hidden, self.n_classes, self.obs_logvar, self.prior_logvar,
+                      "RecurrentVAEConfig")
+
+
+def _check_finite(x: Tensor, where: str) -> Tensor:
+    if not bool(torch.isfinite(x.detach()).all()):
+        first = tuple(int(i) for i in (~torch.isfinite(x.detach())).nonzero()[0])
+        raise ValueError(f"{where}: x contains NaN or infinite values (first at index {first})")
+    return x
+
+
+def _mlp(sizes: list[int]) -> nn.Sequential:
+    """Linear layers of ``sizes`` with SiLU between them (none after the last)."""
+    layers: list[nn.Module] = []
+    for i, (a, b) in enumerate(zip(sizes[:-1], sizes[1:])):
+        layers.append(nn.Linear(a, b))
+        if i < len(sizes) - 2:
+            layers.append(nn.SiLU())
+    return nn.Sequential(*layers)
+
+
+class LatentVariableModel(nn.Module):
+    """What both VAEs share: label checks, one-hot conditions, the reparameterised forward pass, prior draws.
+
+    Subclasses set ``cfg`` and define ``encode(x, label) -> (mu, logvar)`` and ``decode(z, label) -> mean``.
+    """
+
+    cfg: VAEConfig | RecurrentVAEConfig
+
+    @property
+    def variational(self) -> bool:
+        return getattr(self.cfg, "variational", True)
+
+    def condition(self, label: Tensor | None, batch: int, where: str) -> Tensor | None:
+        """One-hot ``(B, n_classes)`` of ``label`` ``(B,)``; ``None`` for an unconditional model."""
+        n_classes = self.cfg.n_classes
+        if n_classes == 0:
+            if label is not None:
+                raise ValueError(f"{where}: this model is unconditional (n_classes=0) but a label was given")
+            return None
+        if label is None:
+            raise ValueError(f"{where}: this model is conditional on {n_classes} classes; pass label (B,)")
+        label = torch.as_tensor(label)
+        if label.dim() != 1 or label.shape[0] != batch or label.is_floating_point():
+            raise ValueError(f"{where}: label must be an integer tensor of shape ({batch},), got {label.dtype} "
+                             f"{tuple(label.shape)}")
+        if batch and (int(label.min()) < 0 or int(label.max()) >= n_classes):
+            raise ValueError(f"{where}: label values must lie in [0, {n_classes}), got [{int(label.min())}, "
+                             f"{int(label.max())}]")
+        return F.one_hot(label.long(), n_classes).float()
+
+    def forward(self, x: Tensor, label: Tensor | None = None, generator: torch.Generator | None = None) -> VAEOutput:
+        """Encode, draw ``z = mu + sigma * eps`` (an autoencoder uses ``mu``), decode."""
+        mu, logvar = self.encode(x, label)
+        z = mu if logvar is None else reparameterize(mu, logvar, generator)
+        return VAEOutput(self.reconstruct(x, z, label), mu, logvar, z)
+
+    def reconstruct(self, x: Tensor, z: Tensor, label: Tensor | None) -> Tensor:
+        """The likelihood mean of ``x`` given ``z`` (the recurrent model overrides it with teacher forcing)."""
+        return self.decode(z, label)
+
+    def prior_sample(self, n: int, generator: torch.Generator | None = None) -> Tensor:
+        """``n`` draws ``(n, latent_dim)`` from the prior N(0, sigma_p^2 I)."""
+        if isinstance(n, bool) or not isinstance(n, int) or n < 1:
+            raise ValueError(f"prior_sample: n must be a positive integer, got {n!r}")
+        eps = torch.randn(n, self.cfg.latent_dim, generator=generator)
+        return eps * math.exp(0.5 * self.cfg.prior_logvar)
+
+    @torch.no_grad()
+    def sample(self, label: Tensor | int, generator: torch.Generator | None = None) -> Tensor:
+        """Decode prior draws: ``label`` ``(B,)`` class ids for a CVAE, or the number of samples ``B`` otherwise."""
+        was_training = self.training
+        self.eval()
+        try:
+            if isinstance(label, int) and not isinstance(label, bool):
+                if self.cfg.n_classes:
+                    raise ValueError("sample: this model is conditional; pass the class of each sample (B,)")
+                return self.decode(self.prior_sample(label, generator))
+            label = torch.as_tensor(label)
+            return self.decode(self.prior_sample(int(label.shape[0]), generator), label)
+        finally:
+            self.train(was_training)
+
+
+class MLPVAE(LatentVariableModel):
+    """An MLP (conditional) VAE, or autoencoder, on fixed-shape inputs ``(B, *cfg.input_shape)``."""
+
+    def __init__(self, cfg: VAEConfig) -> None:
+        super().__init__()
+        self.cfg = cfg
+        code_size = 2 * cfg.latent_dim if cfg.variational else cfg.latent_dim
+        self.encoder = _mlp([cfg.input_size + cfg.n_classes] + [cfg.hidden] * cfg.depth + [code_size])
+        self.decoder = _mlp([cfg.latent_dim + cfg.n_classes] + [cfg.hidden] * cfg.depth + [cfg.input_size])
+
+    def _check_input(self, x: Tensor, where: str) -> Tensor:
+        if not isinstance(x, Tensor) or not x.is_floating_point():
+            raise TypeError(f"{where}: x must be a floating-point tensor, got {type(x).__name__}")
+        if tuple(x.shape[1:]) != self.cfg.input_shape:
+            raise ValueError(f"{where}: x must have shape (B, {', '.join(map(str, self.cfg.input_shape))}), "
+                             f"got {tuple(x.shape)}")
+        return _check_finite(x, where)
+
+    def encode(self, x: Tensor, label: Tensor | None = None) -> tuple[Tensor, Tensor | None]:
+        """Posterior parameters ``mu``, ``logvar`` ``(B, latent_dim)`` (``logvar`` is ``None`` for an autoencoder)."""
+        x = self._check_input(x, "MLPVAE.encode")
+        c = self.condition(label, x.shape[0], "MLPVAE.encode")
+        h = x.flatten(1) if c is None else torch.cat([x.flatten(1), c], dim=-1)
+        code = self.encoder(h)
+        if not self.cfg.variational:
+            return code, None
+        mu, logvar = code.chunk(2, dim=-1)
+        return mu, logvar
+
+    def decode(self, z: Tensor, label: Tensor | None = None) -> Tensor:
+        """Likelihood mean ``(B, *input_shape)`` from codes ``z`` ``(B, latent_dim)``."""
+        if z.dim() != 2 or z.shape[1] != self.cfg.latent_dim:
+            raise ValueError(f"MLPVAE.decode: z must have shape (B, {self.cfg.latent_dim}), got {tuple(z.shape)}")
+        c = self.condition(label, z.shape[0], "MLPVAE.decode")
+        h = z if c is None else torch.cat([z, c], dim=-1)
+        return self.decoder(h).unflatten(1, self.cfg.input_shape)
+
+
+class RecurrentVAE(LatentVariableModel):
+    """A GRU (conditional) VAE on clips ``(B, L, n_features)``; the decoder may be autoregressive.
+
+    Encoder: a GRU reads the frames (with c appended to each), its last state gives ``mu``, ``logvar``.
+    Decoder: its state starts at ``tanh(W [z, c])``; at frame t it reads ``[x_{t-1}, z, c]`` (``x_{-1} = 0``;
+    without ``autoregressive`` just ``[z, c]``) and outputs the mean of frame t. In training (:meth:`forward`)
+    ``x_{t-1}`` is the real previous frame (teacher forcing); when sampling it is the decoder's own output.
+    """
+
+    def __init__(self, cfg: RecurrentVAEConfig) -> None:
+        super().__init__()
+        self.cfg = cfg
+        cond = cfg.n_classes
+        self.encoder = nn.GRU(cfg.n_features + cond, cfg.hidden, batch_first=True)
+        self.to_posterior = nn.Linear(cfg.hidden, 2 * cfg.latent_dim)
+        self.to_state = nn.Linear(cfg.latent_dim + cond, cfg.hidden)
+        frame_in = cfg.n_features if cfg.autoregressive else 0
+        self.decoder = nn.GRU(frame_in + cfg.latent_dim + cond, cfg.hidden, batch_first=True)
+        self.to_frame = nn.Linear(cfg.hidden, cfg.n_features)
+
+    def _check_clip(self, x: Tensor, where: str) -> Tensor:
+        if not isinstance(x, Tensor) or not x.is_floating_point():
+            raise TypeError(f"{where}: x must be a floating-point tensor, got {type(x).__name__}")
+        if x.dim() != 3 or x.shape[1] < 1 or x.shape[2] != self.cfg.n_features:
+            raise ValueError(f"{where}: x must have shape (B, L, {self.cfg.n_features}) with L >= 1, got {tuple(x.shape)}")
+        return _check_finite(x, where)
+
+    def encode(self, x: Tensor, label: Tensor | None = None) -> tuple[Tensor, Tensor]:
+        """Posterior parameters ``mu``, ``logvar`` ``(B, latent_dim)`` of clips ``x`` ``(B, L, n_features)``."""
+        x = self._check_clip(x, "RecurrentVAE.encode")
+        c = self.condition(label, x.shape[0], "RecurrentVAE.encode")
+        h = x if c is None else torch.cat([x, c[:, None].expand(-1, x.shape[1], -1)], dim=-1)
+        _, last = self.encoder(h)
+        mu, logvar = self.to_posterior(last[0]).chunk(2, dim=-1)
+        return mu, logvar
+
+    def _context(self, z: Tensor, label: Tensor | None, where: str) -> tuple[Tensor, Tensor]:
+        """The per-frame context ``[z, c]`` ``(B, latent + n_classes)`` and the initial decoder state ``(1, B, hidden)``."""
+        if z.dim() != 2 or z.shape[1] != self.cfg.latent_dim:
+            raise ValueError(f"{where}: z must have shape (B, {self.cfg.latent_dim}), got {tuple(z.shape)}")
+        c = self.condition(label, z.shape[0], where)
+        context = z if c is None else torch.cat([z, c], dim=-1)
+        return context, torch.tanh(self.to_state(context))[None]
+
+    def reconstruct(self, x: Tensor, z: Tensor, label: Tensor | None) -> Tensor:
+        """Teacher-forced likelihood means ``(B, L, n_features)``: frame t is predicted from real frames < t.
+
+        In training mode each previous-frame input is hidden with probability ``cfg.frame_dropout``.
+        """
+        x = self._check_clip(x, "RecurrentVAE.reconstruct")
+        context, state = self._context(z, label, "RecurrentVAE.reconstruct")
+        inputs = context[:, None].expand(-1, x.shape[1], -1)
+        if self.cfg.autoregressive:
+            previous = torch.cat([torch.zeros_like(x[:, :1]), x[:, :-1]], dim=1)
+            if self.training and self.cfg.frame_dropout > 0:
+                keep = torch.rand(previous.shape[:2], device=x.device) >= self.cfg.frame_dropout
+                previous = previous * keep[..., None]
+            inputs = torch.cat([previous, inputs], dim=-1)
+        out, _ = self.decoder(inputs, state)
+        return self.to_frame(out)
+
+    def decode(self, z: Tensor, label: Tensor | None = None, length: int | None = None) -> Tensor:
+        """Free-running decoding of ``length`` frames (default ``cfg.length``): ``(B, length, n_features)``.
+
+        An autoregressive decoder feeds each frame's mean back as the next frame's input.
+        """
+        length = self.cfg.length if length is None else length
+        context, state = self._context(z, label, "RecurrentVAE.decode")
+        if not self.cfg.autoregressive:
+            out, _ = self.decoder(context[:, None].expand(-1, length, -1), state)
+            return self.to_frame(out)
+        frame = z.new_zeros(z.shape[0], 1, self.cfg.n_features)
+        frames = []
+        for _ in range(length):
+            out, state = self.decoder(torch.cat([frame, context[:, None]], dim=-1), state)
+            frame = self.to_frame(out)
+            frames.append(frame)
+        return torch.cat(frames, dim=1)
+
+
+def elbo_terms(model: LatentVariableModel, x: Tensor, label: Tensor | None = None,
+               generator: torch.Generator | None = None) -> dict[str, Tensor]:
+    """The negative ELBO's two terms for a batch, in nats per sample (means over the batch).
+
+    ``recon`` = E_q[-log p(x | z)], one draw of z, summed over all of x's numbers;
+    ``kl`` = KL(q(z | x) || p(z)) summed over the latent dimensions (zero for an autoencoder).
+    Also returns ``kl_per_dim`` ``(latent_dim,)`` (batch mean), for monitoring collapse.
+    """
+    out = model(x, label, generator)
+    recon = gaussian_nll(x, out.mean, model.cfg.obs_logvar).flatten(1).sum(-1).mean()
+    if out.logvar is None:
+        kl_dims = torch.zeros(model.cfg.latent_dim, dtype=x.dtype, device=x.device)
+    else:
+        kl_dims = gaussian_kl(out.mu, out.logvar, prior_logvar=model.cfg.prior_logvar).mean(0)
+    return {"recon": recon, "kl": kl_dims.sum(), "kl_per_dim": kl_dims}
+
+
+def elbo_loss(model: LatentVariableModel, batch: Tensor | tuple[Tensor, Tensor], step: int,
+              coeffs: dict[str, float]) -> dict[str, Tensor]:
+    """Loss function for :func:`motionlab.train.train`: ``recon + beta * kl`` (``beta`` from the schedules, default 1).
+
+    ``batch`` is ``x`` for an unconditional model or ``(x, label)`` for a conditional one. For an autoencoder
+    the loss is the reconstruction term alone.
+    """
+    x, label = batch if isinstance(batch, (tuple, list)) else (batch, None)
+    terms = elbo_terms(model, x, label)
+    if not model.variational:
+        return {"loss": terms["recon"], "recon": terms["recon"]}
+    beta = coeffs.get("beta", 1.0)
+    return {"loss": terms["recon"] + beta * terms["kl"], "recon": terms["recon"], "kl": terms["kl"]}
+
+
+@torch.no_grad()
+def encode_all(model: LatentVariableModel, x: Tensor, label: Tensor | None = None,
+               chunk: int = 1024) -> tuple[Tensor, Tensor | None]:
+    """Posterior parameters of a whole data set, in eval mode and in chunks: ``mu``, ``logvar`` ``(N, latent_dim)``."""
+    was_training = model.training
+    model.eval()
+    try:
+        parts = [model.encode(x[i:i + chunk], None if label is None else label[i:i + chunk])
+                 for i in range(0, x.shape[0], chunk)]
+    finally:
+        model.train(was_training)
+    mu = torch.cat([p[0] for p in parts])
+    logvar = None if parts[0][1] is None else torch.cat([p[1] for p in parts])
+    return mu, logvar
+
+
+def interpolate_codes(z0: Tensor, z1: Tensor, t: Tensor | float) -> Tensor:
+    """Straight-line interpolation ``(1 - t) z0 + t z1``: codes ``(D,)`` and ``t`` scalar or ``(K,)`` -> ``(K, D)``."""
+    if z0.shape != z1.shape or z0.dim() != 1:
+        raise ValueError(f"interpolate_codes: z0 and z1 must be 1-D codes of one size, got {tuple(z0.shape)} and "
+                         f"{tuple(z1.shape)}")
+    t = torch.as_tensor(t, dtype=z0.dtype).reshape(-1, 1)
+    return (1 - t) * z0 + t * z1

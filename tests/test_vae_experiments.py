@@ -1,0 +1,58 @@
+"""Chapter 03's measurements: latent summaries, pose plausibility, KL schedules and the settings."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+import torch
+
+from motionlab.data.synthetic import generate
+from motionlab.models.vae_experiments import (
+    chapter_settings,
+    clip_cvae_config,
+    kl_weight,
+    latent_summary,
+    plausibility,
+    pose_vae_config,
+)
+
+
+def test_latent_summary_measures_activity_in_prior_units():
+    g = torch.Generator().manual_seed(0)
+    mu = torch.randn(500, 3, generator=g) * torch.tensor([1.0, 0.05, 0.0])
+    logvar = torch.full((500, 3), math.log(0.2))
+    unit = latent_summary(mu, logvar)
+    assert unit.active == 1  # variances 1, 0.0025, 0 against the 0.01 threshold
+    assert torch.allclose(unit.posterior_var, torch.full((3,), 0.2))
+    assert torch.allclose(unit.mu_std, mu.std(0))
+    expected_kl = 0.5 * (-math.log(0.2) + 0.2 + (mu**2).mean(0) - 1)
+    assert torch.allclose(unit.kl_per_dim, expected_kl, atol=1e-5)
+    # the same codes measured against a prior of variance 0.05: activity divides by 0.05
+    small = latent_summary(mu, logvar, prior_logvar=math.log(0.05))
+    assert torch.allclose(small.activity, unit.activity / 0.05, rtol=1e-5)
+    assert small.active == 2
+
+
+def test_plausibility_is_zero_for_real_poses_and_grows_with_stretching():
+    clips = generate(0, 1, seconds=1.0)
+    poses = torch.as_tensor(clips.positions[:, 0])  # (12, 22, 3), both body types
+    assert plausibility(poses, clips.offsets, clips.parents) < 1e-5
+    stretched = poses * 1.1
+    bones = np.linalg.norm(clips.offsets[clips.body], axis=-1)[:, 1:]  # (12, 21) each clip's own bones
+    assert plausibility(stretched, clips.offsets, clips.parents) == pytest.approx(0.1 * bones.mean(), rel=0.05)
+    with pytest.raises(ValueError, match="poses \\(N, 22, 3\\)"):
+        plausibility(poses[0], clips.offsets, clips.parents)
+
+
+def test_kl_weight_and_configs():
+    ramp = kl_weight(600, anneal=True)
+    assert ramp(0) == 0.0 and ramp(150) == pytest.approx(0.5) and ramp(300) == 1.0 and ramp(599) == 1.0
+    assert kl_weight(600, anneal=False)(0) == 1.0
+    settings = chapter_settings()
+    cvae = clip_cvae_config(settings, n_actions=6, prior_var=0.05)
+    assert cvae.input_shape == (settings.clip_length, 67) and cvae.n_classes == 6
+    assert math.exp(cvae.obs_logvar) == pytest.approx(33.5)
+    assert math.exp(cvae.prior_logvar) == pytest.approx(0.05)
+    assert pose_vae_config(settings, variational=False).variational is False
