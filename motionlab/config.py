@@ -25,9 +25,10 @@ T = TypeVar("T")
 PROFILES = ("quick", "full")
 
 #: Threads torch uses for the course's small models. Measured on the 2-core course machine
-#: (see README, "Threads"): a 2-layer GRU(128) training step on a batch of 64 clips took
-#: 1 thread: 1.0x, 2 threads: slower, because these kernels are too small to split well and the
-#: second thread only adds synchronisation. One thread also leaves a core for the Jupyter server.
+#: (README, "Threads"; ``make bench``, entry ``threads``): a second thread speeds up one training step of
+#: the Motion Cell (hidden 64, batch 32) by only 5-10 %, because its kernels are too small to split
+#: well, while a second *process* on the other core doubles the throughput. So every run uses one
+#: thread and the chapters with several models train two at a time (:mod:`motionlab.train.parallel`).
 DEFAULT_THREADS = 1
 
 REPO_ROOT = Path(__file__).resolve().parents[1]

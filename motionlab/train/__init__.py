@@ -17,7 +17,7 @@ Modules: :mod:`~motionlab.train.schedules` (schedules), :mod:`~motionlab.train.t
 """
 
 from motionlab.train.batches import TensorBatches
-from motionlab.train.cache import resume_path, run_identity, train_or_load
+from motionlab.train.cache import is_cached, resume_path, run_identity, train_or_load
 from motionlab.train.history import History
 from motionlab.train.loop import NonFiniteLossError, TrainResult, loss_terms, train
 from motionlab.train.plot import plot_history
@@ -35,6 +35,7 @@ __all__ = [
     "TensorBatches",
     "TrainConfig",
     "TrainResult",
+    "is_cached",
     "loss_terms",
     "plot_history",
     "resume_path",

@@ -42,6 +42,11 @@ def resume_path(name: str, identity: dict[str, Any]) -> Path:
     return checkpoint_path(name, identity).with_suffix(".resume.pt")
 
 
+def is_cached(name: str, model_config: Any, train_config: TrainConfig, data_config: Any | None = None) -> bool:
+    """Whether :func:`train_or_load` with these arguments would find a cache entry (and not train)."""
+    return checkpoint_path(name, run_identity(model_config, train_config, data_config)).exists()
+
+
 def _cached_result(name: str, identity: dict[str, Any], model: nn.Module) -> TrainResult | None:
     """The cached run, loaded into ``model``; ``None`` (model untouched) when absent or unusable."""
     backup = {k: v.detach().clone() for k, v in model.state_dict().items()}

@@ -1,0 +1,95 @@
+"""Training in worker processes: order, thread count, errors, and weights identical to training in-process."""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+
+import pytest
+import torch
+from torch import nn
+
+from motionlab import config
+from motionlab.train import TensorBatches, TrainConfig, is_cached, train_or_load
+from motionlab.train.parallel import InBackground, run_in_workers, worker_pool
+
+CFG = TrainConfig(steps=15, batch_size=8, lr=1e-2, checkpoint_every=None)
+
+
+@pytest.fixture(autouse=True)
+def own_build(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    # Spawned workers inherit the environment, so they share this test's cache directory.
+    monkeypatch.setenv("MOTIONLAB_BUILD", str(tmp_path / "build"))
+    monkeypatch.setenv("MOTIONLAB_PROFILE", "quick")
+
+
+def where_and_threads(tag: str) -> tuple[str, int, int]:
+    return tag, os.getpid(), torch.get_num_threads()
+
+
+def fail(message: str) -> None:
+    raise RuntimeError(message)
+
+
+def tiny_model() -> nn.Module:
+    torch.manual_seed(0)
+    return nn.Sequential(nn.Linear(4, 8), nn.Tanh(), nn.Linear(8, 4))
+
+
+def loss_fn(model: nn.Module, batch: torch.Tensor, step: int, coeffs: dict[str, float]) -> dict[str, torch.Tensor]:
+    return {"loss": ((model(batch) - batch) ** 2).mean()}
+
+
+def batches() -> TensorBatches:
+    return TensorBatches((torch.randn(32, 4, generator=torch.Generator().manual_seed(3)),))
+
+
+def train_tiny(name: str) -> bool:
+    return train_or_load(name, {"hidden": 8}, tiny_model(), loss_fn, batches(), CFG).loaded_from_cache
+
+
+def test_results_come_back_in_order_from_other_processes_on_one_thread() -> None:
+    results = run_in_workers(where_and_threads, [("a",), ("b",), ("c",)], processes=2)
+    assert [tag for tag, _, _ in results] == ["a", "b", "c"]
+    assert all(pid != os.getpid() for _, pid, _ in results)
+    assert all(threads == config.DEFAULT_THREADS for _, _, threads in results)
+
+
+def test_one_process_or_one_call_runs_here() -> None:
+    assert run_in_workers(where_and_threads, [("x",)], processes=2)[0][1] == os.getpid()
+    assert {pid for _, pid, _ in run_in_workers(where_and_threads, [("x",), ("y",)], processes=1)} == {os.getpid()}
+    assert run_in_workers(where_and_threads, [], processes=2) == []
+
+
+def test_an_error_in_a_worker_is_raised_here() -> None:
+    with pytest.raises(RuntimeError, match="broken run"):
+        run_in_workers(fail, [("broken run",), ("another",)], processes=2)
+
+
+def test_a_background_call_runs_elsewhere_and_reports_its_result_or_error() -> None:
+    background, broken = InBackground(where_and_threads, "later"), InBackground(fail, "broken in the background")
+    tag, pid, threads = background.wait()
+    assert tag == "later" and pid != os.getpid() and threads == config.DEFAULT_THREADS and background.done()
+    with pytest.raises(RuntimeError, match="broken in the background"):
+        broken.wait()
+
+
+@pytest.mark.parametrize("processes", [0, -1, 1.5, True])
+def test_the_process_count_is_checked(processes) -> None:
+    with pytest.raises(ValueError, match="processes"):
+        run_in_workers(where_and_threads, [("a",), ("b",)], processes=processes)
+    with pytest.raises(ValueError, match="processes"):
+        worker_pool(processes)
+
+
+def test_a_run_trained_in_a_worker_loads_here_with_the_weights_of_an_in_process_run() -> None:
+    assert not is_cached("tiny_worker", {"hidden": 8}, CFG)
+    assert run_in_workers(train_tiny, [("tiny_worker",), ("tiny_other",)], processes=2) == [False, False]
+    assert is_cached("tiny_worker", {"hidden": 8}, CFG)
+    loaded = tiny_model()
+    assert train_or_load("tiny_worker", {"hidden": 8}, loaded, loss_fn, batches(), CFG).loaded_from_cache
+    config.set_threads()
+    here = tiny_model()
+    assert not train_or_load("tiny_here", {"hidden": 8}, here, loss_fn, batches(), CFG).loaded_from_cache
+    for (key, a), b in zip(loaded.state_dict().items(), here.state_dict().values()):
+        assert torch.equal(a, b), key
