@@ -52,6 +52,11 @@ def benchmark_evaluator(kind: Literal["conv", "gru"] = "gru", progress: bool | N
     return evaluator
 
 
+def cache_benchmark_evaluator(kind: Literal["conv", "gru"]) -> None:
+    """Train the benchmark's evaluator of ``kind`` into the cache (or find it there); for worker processes."""
+    benchmark_evaluator(kind, progress=False)
+
+
 def sample_metrics(evaluator: Evaluator, positions: np.ndarray | torch.Tensor, action: np.ndarray,
                    reference_features: torch.Tensor, rng: np.random.Generator) -> dict[str, float]:
     """The action-conditioned metric row of one sample set (the ODMO / Action2Motion table columns).
