@@ -1,0 +1,105 @@
+"""The paper's first step: a 1D-convolutional denoising autoencoder that cleans motion capture before training.
+
+Real capture is noisy (jitter on every frame, spikes where markers were lost). Our synthetic clips are
+clean, so the chapter plays the whole story: the training split is "captured" through the noise model
+of :mod:`motionlab.data.noise`, a denoiser is trained on *other* clips whose clean version we know (the
+validation split, with fresh noise), and the denoised training split is what every model learns from.
+
+The autoencoder reads pose vectors ``(B, T, 90)`` as 90 channels over time: two conv layers down to a
+bottleneck and two back up, every layer keeping the frame count (kernel ``k``, padding ``k // 2``). Its
+output is a *correction* added to the noisy input (a skip connection around the autoencoder; the last
+layer starts at zero, so training starts from "change nothing"), and the corrected quaternions are
+normalised. It is trained with the same pose loss as the models (eq. 22 plus the root term) and the
+quaternion-norm constraint.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import torch
+from torch import Tensor, nn
+
+from motionlab.data.noise import ROTATION_NOISE, NoiseConfig, add_position_noise, add_rotation_noise
+from motionlab.geometry import quat_normalize
+from motionlab.models.motion_cell.config import DenoiserConfig, LossConfig
+from motionlab.models.motion_cell.data import PoseCodec, motion_cell_features
+from motionlab.models.motion_cell.losses import LossFn, joint_weights, norm_loss, pose_loss
+from motionlab.models.motion_cell.output import OutputHead, PosePrediction, assemble_pose
+
+#: Noise on the root position: 0.5 mm jitter, no spikes. The pelvis is tracked by a rigid cluster of markers,
+#: far better than single joints, and the root channels are velocities (frame differences), which magnify
+#: jitter: 5 mm would already swamp the sideways velocity (its standard deviation in the data is 4 mm per frame).
+ROOT_NOISE = NoiseConfig(jitter=0.0005, spike_rate=0.0)
+
+#: Clips denoised at a time.
+CHUNK = 256
+
+
+def noisy_features(rotations: np.ndarray, positions: np.ndarray, rng: np.random.Generator | int) -> Tensor:
+    """Motion Cell features ``(N, T, 90)`` of clips "captured" with noise.
+
+    The non-root joints' rotations get :data:`~motionlab.data.noise.ROTATION_NOISE` (jitter and spikes), the
+    root position :data:`ROOT_NOISE`; the root orientation stays clean (see :data:`ROOT_NOISE`).
+
+    Args:
+        rotations: clean local quaternions ``(N, T, 22, 4)``; positions: clean positions ``(N, T, 22, 3)``.
+        rng: a NumPy generator or seed; draws the rotation noise, then the root noise.
+    """
+    if not isinstance(rng, np.random.Generator):
+        if isinstance(rng, bool) or not isinstance(rng, (int, np.integer)) or rng < 0:
+            raise ValueError(f"noisy_features: rng must be a numpy Generator or a non-negative integer seed, got {rng!r}")
+        rng = np.random.default_rng(int(rng))
+    noisy_rotations = np.asarray(rotations, dtype=np.float32).copy()
+    noisy_rotations[:, :, 1:], _ = add_rotation_noise(noisy_rotations[:, :, 1:], rng, ROTATION_NOISE)
+    noisy_root, _ = add_position_noise(np.asarray(positions, dtype=np.float32)[:, :, :1], rng, ROOT_NOISE)
+    noisy_positions = np.asarray(positions, dtype=np.float32).copy()
+    noisy_positions[:, :, :1] = noisy_root
+    return motion_cell_features(noisy_rotations, noisy_positions)
+
+
+class DenoisingAutoencoder(nn.Module):
+    """Conv1d encoder-decoder over time: noisy pose vectors ``(B, T, 90)`` -> clean ones."""
+
+    def __init__(self, cfg: DenoiserConfig, codec: PoseCodec) -> None:
+        super().__init__()
+        if codec.n_joints != cfg.n_joints:
+            raise ValueError(f"DenoisingAutoencoder: the codec has {codec.n_joints} joints, the config {cfg.n_joints}")
+        self.cfg = cfg
+        self.codec = codec
+        self.head = OutputHead("quaternion")
+        k, pad = cfg.kernel_size, cfg.kernel_size // 2
+        self.encoder = nn.Sequential(nn.Conv1d(cfg.pose_dim, cfg.channels, k, padding=pad), nn.ELU(),
+                                     nn.Conv1d(cfg.channels, cfg.bottleneck, k, padding=pad), nn.ELU())
+        self.decoder = nn.Sequential(nn.Conv1d(cfg.bottleneck, cfg.channels, k, padding=pad), nn.ELU(),
+                                     nn.Conv1d(cfg.channels, cfg.pose_dim, k, padding=pad))
+        with torch.no_grad():  # start close to "change nothing"
+            self.decoder[-1].weight.mul_(0.01)
+            self.decoder[-1].bias.zero_()
+
+    def forward(self, noisy: Tensor) -> PosePrediction:
+        """Denoised pose vectors ``(B, T, 90)`` and the corrected quaternions before normalisation ``(B, T, J - 1, 4)``."""
+        if noisy.dim() != 3 or noisy.shape[-1] != self.cfg.pose_dim:
+            raise ValueError(f"DenoisingAutoencoder: expected (B, T, {self.cfg.pose_dim}), got {tuple(noisy.shape)}")
+        corrected = noisy + self.decoder(self.encoder(noisy.transpose(1, 2))).transpose(1, 2)
+        quaternions, root = self.codec.split(corrected)
+        return PosePrediction(assemble_pose(quat_normalize(quaternions), root), quaternions)
+
+    @torch.no_grad()
+    def denoise(self, noisy: Tensor) -> Tensor:
+        """Denoised pose vectors ``(N, T, 90)``, in chunks of :data:`CHUNK` clips."""
+        self.eval()
+        return torch.cat([self(noisy[i:i + CHUNK]).poses for i in range(0, noisy.shape[0], CHUNK)])
+
+
+def denoiser_loss(cfg: LossConfig) -> LossFn:
+    """Pose loss of the denoised clips against the clean ones, plus the norm constraint; batches ``(noisy, clean)``."""
+    weights = joint_weights(cfg.joint_weights)
+
+    def loss_fn(model: nn.Module, batch: tuple[Tensor, Tensor], step: int, coeffs: dict[str, float]) -> dict[str, Tensor]:
+        noisy, clean = batch
+        out = model(noisy)
+        pose = pose_loss(model.codec, out.poses, clean, weights, cfg.root_weight)
+        norm = norm_loss(out.rotation_params, model.head)
+        return {"loss": pose + cfg.norm_weight * norm, "pose": pose, "norm": norm}
+
+    return loss_fn

@@ -1,0 +1,212 @@
+"""The paper's evaluation protocol on the course benchmark: Table 2 rows, mean-collapse curves, t-SNE.
+
+* **Protocol.** Every model generates :data:`PROTOCOL_FRAMES` = 140 frames per sample and the first
+  :data:`DISCARDED_FRAMES` = 20 are discarded (they depend on the initial state more than on the model);
+  a sample set holds the same number of samples for every action x body type combination.
+* **Table 2.** Each row is the mean and 95% interval over repeated sample sets of IS, FID, accuracy and
+  diversity (:func:`motionlab.evaluation.benchmark.sample_metrics`), measured with the benchmark's GRU
+  evaluator; the real row is the held-out test split.
+* **Mean collapse.** Each frame's distance to the data set's mean pose (mean over joints of the
+  Euclidean distance, in the body frame of :func:`motionlab.evaluation.body_frame_features`), averaged
+  over the samples of the non-periodic actions. A model that regresses to the mean drifts towards zero;
+  :func:`collapse_ratio` divides its level over frames 60-140 by real data's level. A model can also fail
+  the other way, drifting into poses far from the mean; :func:`speed_curve` (mean joint speed in the body
+  frame) tells the two apart: a collapsed model also stops moving.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from typing import NamedTuple, Protocol
+
+import numpy as np
+import torch
+from torch import Tensor
+
+from motionlab.evaluation import body_frame_features
+from motionlab.evaluation.benchmark import sample_metrics
+from motionlab.evaluation.evaluator import Evaluator
+from motionlab.metrics import mean_ci, repeat_seed
+from motionlab.models.motion_cell.config import BaselineConfig, MotionCellConfig
+from motionlab.models.motion_cell.data import PoseCodec
+from motionlab.train.parallel import run_in_workers
+
+PROTOCOL_FRAMES = 140
+DISCARDED_FRAMES = 20
+#: Frames (half-open) over which the mean-collapse ratio is measured.
+COLLAPSE_FRAMES = (60, 140)
+#: The benchmark's actions that happen once per clip (the others repeat: walk, jog, wave).
+NON_PERIODIC_ACTIONS = ("jump", "lift", "kick")
+
+
+class MotionGenerator(Protocol):
+    """What the protocol needs of a model: its config (class counts), a codec and ``generate``."""
+
+    cfg: MotionCellConfig | BaselineConfig
+    codec: PoseCodec
+
+    def generate(self, action: Tensor, body: Tensor, n_frames: int, generator: torch.Generator | None = None) -> Tensor: ...
+
+
+class SampleSet(NamedTuple):
+    """Generated clips: positions ``(N, T, 22, 3)`` over all generated frames, and attributes ``(N,)`` each."""
+
+    positions: Tensor
+    action: Tensor
+    body: Tensor
+
+    @property
+    def evaluated(self) -> Tensor:
+        """The frames the metrics see, ``(N, T - DISCARDED_FRAMES, 22, 3)``."""
+        return self.positions[:, DISCARDED_FRAMES:]
+
+
+class ModelEvaluation(NamedTuple):
+    """A Table 2 row ``{metric: (mean, 95% half-width)}`` and the first sample set it was measured on."""
+
+    row: dict[str, tuple[float, float]]
+    samples: SampleSet
+
+
+def attribute_grid(n_per_combination: int, n_actions: int = 6, n_bodies: int = 2) -> tuple[Tensor, Tensor]:
+    """Actions and body types ``(n_actions * n_bodies * n_per_combination,)``: every combination equally often."""
+    if isinstance(n_per_combination, bool) or not isinstance(n_per_combination, int) or n_per_combination < 1:
+        raise ValueError(f"attribute_grid: n_per_combination must be a positive integer, got {n_per_combination!r}")
+    combination = torch.arange(n_actions * n_bodies).repeat_interleave(n_per_combination)
+    return combination // n_bodies, combination % n_bodies
+
+
+def protocol_samples(model: MotionGenerator, n_per_combination: int, generator: torch.Generator,
+                     n_frames: int = PROTOCOL_FRAMES) -> SampleSet:
+    """One sample set: ``n_per_combination`` clips of ``n_frames`` for every action x body combination."""
+    action, body = attribute_grid(n_per_combination, model.cfg.n_actions, model.cfg.n_bodies)
+    with torch.no_grad():
+        poses = model.generate(action, body, n_frames, generator)
+        positions = model.codec.positions(poses, body)
+    return SampleSet(positions, action, body)
+
+
+def evaluate_model(model: MotionGenerator, evaluator: Evaluator, reference_features: Tensor, n_per_combination: int,
+                   n_repeats: int, seed: int = 0) -> ModelEvaluation:
+    """Table 2 metrics of ``model`` over ``n_repeats`` sample sets (frames 20-140 of each sample).
+
+    Repeat ``r`` draws its samples with ``torch.Generator().manual_seed(repeat_seed(seed, r))`` and its
+    Diversity pairs with ``numpy.random.default_rng([seed, r])``, so the numbers are reproducible.
+    """
+    if isinstance(n_repeats, bool) or not isinstance(n_repeats, int) or n_repeats < 2:
+        raise ValueError(f"evaluate_model: n_repeats must be an integer >= 2 (for an interval), got {n_repeats!r}")
+    rows, first = [], None
+    for r in range(n_repeats):
+        samples = protocol_samples(model, n_per_combination, torch.Generator().manual_seed(repeat_seed(seed, r)))
+        first = samples if first is None else first
+        rows.append(sample_metrics(evaluator, samples.evaluated, samples.action.numpy(), reference_features,
+                                   np.random.default_rng([seed, r])))
+    return ModelEvaluation({key: mean_ci([row[key] for row in rows]) for key in rows[0]}, first)
+
+
+def evaluate_models(models: dict[str, MotionGenerator], evaluator: Evaluator, reference_features: Tensor,
+                    n_per_combination: int, n_repeats: int, seed: int = 0,
+                    processes: int = 2) -> dict[str, ModelEvaluation]:
+    """:func:`evaluate_model` of every model, ``processes`` models at a time in worker processes.
+
+    Each evaluation is seeded by ``seed`` alone, so the numbers are those of an in-process call.
+    """
+    calls = [(model, evaluator, reference_features, n_per_combination, n_repeats, seed) for model in models.values()]
+    return dict(zip(models, run_in_workers(evaluate_model, calls, processes)))
+
+
+def body_frame_poses(positions: Tensor) -> Tensor:
+    """Joint positions ``(..., T, 22, 3)`` in each frame's body frame (root on the z axis, facing +x)."""
+    features = body_frame_features(torch.as_tensor(positions, dtype=torch.float32))
+    height = features[..., :1]
+    root = torch.cat([torch.zeros_like(height), torch.zeros_like(height), height], dim=-1)
+    return torch.cat([root[..., None, :], features[..., 1:64].unflatten(-1, (21, 3))], dim=-2)
+
+
+def mean_pose(positions: Tensor | np.ndarray) -> Tensor:
+    """The data set's mean pose ``(22, 3)``: body-frame positions averaged over all clips and frames."""
+    return body_frame_poses(torch.as_tensor(np.asarray(positions))).flatten(0, -3).mean(0)
+
+
+def distance_to_pose(positions: Tensor | np.ndarray, pose: Tensor) -> Tensor:
+    """Mean over joints of the distance (metres) of each frame's body-frame pose to ``pose``: ``(N, T)``."""
+    poses = body_frame_poses(torch.as_tensor(np.asarray(positions)))
+    if pose.shape != poses.shape[-2:]:
+        raise ValueError(f"distance_to_pose: pose must be {tuple(poses.shape[-2:])}, got {tuple(pose.shape)}")
+    return (poses - pose).norm(dim=-1).mean(-1)
+
+
+def action_mask(action: Tensor | np.ndarray, action_names: Sequence[str], chosen: Sequence[str] = NON_PERIODIC_ACTIONS) -> Tensor:
+    """Boolean ``(N,)``: which clips' actions are among ``chosen`` (names from ``action_names``)."""
+    unknown = set(chosen) - set(action_names)
+    if unknown:
+        raise ValueError(f"action_mask: unknown actions {sorted(unknown)}; the data has {list(action_names)}")
+    ids = torch.tensor([list(action_names).index(name) for name in chosen])
+    return torch.isin(torch.as_tensor(np.asarray(action)), ids)
+
+
+def collapse_curve(samples: SampleSet, pose: Tensor, action_names: Sequence[str]) -> Tensor:
+    """Distance to ``pose`` per frame ``(T,)``, averaged over the samples of the non-periodic actions."""
+    mask = action_mask(samples.action, action_names)
+    if not bool(mask.any()):
+        raise ValueError("collapse_curve: the sample set has no clip of a non-periodic action")
+    return distance_to_pose(samples.positions[mask], pose).mean(0)
+
+
+def real_collapse_level(positions: Tensor | np.ndarray, action: Tensor | np.ndarray, pose: Tensor,
+                        action_names: Sequence[str]) -> float:
+    """Real data's mean distance to ``pose`` over every frame of its non-periodic clips (the ratio's unit)."""
+    mask = action_mask(action, action_names)
+    if not bool(mask.any()):
+        raise ValueError("real_collapse_level: no clip of a non-periodic action")
+    return float(distance_to_pose(torch.as_tensor(np.asarray(positions))[mask], pose).mean())
+
+
+def joint_speed(positions: Tensor | np.ndarray, fps: float = 30.0) -> Tensor:
+    """Mean over joints of each frame's body-frame joint speed (m/s) ``(N, T)``; frame 0 repeats frame 1's.
+
+    The body frame removes travel over the floor, so a frozen pose scores 0 whether or not it glides.
+    """
+    poses = body_frame_poses(torch.as_tensor(np.asarray(positions)))
+    if poses.shape[-3] < 2:
+        raise ValueError(f"joint_speed: need at least 2 frames, got {poses.shape[-3]}")
+    speed = (poses[..., 1:, :, :] - poses[..., :-1, :, :]).norm(dim=-1).mean(-1) * fps
+    return torch.cat([speed[..., :1], speed], dim=-1)
+
+
+def speed_curve(samples: SampleSet, action_names: Sequence[str], fps: float = 30.0) -> Tensor:
+    """:func:`joint_speed` per frame ``(T,)``, averaged over the samples of the non-periodic actions."""
+    mask = action_mask(samples.action, action_names)
+    if not bool(mask.any()):
+        raise ValueError("speed_curve: the sample set has no clip of a non-periodic action")
+    return joint_speed(samples.positions[mask], fps).mean(0)
+
+
+def real_speed_level(positions: Tensor | np.ndarray, action: Tensor | np.ndarray, action_names: Sequence[str],
+                     fps: float = 30.0) -> float:
+    """Real data's mean :func:`joint_speed` over every frame of its non-periodic clips."""
+    mask = action_mask(action, action_names)
+    if not bool(mask.any()):
+        raise ValueError("real_speed_level: no clip of a non-periodic action")
+    return float(joint_speed(torch.as_tensor(np.asarray(positions))[mask], fps).mean())
+
+
+def collapse_ratio(curve: Tensor, real_level: float, frames: tuple[int, int] = COLLAPSE_FRAMES) -> float:
+    """Mean of ``curve`` ``(T,)`` over ``frames`` divided by ``real_level`` (1: as lively as real data)."""
+    begin, end = frames
+    if not 0 <= begin < end <= curve.shape[0]:
+        raise ValueError(f"collapse_ratio: frames {frames} do not fit a curve of {curve.shape[0]} frames")
+    if not real_level > 0:
+        raise ValueError(f"collapse_ratio: real_level must be positive, got {real_level}")
+    return float(curve[begin:end].mean()) / real_level
+
+
+def tsne_embedding(features: Tensor | np.ndarray, seed: int = 0, perplexity: float = 30.0) -> np.ndarray:
+    """2-D t-SNE embedding ``(N, 2)`` of feature vectors ``(N, D)`` (scikit-learn, PCA initialisation, seeded)."""
+    from sklearn.manifold import TSNE
+
+    x = np.asarray(features, dtype=np.float64)
+    if x.ndim != 2 or x.shape[0] < 5:
+        raise ValueError(f"tsne_embedding: features must be (N, D) with N >= 5, got {x.shape}")
+    return TSNE(n_components=2, perplexity=min(perplexity, (x.shape[0] - 1) / 3), init="pca",
+                random_state=seed).fit_transform(x)

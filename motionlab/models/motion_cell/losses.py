@@ -1,0 +1,183 @@
+r"""The terms of the Motion Cell objective (the paper's eq. 14), shared by the baselines and the denoiser.
+
+Per frame, for predicted pose vectors against the data (all terms are means over clips and frames):
+
+* hierarchical geodesic reconstruction (eq. 22): :math:`\sum_k \alpha_k\, d_1(q_k, \hat q_k)` over the
+  non-root joints, with :math:`d_1` the rotation angle between the two quaternions and
+  :math:`\alpha_k` the joint impact weights of :func:`motionlab.skeleton.joint_impact_weights` (eq. 23;
+  rescaled to mean 1 over the non-root joints), or all ones for the NL ablation; plus the squared error
+  of the 6 standardised root channels;
+* KL of the posterior from the learned prior, summed over latent dimensions, per word divided by the
+  word length (nats per frame, so SL and the word models are on one scale);
+* classifier loss (eq. 24): feature matching of mean activations on every intermediate layer of the
+  frozen conv classifier plus cross-entropy of its action and body heads, on clips *sampled* from the
+  model (prior and free-running recurrence) with the attributes of real clips of the batch;
+* quaternion-norm constraint (eq. 26): :math:`(\lVert q\rVert - 1)^2` of the raw quaternion outputs.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+
+import torch
+import torch.nn.functional as F
+from torch import Tensor, nn
+
+from motionlab.evaluation.evaluator import Evaluator
+from motionlab.geometry import quat_geodesic, quat_norm_penalty
+from motionlab.models.gaussian import gaussian_kl
+from motionlab.models.motion_cell.config import JOINT_WEIGHTINGS, LossConfig
+from motionlab.models.motion_cell.data import PoseCodec, WindowBatch
+from motionlab.models.motion_cell.output import OutputHead
+from motionlab.skeleton import joint_impact_weights
+
+LossFn = Callable[[nn.Module, WindowBatch, int, dict[str, float]], dict[str, Tensor]]
+
+
+def joint_weights(kind: str, n_joints: int = 22) -> Tensor:
+    """The non-root joints' weights ``alpha_k`` ``(J - 1,)``, mean 1: ``"impact"`` (eq. 23) or ``"uniform"``."""
+    if kind not in JOINT_WEIGHTINGS:
+        raise ValueError(f"joint_weights: kind must be one of {JOINT_WEIGHTINGS}, got {kind!r}")
+    if kind == "uniform":
+        return torch.ones(n_joints - 1)
+    weights = torch.as_tensor(joint_impact_weights()[1:], dtype=torch.float32)
+    if weights.numel() != n_joints - 1:
+        raise ValueError(f"joint_weights: the impact weights are for {weights.numel() + 1} joints, not {n_joints}")
+    return weights / weights.mean()
+
+
+def rotation_loss(predicted: Tensor, target: Tensor, weights: Tensor) -> Tensor:
+    """Eq. 22: mean over frames of ``sum_k alpha_k d1(q_k, q^_k)`` for quaternions ``(..., J - 1, 4)``."""
+    if predicted.shape != target.shape or predicted.shape[-2:] != (weights.numel(), 4):
+        raise ValueError(f"rotation_loss: predicted {tuple(predicted.shape)} and target {tuple(target.shape)} must "
+                         f"both be (..., {weights.numel()}, 4)")
+    return (quat_geodesic(predicted, target) * weights).sum(-1).mean()
+
+
+def root_loss(predicted: Tensor, target: Tensor) -> Tensor:
+    """Mean over frames of the summed squared error of the standardised root channels ``(..., 6)``."""
+    if predicted.shape != target.shape:
+        raise ValueError(f"root_loss: shapes differ, {tuple(predicted.shape)} and {tuple(target.shape)}")
+    return ((predicted - target) ** 2).sum(-1).mean()
+
+
+def kl_loss(posterior_mu: Tensor, posterior_logvar: Tensor, prior_mu: Tensor, prior_logvar: Tensor,
+            word_length: int) -> Tensor:
+    """KL(q || p) summed over latent dimensions, averaged over words, divided by the word length (nats/frame)."""
+    return gaussian_kl(posterior_mu, posterior_logvar, prior_mu, prior_logvar).sum(-1).mean() / word_length
+
+
+def norm_loss(params: Tensor, head: OutputHead) -> Tensor:
+    """Eq. 26: mean over frames of ``sum_k (|q_k| - 1)^2`` of raw quaternion outputs; 0 for other heads."""
+    if head.kind != "quaternion":
+        return params.new_zeros(())
+    return quat_norm_penalty(params).sum(-1).mean()
+
+
+def pose_loss(codec: PoseCodec, predicted: Tensor, target: Tensor, weights: Tensor, root_weight: float) -> Tensor:
+    """Eq. 22's rotation term plus ``root_weight`` times the root term, for pose vectors ``(..., 90)``."""
+    predicted_q, predicted_root = codec.split(predicted)
+    target_q, target_root = codec.split(target)
+    return rotation_loss(predicted_q, target_q, weights) + root_weight * root_loss(predicted_root, target_root)
+
+
+class ClassifierLoss(nn.Module):
+    """Eq. 24 with a frozen evaluation classifier: feature matching on its layers plus attribute cross-entropy.
+
+    Built with the real training clips, whose mean activations per (action, body) combination it keeps:
+    for every intermediate layer of the classifier, the per-channel mean over clips and frames.
+    ``forward(generated, action, body)`` takes joint positions ``(B, T, 22, 3)`` of clips sampled from the
+    model (differentiable) with attributes ``(B,)`` and returns ``(feature_matching, cross_entropy)``:
+
+    * feature matching (as in CVAE-GAN, which the paper follows): for every layer, the squared distance
+      between the mean activation of the generated clips and the mean of the real means of their
+      attribute combinations, divided by the squared norm of the latter, summed over layers. It matches
+      statistics, not individual clips, so samples stay free to differ;
+    * the cross-entropy of the classifier's ``action`` and ``body`` heads on the generated clips.
+    """
+
+    targets: list[Tensor]
+
+    def __init__(self, evaluator: Evaluator, positions: Tensor, action: Tensor, body: Tensor, n_bodies: int = 2,
+                 chunk: int = 128) -> None:
+        super().__init__()
+        missing = {"action", "body"} - set(evaluator.classifier.heads)
+        if missing:
+            raise ValueError(f"ClassifierLoss: the evaluator has no {sorted(missing)} head(s)")
+        self.evaluator = evaluator.eval().requires_grad_(False)
+        self.n_bodies = n_bodies
+        combination = torch.as_tensor(action) * n_bodies + torch.as_tensor(body)
+        n_combinations = int(self.evaluator.classifier.heads["action"].out_features) * n_bodies
+        counts = torch.bincount(combination, minlength=n_combinations).double()
+        if bool((counts == 0).any()):
+            raise ValueError(f"ClassifierLoss: the real clips miss attribute combinations "
+                             f"{torch.nonzero(counts == 0).flatten().tolist()} (action * {n_bodies} + body)")
+        sums: list[Tensor] | None = None
+        with torch.no_grad():
+            for begin in range(0, positions.shape[0], chunk):
+                clip_means = self.clip_means(self.activations(positions[begin:begin + chunk]))
+                index = combination[begin:begin + chunk]
+                parts = [torch.zeros(n_combinations, m.shape[-1], dtype=torch.float64).index_add_(0, index, m.double())
+                         for m in clip_means]
+                sums = parts if sums is None else [s + p for s, p in zip(sums, parts)]
+        self.targets = [(s / counts[:, None]).float() for s in sums]
+
+    def activations(self, positions: Tensor) -> list[Tensor]:
+        """The classifier's intermediate activations for positions ``(B, T, 22, 3)``."""
+        return self.evaluator.classifier.layer_activations(self.evaluator.inputs(positions))
+
+    @staticmethod
+    def clip_means(activations: list[Tensor]) -> list[Tensor]:
+        """Per-clip channel means: ``(B, C, T)`` layers averaged over frames, ``(B, C)`` ones as they are."""
+        return [a.mean(dim=2) if a.dim() == 3 else a for a in activations]
+
+    def forward(self, generated: Tensor, action: Tensor, body: Tensor) -> tuple[Tensor, Tensor]:
+        if generated.dim() != 4 or generated.shape[0] != action.shape[0] or action.shape != body.shape:
+            raise ValueError(f"ClassifierLoss: expected generated (B, T, 22, 3) and attributes (B,), got "
+                             f"{tuple(generated.shape)}, {tuple(action.shape)} and {tuple(body.shape)}")
+        outputs = self.activations(generated)
+        combination = action * self.n_bodies + body
+        matching = generated.new_zeros(())
+        for mean, target in zip(self.clip_means(outputs), self.targets):
+            wanted = target[combination].mean(0)
+            matching = matching + ((mean.mean(0) - wanted) ** 2).sum() / (wanted**2).sum().clamp(min=1e-8)
+        heads = self.evaluator.classifier.heads
+        entropy = F.cross_entropy(heads["action"](outputs[-1]), action) + F.cross_entropy(heads["body"](outputs[-1]), body)
+        return matching, entropy
+
+
+def motion_cell_loss(cfg: LossConfig, classifier: ClassifierLoss | None = None) -> LossFn:
+    """The Motion Cell objective (eq. 14) for :func:`motionlab.train.train_or_load`.
+
+    Reads the schedules ``beta``, ``classifier`` (lambda_CL; the classifier runs only while it is positive,
+    and needs ``classifier``) and ``word_drop`` from ``coeffs``. The classifier term is computed every
+    ``cfg.classifier_every`` steps and weighted by that number (the same weight on average at a fraction of
+    the cost; in between its terms are logged as 0). Returns the total and every term.
+    """
+    weights = joint_weights(cfg.joint_weights)
+
+    def loss_fn(model: nn.Module, batch: WindowBatch, step: int, coeffs: dict[str, float]) -> dict[str, Tensor]:
+        out = model(batch.poses, batch.action, batch.body, word_drop=coeffs.get("word_drop", 0.0))
+        codec = model.codec
+        predicted_q, predicted_root = codec.split(out.poses)
+        target_q, target_root = codec.split(batch.poses)
+        rotation = rotation_loss(predicted_q, target_q, weights)
+        root = root_loss(predicted_root, target_root)
+        kl = kl_loss(out.posterior_mu, out.posterior_logvar, out.prior_mu, out.prior_logvar, model.cfg.word_length)
+        norm = norm_loss(out.rotation_params, model.head)
+        lambda_cl = coeffs.get("classifier", 0.0)
+        matching = entropy = out.poses.new_zeros(())
+        if lambda_cl > 0 and step % cfg.classifier_every == 0:
+            if classifier is None:
+                raise ValueError("motion_cell_loss: the 'classifier' schedule is positive but no ClassifierLoss was given")
+            k = min(cfg.classifier_clips, batch.poses.shape[0])
+            action, body = batch.action[:k], batch.body[:k]
+            generated = codec.positions(model.rollout(action, body, batch.poses.shape[1], truncate=cfg.classifier_truncate), body)
+            matching, entropy = classifier(generated, action, body)
+        classifier_term = cfg.classifier_every * (cfg.feature_weight * matching + cfg.entropy_weight * entropy)
+        total = (rotation + cfg.root_weight * root + coeffs.get("beta", 1.0) * kl + lambda_cl * classifier_term
+                 + cfg.norm_weight * norm)
+        return {"loss": total, "rotation": rotation, "root": root, "kl": kl, "feature_matching": matching,
+                "cross_entropy": entropy, "norm": norm}
+
+    return loss_fn

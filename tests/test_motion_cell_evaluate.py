@@ -1,0 +1,138 @@
+"""The evaluation protocol: sample sets, distances to the mean pose, collapse ratios, Table 2 rows."""
+
+import numpy as np
+import pytest
+import torch
+
+from motionlab.evaluation import EVAL_FEATURES, Evaluator, body_frame_features
+from motionlab.data.datasets import Standardizer
+from motionlab.models.classifiers import ClassifierConfig, MotionClassifier
+from motionlab.models.motion_cell import evaluate as E
+from motionlab.skeleton import average_skeleton
+from test_motion_cell_common import clips, motion_cell, perturb
+
+
+def test_attribute_grid_covers_every_combination_equally():
+    action, body = E.attribute_grid(3, n_actions=6, n_bodies=2)
+    assert action.shape == body.shape == (36,)
+    pairs = torch.stack([action, body], dim=1)
+    unique, counts = torch.unique(pairs, dim=0, return_counts=True)
+    assert unique.shape == (12, 2) and torch.all(counts == 3)
+    with pytest.raises(ValueError, match="n_per_combination"):
+        E.attribute_grid(0)
+
+
+def test_protocol_samples_have_140_frames_and_discard_20():
+    samples = E.protocol_samples(motion_cell(), 1, torch.Generator().manual_seed(0))
+    assert samples.positions.shape == (12, 140, 22, 3)
+    assert samples.evaluated.shape == (12, 120, 22, 3)
+    torch.testing.assert_close(samples.evaluated, samples.positions[:, 20:])
+
+
+def test_body_frame_poses_of_a_rest_pose_are_the_rest_positions():
+    rest = torch.tensor(average_skeleton().rest_positions(), dtype=torch.float32)
+    placed = rest + torch.tensor([2.0, -1.0, 0.9])  # somewhere on the floor, facing +x
+    poses = E.body_frame_poses(placed.expand(1, 3, 22, 3))
+    torch.testing.assert_close(poses[0, 0], rest + torch.tensor([0.0, 0.0, 0.9]), atol=1e-5, rtol=0)
+
+
+def test_distance_to_pose_by_hand():
+    positions = torch.as_tensor(clips().positions[:2, :5])
+    poses = E.body_frame_poses(positions)
+    pose = poses.flatten(0, 1).mean(0)
+    by_hand = np.linalg.norm(poses.numpy() - pose.numpy(), axis=-1).mean(-1)
+    np.testing.assert_allclose(E.distance_to_pose(positions, pose).numpy(), by_hand, rtol=1e-5)
+    assert E.mean_pose(positions).shape == (22, 3)
+    with pytest.raises(ValueError, match="pose"):
+        E.distance_to_pose(positions, pose[:21])
+
+
+def test_collapse_ratio_and_action_mask():
+    curve = torch.cat([torch.full((60,), 5.0), torch.full((80,), 2.0)])
+    assert E.collapse_ratio(curve, real_level=4.0) == pytest.approx(0.5)
+    with pytest.raises(ValueError, match="frames"):
+        E.collapse_ratio(curve[:100], 4.0)
+    with pytest.raises(ValueError, match="real_level"):
+        E.collapse_ratio(curve, 0.0)
+    names = ["walk", "jog", "jump", "lift", "wave", "kick"]
+    mask = E.action_mask(torch.tensor([0, 2, 3, 4, 5, 1]), names)
+    assert mask.tolist() == [False, True, True, False, True, False]
+    with pytest.raises(ValueError, match="unknown actions"):
+        E.action_mask(torch.tensor([0]), names, ("swim",))
+
+
+def test_collapse_curve_averages_the_non_periodic_samples():
+    samples = E.protocol_samples(motion_cell(), 1, torch.Generator().manual_seed(0))
+    names = list(clips().action_names)
+    pose = E.mean_pose(clips().positions)
+    curve = E.collapse_curve(samples, pose, names)
+    mask = E.action_mask(samples.action, names)
+    torch.testing.assert_close(curve, E.distance_to_pose(samples.positions[mask], pose).mean(0))
+    level = E.real_collapse_level(clips().positions, clips().action, pose, names)
+    real_mask = E.action_mask(torch.as_tensor(clips().action), names)
+    assert level == pytest.approx(float(E.distance_to_pose(clips().positions[real_mask.numpy()], pose).mean()), rel=1e-6)
+
+
+def _untrained_evaluator() -> Evaluator:
+    torch.manual_seed(0)
+    data = clips()
+    standardizer = Standardizer(EVAL_FEATURES).fit(body_frame_features(torch.as_tensor(data.positions)))
+    classifier = MotionClassifier(ClassifierConfig("gru", EVAL_FEATURES, {"action": 6, "mode": 12, "body": 2}, hidden=8))
+    return Evaluator(classifier, standardizer).eval()
+
+
+def test_evaluate_model_gives_a_reproducible_table_row():
+    evaluator = _untrained_evaluator()
+    reference = evaluator.features(clips().positions)
+    model = motion_cell()
+    perturb(model.word_decoder.net[-1].weight, 0.05)
+    first = E.evaluate_model(model, evaluator, reference, n_per_combination=1, n_repeats=2, seed=3)
+    second = E.evaluate_model(model, evaluator, reference, n_per_combination=1, n_repeats=2, seed=3)
+    assert set(first.row) == {"accuracy", "fid", "diversity", "multimodality", "is"}
+    assert first.row == second.row
+    assert torch.equal(first.samples.positions, second.samples.positions)
+    assert all(np.isfinite(mean) and half >= 0 for mean, half in first.row.values())
+    with pytest.raises(ValueError, match="n_repeats"):
+        E.evaluate_model(model, evaluator, reference, 1, 1)
+    other = motion_cell()
+    parallel = E.evaluate_models({"perturbed": model, "plain": other}, evaluator, reference, 1, 2, seed=3, processes=2)
+    assert list(parallel) == ["perturbed", "plain"]
+    assert parallel["perturbed"].row == first.row
+    assert torch.equal(parallel["perturbed"].samples.positions, first.samples.positions)
+    assert parallel["plain"].row == E.evaluate_model(other, evaluator, reference, 1, 2, seed=3).row
+
+
+def test_tsne_embedding_shape_and_seed():
+    x = np.random.default_rng(0).normal(size=(30, 5))
+    a = E.tsne_embedding(x, seed=0)
+    assert a.shape == (30, 2)
+    np.testing.assert_allclose(a, E.tsne_embedding(x, seed=0))
+    with pytest.raises(ValueError, match="features"):
+        E.tsne_embedding(x[:3])
+
+
+def test_joint_speed_ignores_travel_and_matches_a_hand_computation():
+    rest = torch.tensor(average_skeleton().rest_positions(), dtype=torch.float32) + torch.tensor([0.0, 0.0, 0.9])
+    gliding = rest + torch.linspace(0, 3, 10)[:, None, None] * torch.tensor([1.0, 0.0, 0.0])  # a frozen pose sliding along x
+    torch.testing.assert_close(E.joint_speed(gliding[None]), torch.zeros(1, 10), atol=1e-4, rtol=0)
+    positions = torch.as_tensor(clips().positions[:2, :6])
+    poses = E.body_frame_poses(positions).numpy()
+    by_hand = np.linalg.norm(np.diff(poses, axis=1), axis=-1).mean(-1) * 30.0
+    speed = E.joint_speed(positions).numpy()
+    np.testing.assert_allclose(speed[:, 1:], by_hand, rtol=1e-5)
+    np.testing.assert_allclose(speed[:, 0], speed[:, 1])
+    with pytest.raises(ValueError, match="2 frames"):
+        E.joint_speed(positions[:, :1])
+
+
+def test_speed_curve_averages_the_non_periodic_samples_and_real_level_matches():
+    data = clips()
+    names = list(data.action_names)
+    samples = E.SampleSet(torch.as_tensor(data.positions), torch.as_tensor(data.action), torch.as_tensor(data.body))
+    mask = E.action_mask(samples.action, names)
+    expected = E.joint_speed(samples.positions[mask]).mean(0)
+    torch.testing.assert_close(E.speed_curve(samples, names), expected)
+    assert E.real_speed_level(data.positions, data.action, names) == pytest.approx(float(expected.mean()), rel=1e-5)
+    walks = samples.action == names.index("walk")
+    with pytest.raises(ValueError, match="non-periodic"):
+        E.speed_curve(E.SampleSet(samples.positions[walks], samples.action[walks], samples.body[walks]), names)

@@ -1,0 +1,154 @@
+"""The Motion Cell model: shapes, unit quaternions, determinism by seed, generation of any length, bad input."""
+
+import math
+
+import pytest
+import torch
+
+from motionlab.models.motion_cell.cell import InitialState, bounded_logvar
+from motionlab.models.motion_cell.config import MotionCellConfig
+from test_motion_cell_common import batch, motion_cell, perturb, tiny_batch, tiny_model  # noqa: F401 (fixtures)
+
+
+def _quaternion_norms(model, poses):
+    return model.codec.split(poses)[0].norm(dim=-1)
+
+
+def test_forward_shapes_and_unit_quaternions(tiny_model, tiny_batch):
+    out = tiny_model(tiny_batch.poses, tiny_batch.action, tiny_batch.body, word_drop=0.3)
+    n, t = tiny_batch.poses.shape[:2]
+    assert out.poses.shape == (n, t, 90)
+    assert out.rotation_params.shape == (n, t, 21, 4)
+    for tensor in (out.posterior_mu, out.posterior_logvar, out.prior_mu, out.prior_logvar):
+        assert tensor.shape == (n, t // 3, 4)
+    torch.testing.assert_close(_quaternion_norms(tiny_model, out.poses), torch.ones(n, t, 21))
+
+
+def test_untrained_decoder_starts_at_the_rest_pose(tiny_model, tiny_batch):
+    out = tiny_model(tiny_batch.poses, tiny_batch.action, tiny_batch.body)
+    quaternions, root = tiny_model.codec.split(out.poses)
+    torch.testing.assert_close(quaternions, torch.tensor([1.0, 0, 0, 0]).expand_as(quaternions))
+    assert torch.all(root == 0)
+
+
+def test_the_posterior_sees_the_words_and_the_prior_does_not(tiny_model, tiny_batch):
+    g = lambda: torch.Generator().manual_seed(3)  # noqa: E731
+    a = tiny_model(tiny_batch.poses, tiny_batch.action, tiny_batch.body, generator=g())
+    changed = tiny_batch.poses.clone()
+    changed[:, 3:] += 0.5  # change every word from the second on
+    b = tiny_model(changed, tiny_batch.action, tiny_batch.body, generator=g())
+    torch.testing.assert_close(a.posterior_mu[:, 0], b.posterior_mu[:, 0])  # word 1 unchanged
+    assert not torch.allclose(a.posterior_mu[:, 1], b.posterior_mu[:, 1])
+    torch.testing.assert_close(a.prior_mu[:, :2], b.prior_mu[:, :2])  # p(z_t | h_{t-1}) reads words < t only
+    assert not torch.allclose(a.prior_mu[:, 2], b.prior_mu[:, 2])
+
+
+def test_dropping_every_word_cuts_the_words_out_of_the_recurrence(tiny_model, tiny_batch):
+    g = lambda: torch.Generator().manual_seed(5)  # noqa: E731
+    a = tiny_model(tiny_batch.poses, tiny_batch.action, tiny_batch.body, word_drop=1.0, generator=g())
+    changed = tiny_batch.poses.clone()
+    changed[:, :3] += 0.5  # change only word 1: with all words dropped, the prior of word 2 does not see it ...
+    b = tiny_model(changed, tiny_batch.action, tiny_batch.body, word_drop=1.0, generator=g())
+    assert not torch.allclose(a.posterior_mu[:, 0], b.posterior_mu[:, 0])
+    # ... except through the latent z_1 drawn from the (changed) posterior
+    c = tiny_model(tiny_batch.poses, tiny_batch.action, tiny_batch.body, word_drop=0.0, generator=g())
+    assert not torch.allclose(a.prior_mu[:, 1], c.prior_mu[:, 1])
+
+
+def test_forward_is_deterministic_given_the_generator(tiny_model, tiny_batch):
+    runs = [tiny_model(tiny_batch.poses, tiny_batch.action, tiny_batch.body, word_drop=0.5,
+                       generator=torch.Generator().manual_seed(11)) for _ in range(2)]
+    for x, y in zip(*runs):
+        assert torch.equal(x, y)
+
+
+@pytest.mark.parametrize("n_frames", [1, 7, 12, 100])
+def test_generate_any_length_with_unit_quaternions(tiny_model, n_frames):
+    action, body = torch.tensor([0, 5, 2]), torch.tensor([1, 0, 1])
+    poses = tiny_model.generate(action, body, n_frames, torch.Generator().manual_seed(0))
+    assert poses.shape == (3, n_frames, 90)
+    torch.testing.assert_close(_quaternion_norms(tiny_model, poses), torch.ones(3, n_frames, 21))
+
+
+def test_generation_with_the_same_seed_is_bitwise_identical_and_other_seeds_differ():
+    model = motion_cell()
+    perturb(model.word_decoder.net[-1].weight, 0.1)  # a decoder that moves
+    action, body = torch.tensor([0, 3]), torch.tensor([0, 1])
+    a = model.generate(action, body, 30, torch.Generator().manual_seed(7))
+    b = model.generate(action, body, 30, torch.Generator().manual_seed(7))
+    c = model.generate(action, body, 30, torch.Generator().manual_seed(8))
+    assert torch.equal(a, b)
+    assert not torch.equal(a, c)
+
+
+def test_a_longer_generation_starts_with_the_shorter_one():
+    model = motion_cell()
+    perturb(model.word_decoder.net[-1].weight, 0.1)
+    action, body = torch.tensor([1]), torch.tensor([0])
+    short = model.generate(action, body, 9, torch.Generator().manual_seed(2))
+    long = model.generate(action, body, 60, torch.Generator().manual_seed(2))
+    torch.testing.assert_close(long[:, :9], short)
+
+
+@pytest.mark.parametrize("output,params", [("quaternion", 4), ("matrix", 9), ("axis_angle", 3)])
+def test_every_output_head_gives_unit_quaternions(output, params, tiny_batch):
+    model = motion_cell(output=output)
+    perturb(model.word_decoder.net[-1].weight, 0.3)
+    out = model(tiny_batch.poses, tiny_batch.action, tiny_batch.body)
+    assert out.rotation_params.shape[-1] == params
+    torch.testing.assert_close(_quaternion_norms(model, out.poses), torch.ones(out.poses.shape[:2] + (21,)))
+
+
+def test_sl_ablation_runs_the_recurrence_once_per_frame():
+    model = motion_cell(word_length=1)
+    b = batch(frames=10)
+    out = model(b.poses, b.action, b.body)
+    assert out.posterior_mu.shape[:2] == (12, 10)
+
+
+def test_bad_input_raises_clear_errors(tiny_model, tiny_batch):
+    poses, action, body = tiny_batch
+    with pytest.raises(ValueError, match="whole number of words"):
+        tiny_model(poses[:, :10], action, body)
+    with pytest.raises(ValueError, match=r"\(B, T, 90\)"):
+        tiny_model(poses[..., :89], action, body)
+    bad = poses.clone()
+    bad[0, 0, 0] = math.nan
+    with pytest.raises(ValueError, match="NaN"):
+        tiny_model(bad, action, body)
+    with pytest.raises(ValueError, match="word_drop"):
+        tiny_model(poses, action, body, word_drop=1.5)
+    with pytest.raises(ValueError, match="action values"):
+        tiny_model(poses, action + 6, body)
+    with pytest.raises(ValueError, match="n_frames"):
+        tiny_model.generate(action, body, 0)
+    with pytest.raises(ValueError, match="action and body"):
+        tiny_model.generate(action, body[:3], 6)
+
+
+def test_config_validation():
+    with pytest.raises(ValueError, match="output"):
+        MotionCellConfig(output="euler")
+    with pytest.raises(ValueError, match="word_length"):
+        MotionCellConfig(word_length=0)
+
+
+def test_initial_state_is_a_learned_gaussian_per_attribute_combination():
+    initial = InitialState(n_actions=3, n_bodies=2, size=4)
+    with torch.no_grad():
+        initial.mean[1 * 2 + 1] = 5.0  # action 1, body 1
+        initial.logvar.fill_(math.log(0.25))  # sigma = 0.5
+    n = 4000
+    states = initial(torch.tensor([1, 0]).repeat_interleave(n), torch.tensor([1, 1]).repeat_interleave(n),
+                     torch.Generator().manual_seed(0))
+    for part, mean in ((states[:n], 5.0), (states[n:], 0.0)):
+        torch.testing.assert_close(part.mean(0), torch.full((4,), mean), atol=0.05, rtol=0)
+        torch.testing.assert_close(part.std(0), torch.full((4,), 0.5), atol=0.03, rtol=0)
+
+
+def test_bounded_logvar_is_the_identity_near_zero_and_bounded():
+    x = torch.tensor([-1e6, -0.01, 0.0, 0.01, 1e6])
+    y = bounded_logvar(x)
+    assert y[0] >= -8.0 and y[-1] <= 8.0
+    assert -8.0 < float(bounded_logvar(torch.tensor(-20.0))) < -7.5
+    torch.testing.assert_close(y[1:4], x[1:4], atol=1e-6, rtol=1e-4)
