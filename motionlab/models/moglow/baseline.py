@@ -1,0 +1,95 @@
+"""The Gaussian autoregressive baseline: an LSTM that predicts a mean and a diagonal variance per frame.
+
+It reads exactly MoGlow's conditioning ``c_t`` (:mod:`.autoregression`) and outputs
+``x_t ~ N(mu_t, diag(sigma_t**2))``. It is the natural "deterministic network plus noise" model that
+MoGlow is compared with: the same inputs and memory, but a unimodal, axis-aligned output distribution.
+"""
+
+from __future__ import annotations
+
+import math
+
+import torch
+from torch import Tensor, nn
+
+from motionlab.models.flows.coupling import zero_init
+from motionlab.models.flows.prior import check_temperature
+from motionlab.models.moglow.autoregression import (
+    autoregressive_conditioning,
+    autoregressive_sample,
+    check_pose_control,
+    history_keep_mask,
+)
+from motionlab.models.moglow.config import GaussianARConfig
+from motionlab.models.moglow.linear import LinearPredictor
+
+#: Bounds on the predicted log standard deviation (standard units), to keep the likelihood finite.
+LOG_STD_RANGE = (-15.0, 5.0)
+
+
+class GaussianAR(nn.Module):
+    """``x_t ~ N(mu(h_t), diag(sigma(h_t)**2))`` with ``h_t = LSTM(c_1 .. c_t)``."""
+
+    def __init__(self, cfg: GaussianARConfig) -> None:
+        super().__init__()
+        self.cfg = cfg
+        self.lstm = nn.LSTM(cfg.cond_dim, cfg.hidden, num_layers=cfg.layers, batch_first=True)
+        self.out = zero_init(nn.Linear(cfg.hidden, 2 * cfg.pose_dim))
+        self.linear = LinearPredictor(cfg.pose_dim, cfg.cond_dim)
+
+    def _distribution(self, cond: Tensor, hidden: Tensor) -> tuple[Tensor, Tensor]:
+        """Mean and log-std ``(..., P)``: the linear prediction and its residual scale, corrected by the LSTM.
+
+        The mean's correction is in units of the linear fit's residual scale (like MoGlow's residual
+        ``u_t``), so the first optimiser steps do not throw the mean off by many residual widths.
+        """
+        correction, raw = self.out(hidden).chunk(2, dim=-1)
+        scale = torch.exp(self.linear.log_scale)
+        return self.linear.mean(cond) + scale * correction, (self.linear.log_scale + raw).clamp(*LOG_STD_RANGE)
+
+    def initialize(self, pose: Tensor, control: Tensor, seed: int = 0) -> float:
+        """Fit the linear predictor (:mod:`.linear`) to training windows; returns its RMS residual."""
+        return self.linear.fit(pose, control, self.cfg.history, self.cfg.dropout, seed)
+
+    def forward(self, pose: Tensor, control: Tensor, generator: torch.Generator | None = None) -> Tensor:
+        """Log-likelihood ``(B,)`` (nats) of frames ``tau .. T-1``, as :meth:`MoGlow.forward` (history dropout
+        flags drawn from ``generator``)."""
+        check_pose_control(pose, control, self.cfg.pose_dim, self.cfg.control_dim, self.cfg.history + 1,
+                           "GaussianAR.forward")
+        if control.shape[1] != pose.shape[1]:
+            raise ValueError(f"GaussianAR.forward: pose and control must have the same frames, got {pose.shape[1]} "
+                             f"and {control.shape[1]}")
+        batch, frames, _ = pose.shape
+        keep = None
+        if self.cfg.dropout > 0:
+            keep = history_keep_mask(batch, frames - self.cfg.history, self.cfg.history, self.cfg.dropout, generator)
+        cond = autoregressive_conditioning(pose, control, self.cfg.history, keep)
+        hidden, _ = self.lstm(cond)
+        mean, log_std = self._distribution(cond, hidden)
+        target = pose[:, self.cfg.history:]
+        per_value = -0.5 * ((target - mean) * torch.exp(-log_std)).pow(2) - log_std - 0.5 * math.log(2 * math.pi)
+        return per_value.sum(dim=(1, 2))
+
+    @torch.no_grad()
+    def sample(self, control: Tensor, seed_pose: Tensor, temperature: float = 1.0,
+               generator: torch.Generator | None = None) -> Tensor:
+        """Generate poses ``(B, N, P)`` frame by frame, as :meth:`MoGlow.sample`."""
+        temperature = check_temperature(temperature, "GaussianAR.sample")
+        history = self.cfg.history
+        check_pose_control(seed_pose, control, self.cfg.pose_dim, self.cfg.control_dim, history, "GaussianAR.sample")
+        if seed_pose.shape[1] != history or control.shape[1] <= history:
+            raise ValueError(f"GaussianAR.sample: seed_pose must have tau={history} frames and control more than "
+                             f"that, got {tuple(seed_pose.shape)} and {tuple(control.shape)}")
+
+        batch, frames = control.shape[0], control.shape[1] - history
+        keep = None
+        if self.cfg.dropout > 0:
+            keep = history_keep_mask(batch, frames, history, self.cfg.dropout, generator).to(control.dtype)
+        noise = temperature * torch.randn(batch, frames, self.cfg.pose_dim, generator=generator, dtype=control.dtype)
+
+        def step(t: int, cond: Tensor, state: tuple[Tensor, Tensor] | None) -> tuple[Tensor, tuple[Tensor, Tensor]]:
+            hidden, state = self.lstm(cond[:, None], state)
+            mean, log_std = self._distribution(cond, hidden[:, 0])
+            return mean + torch.exp(log_std) * noise[:, t], state
+
+        return autoregressive_sample(step, control, seed_pose, None, keep)

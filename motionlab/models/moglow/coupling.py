@@ -1,0 +1,116 @@
+"""MoGlow's coupling layer: the affine coupling of Glow with an LSTM over time as its network.
+
+For frame ``t`` the network reads the untouched half ``x_a[t]`` and the conditioning ``c_t`` (previous
+poses and controls), updates its LSTM state and outputs the shift and raw scale of ``x_b[t]``. The
+state carries information from all earlier frames, so the flow of frame ``t`` depends on the whole past
+while each frame's transform stays a plain, exactly invertible affine coupling.
+
+Over a whole sequence (training, likelihoods) the LSTM runs from a zero state in one call; inverting a
+whole sequence is parallel as well, since ``x_a = y_a`` is known for every frame. Generation is
+different: the conditioning of frame ``t`` contains the pose generated at ``t - 1``, so
+:class:`FrameCoupling` inverts one frame at a time and hands back the updated state.
+"""
+
+from __future__ import annotations
+
+from typing import NamedTuple
+
+import torch
+from torch import Tensor, nn
+
+from motionlab.models.flows.base import FlowLayer, check_cond, check_sequence
+from motionlab.models.flows.coupling import SCALE_OFFSET, affine_forward, affine_inverse, zero_init
+
+LSTMState = tuple[Tensor, Tensor]
+"""An LSTM state ``(h, c)``, each ``(batch, hidden)``."""
+
+
+class LSTMAffineCoupling(FlowLayer):
+    """Affine coupling on ``(batch, channels, time)`` whose network is a one-layer LSTM over time.
+
+    Args:
+        channels: channels ``C >= 2``; ``x_a`` is the first ``C // 2``.
+        cond_channels: conditioning features per frame.
+        hidden: LSTM units.
+        scale_offset: the offset inside the sigmoid of the scale.
+
+    The LSTM reads ``[x_a[t], cond[t]]``; a linear layer, zero-initialised, maps its output and, through a
+    skip connection, its input to the shift and raw scale of ``x_b[t]`` (the skip lets the coupling use
+    linear relations between the halves from the first steps of training, before the LSTM has learned).
+    """
+
+    def __init__(self, channels: int, cond_channels: int, hidden: int, scale_offset: float = SCALE_OFFSET) -> None:
+        super().__init__()
+        if isinstance(channels, bool) or not isinstance(channels, int) or channels < 2:
+            raise ValueError(f"LSTMAffineCoupling: channels must be an int >= 2, got {channels!r}")
+        if not isinstance(cond_channels, int) or cond_channels < 1:
+            raise ValueError(f"LSTMAffineCoupling: cond_channels must be a positive int, got {cond_channels!r}")
+        self.channels, self.cond_channels, self.hidden = channels, cond_channels, hidden
+        self.n_a = channels // 2
+        self.scale_offset = float(scale_offset)
+        self.lstm = nn.LSTM(self.n_a + cond_channels, hidden, batch_first=True)
+        self.out = zero_init(nn.Linear(hidden + self.n_a + cond_channels, 2 * (channels - self.n_a)))
+
+    def extra_repr(self) -> str:
+        return f"channels={self.channels}, cond_channels={self.cond_channels}, hidden={self.hidden}"
+
+    def _params(self, x_a: Tensor, cond: Tensor) -> Tensor:
+        """Shift and raw scale ``(B, 2 * C_b, T)`` from ``x_a`` ``(B, C_a, T)`` and ``cond`` ``(B, C_c, T)``."""
+        inputs = torch.cat([x_a, cond], dim=1).transpose(1, 2)
+        output, _ = self.lstm(inputs)
+        return self.out(torch.cat([output, inputs], dim=2)).transpose(1, 2)
+
+    def forward(self, x: Tensor, cond: Tensor | None = None) -> tuple[Tensor, Tensor]:
+        check_sequence(x, "x", "LSTMAffineCoupling.forward", self.channels)
+        cond = check_cond(cond, x, self.cond_channels, "LSTMAffineCoupling.forward")
+        x_a, x_b = x[:, :self.n_a], x[:, self.n_a:]
+        y_b, logdet = affine_forward(x_b, self._params(x_a, cond), self.scale_offset)
+        return torch.cat([x_a, y_b], dim=1), logdet
+
+    def inverse(self, y: Tensor, cond: Tensor | None = None) -> Tensor:
+        check_sequence(y, "y", "LSTMAffineCoupling.inverse", self.channels)
+        cond = check_cond(cond, y, self.cond_channels, "LSTMAffineCoupling.inverse")
+        y_a, y_b = y[:, :self.n_a], y[:, self.n_a:]
+        return torch.cat([y_a, affine_inverse(y_b, self._params(y_a, cond), self.scale_offset)], dim=1)
+
+    def frame_inverse(self) -> FrameCoupling:
+        """This coupling's tensors bundled for inverting one frame at a time (see :class:`FrameCoupling`)."""
+        lstm, hidden = self.lstm, self.hidden
+        weight = self.out.weight.detach().T
+        bias = self.out.bias.detach().clone()
+        bias[bias.shape[0] // 2:] += self.scale_offset  # the sigmoid's offset, folded into the raw-scale bias
+        return FrameCoupling(self.n_a, hidden, (lstm.weight_ih_l0.detach(), lstm.weight_hh_l0.detach(),
+                                                lstm.bias_ih_l0.detach(), lstm.bias_hh_l0.detach()),
+                             weight[:hidden], weight[hidden:], bias)
+
+
+class FrameCoupling(NamedTuple):
+    """An :class:`LSTMAffineCoupling` prepared for generation: plain tensors, no module look-ups.
+
+    Generation inverts one frame at a time, because the conditioning of frame ``t`` contains the pose
+    generated at ``t - 1``; :meth:`inverse` does it and hands back the updated LSTM state. It skips input
+    checks (the caller checked the sequence) and gives the same result as
+    :meth:`LSTMAffineCoupling.inverse` on the whole sequence. The output layer's weight is split into its
+    rows for the LSTM output and for the skip connection, and the sigmoid's offset is in the bias.
+    """
+
+    n_a: int
+    hidden: int
+    lstm_weights: tuple[Tensor, Tensor, Tensor, Tensor]
+    out_weight_hidden: Tensor
+    out_weight_inputs: Tensor
+    out_bias: Tensor
+
+    def zero_state(self, batch: int, like: Tensor) -> LSTMState:
+        """The LSTM's initial state for ``batch`` sequences (dtype and device of ``like``)."""
+        zeros = like.new_zeros(batch, self.hidden)
+        return zeros, zeros
+
+    def inverse(self, y: Tensor, cond: Tensor, state: LSTMState) -> tuple[Tensor, LSTMState]:
+        """Invert one frame ``y`` ``(B, C)`` given its conditioning ``(B, C_c)`` and the LSTM state;
+        return ``(x, new_state)``."""
+        y_a = y[:, :self.n_a]
+        inputs = torch.cat([y_a, cond], dim=1)
+        h, c = torch.lstm_cell(inputs, state, *self.lstm_weights)
+        params = torch.addmm(self.out_bias, h, self.out_weight_hidden).addmm_(inputs, self.out_weight_inputs)
+        return torch.cat([y_a, affine_inverse(y[:, self.n_a:], params, 0.0)], dim=1), (h, c)

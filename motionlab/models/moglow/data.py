@@ -1,0 +1,135 @@
+"""MoGlow's data: root-local xyz poses with root-velocity control, augmented, standardised, windowed.
+
+Per frame (:func:`motionlab.data.representations.to_moglow`, 22 joints): the **pose** ``(64,)`` — root
+height, then joints 1..21's xyz in the heading frame (origin on the floor below the pelvis, x forward,
+z up) — and the **control** ``(3,)`` — forward and sideways root velocity (m/frame) and yaw rate
+(rad/frame) from the previous frame. Frame 0 of a clip has no previous frame, so its control is zero.
+
+Augmentation as in the paper: **mirroring** (left and right swapped, :mod:`motionlab.data.augment`) and
+**time reversal** (the clip played backwards: walking backwards, with the control recomputed from the
+reversed root path), applied before the features are computed, so that the control always matches the
+pose. Both double the data. Standardisation is per channel, fitted on the (augmented) training frames.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+from typing import NamedTuple
+
+import numpy as np
+import torch
+from torch import Tensor
+
+from motionlab.data.augment import mirror_positions, mirror_rotations
+from motionlab.data.datasets import Standardizer
+from motionlab.data.representations import CONTROL_FEATURES, representation, to_moglow
+from motionlab.data.store import MotionSet
+
+#: The actions of the locomotion experiments.
+LOCOMOTION = ("walk", "jog")
+
+_REPRESENTATION = representation("moglow")
+POSE_DIM = _REPRESENTATION.channels["pose"].stop - _REPRESENTATION.channels["pose"].start
+CONTROL_DIM = len(CONTROL_FEATURES)
+
+
+class MoGlowFeatures(NamedTuple):
+    """Clips (or windows) as MoGlow features: ``pose`` ``(N, T, 64)`` and ``control`` ``(N, T, 3)``."""
+
+    pose: Tensor
+    control: Tensor
+
+
+@dataclass(frozen=True)
+class MoGlowDataConfig:
+    """Which clips and which augmentation (part of the cache key of every model trained on them).
+
+    Attributes:
+        actions: action names to keep (see ``MotionSet.action_names``).
+        mirror: add the left/right mirrored clips.
+        reverse_time: add the time-reversed clips (of the mirrored ones too).
+    """
+
+    actions: tuple[str, ...] = LOCOMOTION
+    mirror: bool = True
+    reverse_time: bool = True
+
+    def __post_init__(self) -> None:
+        if not self.actions or not all(isinstance(a, str) for a in self.actions):
+            raise ValueError(f"MoGlowDataConfig.actions must be a non-empty tuple of action names, "
+                             f"got {self.actions!r}")
+
+
+def select_actions(data: MotionSet, actions: Sequence[str]) -> MotionSet:
+    """The clips of ``data`` whose action is one of ``actions`` (names), in their stored order."""
+    names = [str(name) for name in data.action_names]
+    unknown = [a for a in actions if a not in names]
+    if unknown:
+        raise ValueError(f"select_actions: unknown actions {unknown}; the data has {names}")
+    wanted = np.array([names.index(a) for a in actions])
+    return data.subset(np.isin(data.action, wanted))
+
+
+def augment_clips(positions: Tensor, rotations: Tensor, mirror: bool, reverse_time: bool) -> tuple[Tensor, Tensor]:
+    """Stack the augmented copies of clips ``(N, T, J, 3)`` / ``(N, T, J, 4)`` along the first axis.
+
+    Order: the originals, then (with ``mirror``) the mirrored clips; then (with ``reverse_time``) all of
+    those again played backwards. Returns ``(positions, rotations)`` with 1, 2 or 4 times ``N`` clips.
+    """
+    if positions.dim() != 4 or rotations.dim() != 4 or positions.shape[:3] != rotations.shape[:3]:
+        raise ValueError(f"augment_clips: positions (N, T, J, 3) and rotations (N, T, J, 4) must share (N, T, J), "
+                         f"got {tuple(positions.shape)} and {tuple(rotations.shape)}")
+    if mirror:
+        positions = torch.cat([positions, mirror_positions(positions)])
+        rotations = torch.cat([rotations, mirror_rotations(rotations)])
+    if reverse_time:
+        positions = torch.cat([positions, positions.flip(1)])
+        rotations = torch.cat([rotations, rotations.flip(1)])
+    return positions, rotations
+
+
+def moglow_features(positions: Tensor, rotations: Tensor) -> MoGlowFeatures:
+    """Pose ``(..., T, 64)`` and control ``(..., T, 3)`` of clips ``(..., T, 22, 3)`` / ``(..., T, 22, 4)``."""
+    features = to_moglow(positions, rotations[..., 0, :])
+    return MoGlowFeatures(_REPRESENTATION.select(features, "pose"), _REPRESENTATION.select(features, "control"))
+
+
+def clip_features(data: MotionSet, cfg: MoGlowDataConfig, augment: bool) -> MoGlowFeatures:
+    """Raw features of the clips of ``cfg.actions`` in ``data`` (augmented as ``cfg`` says when ``augment``)."""
+    clips = select_actions(data, cfg.actions)
+    positions, rotations = torch.from_numpy(clips.positions), torch.from_numpy(clips.rotations)
+    if augment:
+        positions, rotations = augment_clips(positions, rotations, cfg.mirror, cfg.reverse_time)
+    return moglow_features(positions, rotations)
+
+
+class Scalers(NamedTuple):
+    """Per-channel standardisers of the pose ``(64,)`` and of the control ``(3,)``."""
+
+    pose: Standardizer
+    control: Standardizer
+
+
+def fit_scalers(train: MoGlowFeatures) -> Scalers:
+    """Standardisers fitted on every frame of the training features."""
+    return Scalers(Standardizer(train.pose.shape[-1]).fit(train.pose),
+                   Standardizer(train.control.shape[-1]).fit(train.control))
+
+
+def standardize(features: MoGlowFeatures, scalers: Scalers) -> MoGlowFeatures:
+    """``features`` in standard units (per channel zero mean, unit variance on the training frames)."""
+    return MoGlowFeatures(scalers.pose.transform(features.pose), scalers.control.transform(features.control))
+
+
+def sequence_windows(features: MoGlowFeatures, length: int, stride: int, first: int = 1) -> MoGlowFeatures:
+    """Windows of ``length`` frames every ``stride`` frames from each clip, starting at frame ``first``.
+
+    ``first = 1`` skips frame 0, whose control is undefined (zero). Returns ``(N * W, length, ·)``.
+    """
+    n_frames = features.pose.shape[1]
+    if length < 1 or stride < 1 or first < 0 or first + length > n_frames:
+        raise ValueError(f"sequence_windows: need length >= 1, stride >= 1 and first + length <= {n_frames} frames, "
+                         f"got length={length}, stride={stride}, first={first}")
+    starts = range(first, n_frames - length + 1, stride)
+    return MoGlowFeatures(*(torch.cat([x[:, s:s + length] for s in starts]) for x in features))

@@ -1,0 +1,215 @@
+"""MoGlow and its Gaussian baseline: conditioning, likelihoods, frame-by-frame sampling, determinism, errors."""
+
+import math
+
+import numpy as np
+import pytest
+import torch
+
+from motionlab.models.flows import logdet_error, perturb_parameters_, roundtrip_error
+from motionlab.models.moglow import (
+    GaussianAR,
+    GaussianARConfig,
+    LSTMAffineCoupling,
+    MoGlow,
+    MoGlowConfig,
+    autoregressive_conditioning,
+    autoregressive_sample,
+    frame_conditioning,
+    held_out_nll,
+    history_keep_mask,
+    MoGlowFeatures,
+    nll_per_frame_loss,
+)
+
+SMALL = dict(pose_dim=6, control_dim=2, history=3)
+
+
+def _moglow(dropout=0.0, dtype=torch.float64, spread=0.1):
+    torch.manual_seed(0)
+    model = MoGlow(MoGlowConfig(**SMALL, steps=3, hidden=8, cond_features=5, dropout=dropout)).to(dtype)
+    return perturb_parameters_(model, spread, torch.Generator().manual_seed(1)).eval()
+
+
+def _data(batch=2, frames=12, dtype=torch.float64, seed=0):
+    generator = torch.Generator().manual_seed(seed)
+    return (torch.randn(batch, frames, 6, generator=generator, dtype=dtype),
+            torch.randn(batch, frames, 2, generator=generator, dtype=dtype))
+
+
+def test_conditioning_layout_by_hand():
+    pose = torch.arange(2 * 5 * 2, dtype=torch.float32).reshape(2, 5, 2)
+    control = 100 + torch.arange(2 * 5 * 1, dtype=torch.float32).reshape(2, 5, 1)
+    cond = autoregressive_conditioning(pose, control, history=2)
+    assert cond.shape == (2, 3, 2 * 2 + 3 * 1)
+    # frame t = 2 of clip 1: poses 0, 1 (oldest first), controls 0, 1, 2
+    expected = torch.cat([pose[1, 0], pose[1, 1], control[1, 0], control[1, 1], control[1, 2]])
+    assert torch.equal(cond[1, 0], expected)
+    assert torch.equal(cond[1, 0], frame_conditioning(pose[1:2, 0:2], control[1:2, 0:3])[0])
+    keep = torch.tensor([[[0.0, 1.0]] * 3] * 2)
+    dropped = autoregressive_conditioning(pose, control, history=2, keep=keep)
+    assert torch.equal(dropped[..., :2], torch.zeros_like(dropped[..., :2]))
+    assert torch.equal(dropped[..., 2:], cond[..., 2:])
+
+
+def test_history_keep_mask_rate_and_seed():
+    a = history_keep_mask(200, 50, 5, 0.7, torch.Generator().manual_seed(0))
+    b = history_keep_mask(200, 50, 5, 0.7, torch.Generator().manual_seed(0))
+    assert torch.equal(a, b)
+    assert abs(float(a.mean()) - 0.3) < 0.01
+    assert set(a.unique().tolist()) <= {0.0, 1.0}
+
+
+def test_lstm_coupling_logdet_roundtrip_and_frame_inverse():
+    torch.manual_seed(0)
+    layer = perturb_parameters_(LSTMAffineCoupling(6, cond_channels=3, hidden=8).double(), 0.3,
+                                torch.Generator().manual_seed(0)).eval()
+    generator = torch.Generator().manual_seed(1)
+    x = torch.randn(2, 6, 5, dtype=torch.float64, generator=generator)
+    cond = torch.randn(2, 3, 5, dtype=torch.float64, generator=generator)
+    assert logdet_error(layer, x, cond) < 1e-10
+    assert roundtrip_error(layer, x, cond) < 1e-12
+    y, _ = layer(x, cond)
+    layer.out.bias.data[3:] += 0.4  # a non-zero raw-scale bias checks that the offset is folded correctly
+    y, _ = layer(x, cond)
+    frames = layer.frame_inverse()
+    state = frames.zero_state(2, y)
+    rebuilt = []
+    for t in range(5):
+        x_t, state = frames.inverse(y[:, :, t], cond[:, :, t], state)
+        rebuilt.append(x_t)
+    assert torch.allclose(torch.stack(rebuilt, dim=2), x, atol=1e-12)
+
+
+def test_moglow_causality():
+    model = _moglow()
+    pose, control = _data()
+    changed_pose, changed_control = pose.clone(), control.clone()
+    changed_pose[:, 9:] += 1.0
+    changed_control[:, 9:] += 1.0
+    z, _ = model.latents(pose, control)
+    z_changed, _ = model.latents(changed_pose, changed_control)
+    # frames 3..8 (latents 0..5) depend only on the past and the present control
+    assert torch.equal(z[:, :6], z_changed[:, :6])
+    assert not torch.allclose(z[:, 6:], z_changed[:, 6:])
+
+
+def test_sampling_inverts_the_training_pass_exactly():
+    model = _moglow(dropout=0.5)
+    seed_pose, control = _data(frames=3)[0], _data(frames=3 + 7, seed=1)[1]
+    sample = model.sample(control, seed_pose, temperature=1.0, generator=torch.Generator().manual_seed(4))
+    assert sample.shape == (2, 7, 6)
+    # replay the generator: the history masks of all frames are drawn first, then the latents
+    replay = torch.Generator().manual_seed(4)
+    keep = history_keep_mask(2, 7, 3, 0.5, replay)
+    latents = torch.randn(2, 7, 6, generator=replay, dtype=torch.float64)
+    full = torch.cat([seed_pose, sample], dim=1)
+    cond = autoregressive_conditioning(full, control, 3, keep)
+    u, _ = model.linear(sample.transpose(1, 2), cond.transpose(1, 2))
+    z, _ = model.flow(u, model.cond_encoder(cond).transpose(1, 2))
+    assert torch.allclose(z.transpose(1, 2), latents, atol=1e-9)
+
+
+def test_sampling_is_deterministic_by_seed():
+    model = _moglow(dropout=0.3, dtype=torch.float32)
+    seed_pose, control = _data(frames=3, dtype=torch.float32)[0], _data(frames=10, dtype=torch.float32)[1]
+    a = model.sample(control, seed_pose, 0.8, torch.Generator().manual_seed(0))
+    b = model.sample(control, seed_pose, 0.8, torch.Generator().manual_seed(0))
+    c = model.sample(control, seed_pose, 0.8, torch.Generator().manual_seed(1))
+    assert torch.equal(a, b) and not torch.equal(a, c)
+
+
+def test_likelihood_sums_frame_terms_and_loss_is_per_frame():
+    model = _moglow()
+    pose, control = _data()
+    z, logdet = model.latents(pose, control)
+    normal = torch.distributions.Normal(torch.zeros(()), torch.ones(())).log_prob(z).sum(dim=(1, 2))
+    log_p = model(pose, control)
+    assert torch.allclose(log_p, normal + logdet)
+    out = nll_per_frame_loss(model, (pose, control), 0, {})
+    expected = float(-log_p.detach().sum() / (2 * 9))
+    assert math.isclose(float(out["loss"].detach()), expected, rel_tol=1e-9)
+    assert held_out_nll(model, MoGlowFeatures(pose, control)) == pytest.approx(expected)
+
+
+def _baseline_mean_and_std(model, pose, control):
+    cond = autoregressive_conditioning(pose, control, 3)
+    hidden, _ = model.lstm(cond)
+    correction, raw = model.out(hidden).chunk(2, dim=-1)
+    scale = model.linear.log_scale.exp()
+    return model.linear.mean(cond) + scale * correction, scale * raw.exp()
+
+
+def test_gaussian_baseline_against_torch_distributions_and_temperature_zero():
+    torch.manual_seed(0)
+    model = GaussianAR(GaussianARConfig(**SMALL, hidden=8)).double().eval()
+    pose, control = _data(batch=16)
+    model.initialize(pose, control)
+    perturb_parameters_(model, 0.2, torch.Generator().manual_seed(0))
+    mean, std = _baseline_mean_and_std(model, pose, control)
+    expected = torch.distributions.Normal(mean, std).log_prob(pose[:, 3:]).sum(dim=(1, 2))
+    assert torch.allclose(model(pose, control), expected)
+    seed_pose, more_control = pose[:, :3], _data(batch=16, frames=8, seed=2)[1]
+    mode_path = model.sample(more_control, seed_pose, temperature=0.0)
+    # at temperature 0 each frame is the predicted mean given the frames generated before it
+    full = torch.cat([seed_pose, mode_path], dim=1)
+    assert torch.allclose(mode_path, _baseline_mean_and_std(model, full, more_control)[0], atol=1e-12)
+
+
+def test_linear_predictor_recovers_a_linear_system_and_is_a_flow_layer():
+    generator = torch.Generator().manual_seed(0)
+    control = torch.randn(64, 12, 2, generator=generator, dtype=torch.float64)
+    weight = torch.randn(6, 3 * 6 + 4 * 2, generator=generator, dtype=torch.float64) * 0.2
+    pose = torch.zeros(64, 12, 6, dtype=torch.float64)
+    pose[:, :3] = torch.randn(64, 3, 6, generator=generator, dtype=torch.float64)
+    for t in range(3, 12):  # x_t = W c_t + 0.5 + tiny noise
+        cond = frame_conditioning(pose[:, t - 3:t], control[:, t - 3:t + 1])
+        pose[:, t] = cond @ weight.T + 0.5 + 1e-3 * torch.randn(64, 6, generator=generator, dtype=torch.float64)
+    model = MoGlow(MoGlowConfig(**SMALL, steps=1, hidden=4, cond_features=3, dropout=0.0)).double()
+    rms = model.initialize(pose, control)
+    assert rms < 2e-3
+    assert torch.allclose(model.linear.weight, weight, atol=0.02)
+    assert torch.allclose(model.linear.bias, torch.full((6,), 0.5, dtype=torch.float64), atol=0.02)
+    layer = model.linear.eval()
+    x = torch.randn(2, 6, 4, dtype=torch.float64, generator=generator)
+    cond = torch.randn(2, layer.cond_dim, 4, dtype=torch.float64, generator=generator)
+    assert logdet_error(layer, x, cond) < 1e-9
+    assert roundtrip_error(layer, x, cond) < 1e-12
+
+
+def test_autoregressive_loop_feeds_back_its_output():
+    def step(t, cond, state):  # next pose = last pose of the history + the current control
+        return cond[:, 2:4] + cond[:, -2:], state
+
+    seed_pose = torch.zeros(1, 2, 2)
+    control = torch.ones(1, 2 + 3, 2)
+    out = autoregressive_sample(step, control, seed_pose)
+    assert torch.equal(out[0], torch.tensor([[1.0, 1.0], [2.0, 2.0], [3.0, 3.0]]))
+
+    def exploding(t, cond, state):
+        return cond[:, 2:4] * 1e30 + 1.0, state
+
+    with pytest.raises(ValueError, match="diverged: non-finite poses from generated frame 2"):
+        autoregressive_sample(exploding, control, seed_pose)
+
+
+def test_bad_inputs_raise():
+    model = _moglow(dtype=torch.float32)
+    pose, control = _data(dtype=torch.float32)
+    with pytest.raises(ValueError, match="same frames"):
+        model(pose, control[:, :-1])
+    with pytest.raises(ValueError, match="NaN"):
+        model(pose.masked_fill(torch.rand(pose.shape) > 0.5, float("nan")), control)
+    with pytest.raises(ValueError, match=r"\(batch, frames, 6\)"):
+        model(pose[..., :5], control)
+    with pytest.raises(ValueError, match="at least 3 frames"):
+        model.sample(control, pose[:, :2])
+    with pytest.raises(ValueError, match="tau=3"):
+        model.sample(control, pose[:, :4])
+    with pytest.raises(ValueError, match="temperature"):
+        model.sample(control, pose[:, :3], temperature=-0.1)
+    with pytest.raises(ValueError, match="dropout"):
+        MoGlowConfig(dropout=1.0)
+    with pytest.raises(ValueError):
+        GaussianARConfig(hidden=0)
+    np.testing.assert_equal(MoGlowConfig().cond_dim, 5 * 64 + 6 * 3)
