@@ -1,0 +1,188 @@
+r"""The paper's recurrent baselines, given the same initial pose and trajectories as TrajeVAE.
+
+Both read the task frame by frame: the trajectories :math:`Y_t` (``J * 3``, zeros for joints to complete)
+with the initial pose :math:`x_0`. Like TrajeVAE they output per-frame offsets accumulated from the
+initial pose, :math:`\hat x_t = x_0 + \sum_{s \le t} \Delta_s`, so the three models differ only in how they
+turn the task into offsets.
+
+* :class:`GRUCompletion` -- deterministic: a bidirectional GRU summarises the whole task into a context
+  vector; a forward GRU reads the context and :math:`Y_t` and emits :math:`\Delta_t`. Every "sample" is the
+  same completion.
+* :class:`CVAERNN` -- a conditional VAE in the style of DLow's base model: the same context, a GRU
+  posterior :math:`q(z \mid X, \text{context})` with **one** latent vector for the whole sequence, prior
+  :math:`\mathcal N(0, I)`, and the decoder GRU reads :math:`z` at every frame.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import torch
+from torch import Tensor, nn
+
+from motionlab.models.gaussian import reparameterize
+from motionlab.models.trajevae.config import (WindowShape, check_flags, check_non_negative, check_positive_int,
+                                              check_probability, check_seed)
+from motionlab.models.trajevae.inputs import check_masks, check_sampling, check_task, check_windows
+from motionlab.models.trajevae.masks import KEEP_PROBABILITY, given_trajectories
+from motionlab.models.trajevae.model import Gaussian
+
+
+@dataclass(frozen=True)
+class RecurrentConfig(WindowShape):
+    """A recurrent completion baseline.
+
+    Attributes:
+        n_joints, n_frames: as in :class:`~motionlab.models.trajevae.config.TrajeVAEConfig`.
+        hidden: GRU width (the bidirectional context GRU has ``hidden`` per direction).
+        latent_dim: numbers in the sequence's latent vector; 0 makes the deterministic GRU model.
+        beta: KL weight of the CVAE (unused when ``latent_dim == 0``).
+        keep_probability, augment: the training data, as for TrajeVAE.
+        seed: seeds the weight initialisation.
+    """
+
+    n_joints: int = 22
+    n_frames: int = 60
+    hidden: int = 64
+    latent_dim: int = 0
+    beta: float = 0.01
+    keep_probability: float = KEEP_PROBABILITY
+    augment: bool = True
+    seed: int = 0
+
+    def __post_init__(self) -> None:
+        owner = "RecurrentConfig"
+        for name in ("n_joints", "n_frames", "hidden"):
+            check_positive_int(owner, name, getattr(self, name))
+        if self.n_frames < 2:
+            raise ValueError(f"{owner}.n_frames must be at least 2, got {self.n_frames}")
+        if isinstance(self.latent_dim, bool) or not isinstance(self.latent_dim, int) or self.latent_dim < 0:
+            raise ValueError(f"{owner}.latent_dim must be an integer >= 0, got {self.latent_dim!r}")
+        check_non_negative(owner, "beta", self.beta)
+        check_probability(owner, "keep_probability", self.keep_probability)
+        check_flags(owner, self, ("augment",))
+        check_seed(owner, self.seed)
+
+
+class TaskContext(nn.Module):
+    """Bidirectional GRU over ``[Y_t, x_0]``, averaged over time and mixed: ``(B, F, J*3), (B, J*3) -> (B, H)``."""
+
+    def __init__(self, n_channels: int, hidden: int) -> None:
+        super().__init__()
+        self.rnn = nn.GRU(2 * n_channels, hidden, batch_first=True, bidirectional=True)
+        self.mix = nn.Sequential(nn.Linear(2 * hidden, hidden), nn.Tanh())
+
+    def forward(self, trajectories: Tensor, initial_pose: Tensor) -> Tensor:
+        start = initial_pose[:, None, :].expand(-1, trajectories.shape[1], -1)
+        states, _ = self.rnn(torch.cat([trajectories, start], dim=-1))
+        return self.mix(states.mean(dim=1))
+
+
+class OffsetDecoder(nn.Module):
+    """Forward GRU over ``[Y_t, context, z]`` emitting offsets accumulated from ``x_0``: → ``(B, F, J * 3)``."""
+
+    def __init__(self, n_channels: int, hidden: int, latent_dim: int) -> None:
+        super().__init__()
+        self.initial_state = nn.Linear(hidden + latent_dim, hidden)
+        self.rnn = nn.GRU(n_channels + hidden + latent_dim, hidden, batch_first=True)
+        self.offsets = nn.Linear(hidden, n_channels)
+        nn.init.zeros_(self.offsets.weight)  # start from a still pose
+        nn.init.zeros_(self.offsets.bias)
+
+    def forward(self, trajectories: Tensor, initial_pose: Tensor, condition: Tensor) -> Tensor:
+        steps = condition[:, None, :].expand(-1, trajectories.shape[1], -1)
+        state = torch.tanh(self.initial_state(condition))[None]
+        hidden, _ = self.rnn(torch.cat([trajectories, steps], dim=-1), state.contiguous())
+        return initial_pose[:, None, :] + torch.cumsum(self.offsets(hidden), dim=1)
+
+
+class _RecurrentCompletion(nn.Module):
+    """What both baselines share: the config check, the context and the decoder."""
+
+    def __init__(self, cfg: RecurrentConfig, stochastic: bool) -> None:
+        super().__init__()
+        if not isinstance(cfg, RecurrentConfig):
+            raise TypeError(f"{type(self).__name__} needs a RecurrentConfig, got {type(cfg).__name__}")
+        if (cfg.latent_dim > 0) != stochastic:
+            raise ValueError(f"{type(self).__name__} needs RecurrentConfig.latent_dim "
+                             f"{'>= 1' if stochastic else '= 0'}, got {cfg.latent_dim}")
+        self.cfg = cfg
+        generator_state = torch.random.get_rng_state()
+        torch.manual_seed(cfg.seed)
+        self.context = TaskContext(cfg.n_channels, cfg.hidden)
+        self.decoder = OffsetDecoder(cfg.n_channels, cfg.hidden, cfg.latent_dim)
+        self.build_extra()
+        torch.random.set_rng_state(generator_state)
+
+    def build_extra(self) -> None:
+        """Modules a subclass adds (built under the same seed)."""
+
+    def _check_batch(self, windows: Tensor, mask: Tensor, func: str) -> tuple[Tensor, Tensor, Tensor]:
+        check_windows(windows, self.cfg.n_frames, self.cfg.n_channels, func)
+        check_masks(mask, windows.shape[0], self.cfg.n_joints, func)
+        return windows[:, 0], windows[:, 1:], given_trajectories(windows[:, 1:], mask)
+
+
+class GRUCompletion(_RecurrentCompletion):
+    """The deterministic GRU baseline (``RecurrentConfig.latent_dim == 0``)."""
+
+    def __init__(self, cfg: RecurrentConfig) -> None:
+        super().__init__(cfg, stochastic=False)
+
+    def complete(self, initial_pose: Tensor, trajectories: Tensor) -> Tensor:
+        """The completion ``(B, F, J * 3)`` of initial poses ``(B, J * 3)`` and trajectories ``(B, F, J * 3)``."""
+        return self.decoder(trajectories, initial_pose, self.context(trajectories, initial_pose))
+
+    def forward(self, windows: Tensor, mask: Tensor) -> Tensor:
+        """Completed frames ``(B, F, J * 3)`` of windows ``(B, T, J * 3)`` given joint masks ``(B, J)``."""
+        initial_pose, _, trajectories = self._check_batch(windows, mask, "GRUCompletion.forward")
+        return self.complete(initial_pose, trajectories)
+
+    @torch.no_grad()
+    def sample(self, initial_pose: Tensor, trajectories: Tensor, n_samples: int, temperature: float = 1.0,
+               generator: torch.Generator | None = None) -> Tensor:
+        """``(B, K, F, J * 3)``: the one deterministic completion repeated ``K`` times (temperature, generator unused)."""
+        func = "GRUCompletion.sample"
+        check_task(initial_pose, trajectories, self.cfg.n_future, self.cfg.n_channels, func)
+        check_sampling(n_samples, temperature, func)
+        completion = self.complete(initial_pose, trajectories)
+        return completion[:, None].expand(-1, n_samples, -1, -1)
+
+
+class CVAERNN(_RecurrentCompletion):
+    """The CVAE-RNN baseline (DLow style): one latent vector ``(B, L)`` per sequence, prior ``N(0, I)``."""
+
+    def __init__(self, cfg: RecurrentConfig) -> None:
+        super().__init__(cfg, stochastic=True)
+
+    def build_extra(self) -> None:
+        self.posterior_rnn = nn.GRU(self.cfg.n_channels, self.cfg.hidden, batch_first=True)
+        self.posterior_head = nn.Linear(2 * self.cfg.hidden, 2 * self.cfg.latent_dim)
+
+    def posterior(self, future: Tensor, context: Tensor) -> Gaussian:
+        """``q(z | X, context)``: mean and log-variance ``(B, L)`` each from the true frames ``(B, F, J * 3)``."""
+        _, last = self.posterior_rnn(future)
+        mu, logvar = self.posterior_head(torch.cat([last[-1], context], dim=-1)).chunk(2, dim=-1)
+        return Gaussian(mu, logvar)
+
+    def forward(self, windows: Tensor, mask: Tensor, generator: torch.Generator | None = None) -> tuple[Tensor, Gaussian]:
+        """Reconstruction ``(B, F, J * 3)`` through a posterior sample, and the posterior."""
+        initial_pose, future, trajectories = self._check_batch(windows, mask, "CVAERNN.forward")
+        context = self.context(trajectories, initial_pose)
+        posterior = self.posterior(future, context)
+        z = reparameterize(posterior.mu, posterior.logvar, generator)
+        return self.decoder(trajectories, initial_pose, torch.cat([context, z], dim=-1)), posterior
+
+    @torch.no_grad()
+    def sample(self, initial_pose: Tensor, trajectories: Tensor, n_samples: int, temperature: float = 1.0,
+               generator: torch.Generator | None = None) -> Tensor:
+        """Completions ``(B, K, F, J * 3)`` with ``z ~ N(0, temperature² I)`` (``K = 1``: ``z = 0``, the prior mean)."""
+        func = "CVAERNN.sample"
+        batch = check_task(initial_pose, trajectories, self.cfg.n_future, self.cfg.n_channels, func)
+        check_sampling(n_samples, temperature, func)
+        context = self.context(trajectories, initial_pose).repeat_interleave(n_samples, dim=0)
+        shape = (batch * n_samples, self.cfg.latent_dim)
+        z = torch.zeros(shape) if n_samples == 1 else temperature * torch.randn(shape, generator=generator)
+        poses = self.decoder(trajectories.repeat_interleave(n_samples, dim=0),
+                             initial_pose.repeat_interleave(n_samples, dim=0), torch.cat([context, z], dim=-1))
+        return poses.unflatten(0, (batch, n_samples))

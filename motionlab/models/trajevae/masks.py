@@ -1,0 +1,107 @@
+"""Structured joint masks: which joints' trajectories are given, and the trajectories themselves.
+
+TrajeVAE casts control as completion. A mask ``m`` ``(J,)`` marks the joints whose whole trajectory is known
+(1) and the joints to complete (0); it is the same for every frame (a *structured* mask, not random
+entries). With poses ``X`` ``(T, J, 3)`` the trajectories are ``Y = X ⊙ M`` (``M`` is ``m`` broadcast over
+frames and coordinates): the given joints' coordinates, zeros elsewhere. The posterior sees the complement
+``X ⊙ (1 - M)``.
+
+In training each sequence draws its own mask, every joint kept independently with probability
+:data:`KEEP_PROBABILITY` (0.15, so 3.3 of 22 joints on average). For evaluation the joints are given in the
+paper's order, :data:`PAPER_ORDER`: right foot, left foot, right hand, left hand (our skeleton's hands are
+the wrists), then :data:`FULL_ORDER` continues to all joints.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+import torch
+from torch import Tensor
+
+from motionlab.skeleton import JOINT, JOINT_NAMES
+
+#: Probability that a joint's trajectory is given in a training sequence.
+KEEP_PROBABILITY = 0.15
+
+#: The paper's order of adding trajectories (Table 1, Figure 4): right foot, left foot, right hand, left hand.
+PAPER_ORDER: tuple[str, ...] = ("right_foot", "left_foot", "right_wrist", "left_wrist")
+
+#: All 22 joints: the paper's four first, then the head and pelvis, then the rest from the extremities inwards.
+FULL_ORDER: tuple[str, ...] = PAPER_ORDER + (
+    "head", "pelvis", "right_elbow", "left_elbow", "right_knee", "left_knee", "right_ankle", "left_ankle",
+    "right_shoulder", "left_shoulder", "neck", "spine3", "spine2", "spine1", "right_hip", "left_hip",
+    "right_collar", "left_collar",
+)
+
+
+def sample_joint_masks(n_sequences: int, generator: torch.Generator, n_joints: int = len(JOINT_NAMES),
+                       keep_probability: float = KEEP_PROBABILITY) -> Tensor:
+    """Random structured masks ``(n_sequences, n_joints)`` bool: each joint given with ``keep_probability``.
+
+    One ``torch.rand`` draw of ``(n_sequences, n_joints)`` from ``generator``.
+    """
+    func = "sample_joint_masks"
+    if isinstance(n_sequences, bool) or not isinstance(n_sequences, int) or n_sequences < 1:
+        raise ValueError(f"{func}: n_sequences must be a positive integer, got {n_sequences!r}")
+    if isinstance(n_joints, bool) or not isinstance(n_joints, int) or n_joints < 1:
+        raise ValueError(f"{func}: n_joints must be a positive integer, got {n_joints!r}")
+    if not 0.0 <= keep_probability <= 1.0:
+        raise ValueError(f"{func}: keep_probability must lie in [0, 1], got {keep_probability!r}")
+    return torch.rand((n_sequences, n_joints), generator=generator) < keep_probability
+
+
+def joint_mask(joints: Sequence[str | int], n_joints: int = len(JOINT_NAMES)) -> Tensor:
+    """The mask ``(n_joints,)`` bool with the given joints (names or indices) set."""
+    mask = torch.zeros(n_joints, dtype=torch.bool)
+    for joint in joints:
+        if isinstance(joint, str):
+            if joint not in JOINT:
+                raise ValueError(f"joint_mask: unknown joint {joint!r}; joints are {JOINT_NAMES}")
+            index = JOINT[joint]
+        else:
+            index = int(joint)
+        if not 0 <= index < n_joints:
+            raise ValueError(f"joint_mask: joint index {index} is outside [0, {n_joints})")
+        mask[index] = True
+    return mask
+
+
+def first_joints(k: int, order: Sequence[str] = FULL_ORDER) -> Tensor:
+    """The mask ``(22,)`` of the first ``k`` joints of ``order`` (``k = 0`` gives no trajectory at all)."""
+    if isinstance(k, bool) or not isinstance(k, int) or not 0 <= k <= len(order):
+        raise ValueError(f"first_joints: k must be an integer in [0, {len(order)}], got {k!r}")
+    return joint_mask(order[:k])
+
+
+def _check_poses_and_mask(poses: Tensor, mask: Tensor, func: str) -> tuple[int, int]:
+    if not isinstance(poses, Tensor) or not poses.is_floating_point() or poses.dim() < 2:
+        raise ValueError(f"{func}: poses must be a floating tensor (..., T, J * 3), got "
+                         f"{type(poses).__name__} {tuple(getattr(poses, 'shape', ()))}")
+    if not isinstance(mask, Tensor) or mask.dtype != torch.bool:
+        raise ValueError(f"{func}: mask must be a bool tensor (..., J), got {getattr(mask, 'dtype', type(mask).__name__)}")
+    n_joints = mask.shape[-1]
+    if poses.shape[-1] != 3 * n_joints:
+        raise ValueError(f"{func}: poses have {poses.shape[-1]} channels but the mask has {n_joints} joints "
+                         f"(expected {3 * n_joints} = J * 3 channels)")
+    if mask.shape[:-1] != poses.shape[:-2]:
+        raise ValueError(f"{func}: mask {tuple(mask.shape)} must have the leading shape of poses "
+                         f"{tuple(poses.shape[:-2])} plus the joint axis")
+    return n_joints, poses.shape[-2]
+
+
+def channel_mask(mask: Tensor) -> Tensor:
+    """A joint mask ``(..., J)`` bool repeated for the x, y, z channels: ``(..., J * 3)`` bool."""
+    return mask.repeat_interleave(3, dim=-1)
+
+
+def given_trajectories(poses: Tensor, mask: Tensor) -> Tensor:
+    """``Y = X ⊙ M``: poses ``(..., T, J * 3)`` with the joints outside ``mask`` ``(..., J)`` set to zero."""
+    _check_poses_and_mask(poses, mask, "given_trajectories")
+    return poses * channel_mask(mask)[..., None, :].to(poses.dtype)
+
+
+def hidden_poses(poses: Tensor, mask: Tensor) -> Tensor:
+    """``X ⊙ (1 - M)``: poses ``(..., T, J * 3)`` with the given joints set to zero (what the posterior sees)."""
+    _check_poses_and_mask(poses, mask, "hidden_poses")
+    return poses * (~channel_mask(mask))[..., None, :].to(poses.dtype)

@@ -1,0 +1,125 @@
+"""TrajeVAE's data pipeline, training through the cache, the widget callback and the speed benchmark's pieces."""
+
+import math
+
+import numpy as np
+import pytest
+import torch
+
+from motionlab.data.synthetic import generate
+from motionlab.models.trajevae.baselines import GRUCompletion
+from motionlab.models.trajevae.data import CompletionBatches, completion_task, completion_windows, decimate
+from motionlab.models.trajevae.masks import first_joints
+from motionlab.models.trajevae.model import TrajeVAE
+from motionlab.models.trajevae.training import build_model, chapter_setup, loss_function, train_completion_model
+from motionlab.skeleton import JOINT
+from motionlab.train import TrainConfig
+from motionlab.widgets.trajevae import bend_trajectory, complete_window, left_direction
+
+
+@pytest.fixture(scope="module")
+def clips():
+    data = generate(seed=5, n_per_mode=1)
+    return decimate(data.positions[:6]), decimate(data.rotations[:6])
+
+
+@pytest.fixture(autouse=True)
+def build(monkeypatch, tmp_path):
+    monkeypatch.setenv("MOTIONLAB_BUILD", str(tmp_path))
+
+
+def test_windows_start_above_the_origin(clips):
+    positions, _ = clips
+    windows = completion_windows(positions)
+    assert windows.shape == (6, 60, 66)
+    torch.testing.assert_close(windows[:, 0, :2], torch.zeros(6, 2))
+    torch.testing.assert_close(windows[..., 2::3], positions[..., 2])  # heights unchanged
+    with pytest.raises(ValueError, match="NaN"):
+        completion_windows(torch.full((1, 4, 22, 3), float("nan")))
+
+
+def test_batches_are_seeded_and_yaw_augmentation_keeps_shape(clips):
+    positions, rotations = clips
+    batches = CompletionBatches(positions, rotations, augment=True)
+    first = list(batches(0, torch.Generator().manual_seed(3), 4))
+    again = list(batches(0, torch.Generator().manual_seed(3), 4))
+    assert len(first) == 1 and first[0][0].shape == (4, 60, 66) and first[0][1].shape == (4, 22)
+    assert torch.equal(first[0][0], again[0][0]) and torch.equal(first[0][1], again[0][1])
+    plain = list(CompletionBatches(positions, rotations, augment=False)(0, torch.Generator().manual_seed(3), 4))
+    turned, straight = first[0][0].unflatten(-1, (-1, 3)), plain[0][0].unflatten(-1, (-1, 3))
+    # the same clips (same order), turned about the first pelvis: heights and distances to it are kept
+    torch.testing.assert_close(turned[..., 2], straight[..., 2])
+    torch.testing.assert_close(turned[..., :2].norm(dim=-1), straight[..., :2].norm(dim=-1), atol=1e-5, rtol=1e-5)
+    assert not torch.allclose(turned, straight)
+    with pytest.raises(ValueError, match="batch_size"):
+        next(batches(0, torch.Generator(), 7))
+
+
+def test_training_is_cached_and_reproducible(clips):
+    positions, rotations = clips
+    cfg = chapter_setup("quick").trajevae
+    train_cfg = TrainConfig(steps=3, batch_size=3, lr=1e-3, checkpoint_every=None)
+    model, result = train_completion_model("trajevae_test", cfg, positions, rotations, train_cfg, progress=False)
+    assert not result.loaded_from_cache and set(result.history.terms) >= {"recon", "kl"}
+    again, cached = train_completion_model("trajevae_test", cfg, positions, rotations, train_cfg, progress=False)
+    assert cached.loaded_from_cache
+    for a, b in zip(model.state_dict().values(), again.state_dict().values()):
+        assert torch.equal(a, b)
+    start, trajectories = completion_task(completion_windows(positions[:2]), first_joints(2))
+    g = torch.Generator
+    assert torch.equal(model.sample(start, trajectories, 3, generator=g().manual_seed(1)),
+                       again.sample(start, trajectories, 3, generator=g().manual_seed(1)))
+
+
+def test_build_model_and_loss_by_config():
+    setup = chapter_setup("quick")
+    assert isinstance(build_model(setup.trajevae), TrajeVAE)
+    assert isinstance(build_model(setup.gru), GRUCompletion)
+    assert type(build_model(setup.cvae_rnn)).__name__ == "CVAERNN"
+    assert loss_function(setup.gru).__name__ == "gru_loss"
+    with pytest.raises(TypeError, match="TrajeVAEConfig or RecurrentConfig"):
+        build_model({"width": 3})
+    with pytest.raises(ValueError, match="profile"):
+        chapter_setup("fast")
+    assert chapter_setup("full").trajevae.n_frames == 60
+
+
+def test_bend_trajectory_moves_one_joint_to_the_left():
+    trajectories = torch.zeros(10, 66)
+    left = torch.tensor([0.0, 1.0, 0.0])
+    bent = bend_trajectory(trajectories, "left_wrist", 0.5, left)
+    index = 3 * JOINT["left_wrist"]
+    assert bent[-1, index + 1].item() == pytest.approx(0.5)
+    assert bent[4, index + 1].item() == pytest.approx(0.5 * 0.25)
+    assert torch.count_nonzero(bent) == 10  # only the y channel of that joint
+    with pytest.raises(ValueError, match="unknown joint"):
+        bend_trajectory(trajectories, "tail", 0.5, left)
+
+
+def test_left_direction_of_a_character_facing_x_is_y(clips):
+    pose = torch.zeros(66)
+    pose[3 * JOINT["left_hip"] + 1] = 0.1
+    pose[3 * JOINT["right_hip"] + 1] = -0.1
+    torch.testing.assert_close(left_direction(pose), torch.tensor([0.0, 1.0, 0.0]))
+    with pytest.raises(ValueError, match="hips coincide"):
+        left_direction(torch.zeros(66))
+
+
+def test_complete_window_callback(clips):
+    positions, _ = clips
+    window = completion_windows(positions)[0]
+    model = TrajeVAE(chapter_setup("quick").trajevae).eval()
+    result = complete_window(model, window, ["right_foot", "pelvis"], n_samples=3, temperature=0.5,
+                             bend_joint="right_foot", bend=0.4, seed=2)
+    assert result.samples.shape == (3, 60, 22, 3)
+    assert result.mask.sum() == 2 and result.mask[JOINT["right_foot"]] and result.mask[0]
+    torch.testing.assert_close(result.samples[:, 0], window[0].reshape(22, 3).expand(3, -1, -1))
+    # the requested right foot was bent: 0.4 m sideways at the end, relative to the true one
+    shift = result.trajectories[-1, JOINT["right_foot"]] - window[-1].reshape(22, 3)[JOINT["right_foot"]]
+    assert shift.norm().item() == pytest.approx(0.4, rel=1e-4) and abs(shift[2].item()) < 1e-6
+    assert torch.count_nonzero(result.trajectories[:, JOINT["left_foot"]]) == 0
+    same = complete_window(model, window, ["right_foot", "pelvis"], 3, 0.5, "right_foot", 0.4, seed=2)
+    assert torch.equal(result.samples, same.samples)
+    with pytest.raises(ValueError, match="can only bend a given joint"):
+        complete_window(model, window, ["pelvis"], 2, 1.0, "right_foot", 0.3)
+    assert math.isfinite(float(result.samples.abs().max())) and np.isfinite(result.samples.numpy()).all()
