@@ -1,0 +1,160 @@
+"""ODMO's tables on the course benchmark, each number a mean with its 95 % interval over repeated sample sets.
+
+* Tables 1–2 (:func:`metric_table`): accuracy, FID, Diversity, Multimodality (the frozen GRU evaluator's
+  features, FID against the training clips) and n-APD (APD of each class's generated clips over that of
+  the held-out real clips, in joint positions with every clip starting at the origin facing +x).
+* Table 3 (:func:`mode_homogeneity_interval`): clips drawn from each discovered mode, their true style
+  recognised by the evaluator's mode head, :func:`~motionlab.metrics.mode_homogeneity` over all modes.
+* Table 4 (:func:`end_point_control`): for each class, training codes sent to end points on the segment
+  from their own end point to that of another clip of the class; accuracy and ``dist_e``, the distance
+  between the requested end point and where the generated motion's root ends.
+* New (:func:`mode_recovery`): the adjusted Rand index between the discovered modes of the training
+  codes and the synthetic data's true style modes, per action. The evaluator is not involved: this is
+  the latent space against the ground truth.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import torch
+from torch import Tensor
+
+from motionlab.data.store import MotionSet
+from motionlab.evaluation.benchmark import sample_metrics
+from motionlab.evaluation.evaluator import Evaluator
+from motionlab.metrics import Interval, adjusted_rand_index, end_point_error, mean_ci, mode_homogeneity, n_apd, repeat_metric
+from motionlab.models.odmo.customize import end_point_sweep, to_end_point
+from motionlab.models.odmo.data import prepare, to_positions
+from motionlab.models.odmo.modes import ModeSet
+from motionlab.models.odmo.sampler import ODMOSampler, Samples
+from motionlab.train.parallel import run_in_workers
+
+#: Columns of Tables 1–2, in order.
+METRICS = ("accuracy", "fid", "diversity", "multimodality", "n_apd")
+
+
+@dataclass(frozen=True, eq=False)
+class Reference:
+    """What the sample sets are measured against.
+
+    Attributes:
+        evaluator: the frozen GRU evaluation classifier.
+        train_features: its features of the training clips ``(N, 30)`` (FID's reference).
+        real_positions: held-out real clips ``(M, T, J, 3)``, starting at the origin facing +x (n-APD's reference).
+        real_action: their actions ``(M,)``.
+    """
+
+    evaluator: Evaluator
+    train_features: Tensor
+    real_positions: Tensor
+    real_action: np.ndarray
+
+    @classmethod
+    def build(cls, evaluator: Evaluator, train: MotionSet, held_out: MotionSet, floor_clearance: float) -> Reference:
+        """FID against the ``train`` clips, n-APD against the ``held_out`` ones (e.g. the validation split)."""
+        return cls(evaluator, evaluator.features(train.positions), canonical_positions(held_out, floor_clearance),
+                   np.asarray(held_out.action))
+
+
+def canonical_positions(data: MotionSet, floor_clearance: float) -> Tensor:
+    """Joint positions ``(N, T, J, 3)`` of real clips moved to start at the origin facing +x, like generated ones."""
+    return to_positions(prepare(data, 1, floor_clearance).features, 1, floor_clearance)
+
+
+def set_metrics(reference: Reference, positions: Tensor | np.ndarray, action: np.ndarray,
+                rng: np.random.Generator) -> dict[str, float]:
+    """One row of Tables 1–2 for one set of clips ``(N, T, J, 3)`` of actions ``(N,)``."""
+    row = sample_metrics(reference.evaluator, positions, action, reference.train_features, rng)
+    row["n_apd"] = n_apd(torch.as_tensor(positions).flatten(2), action, reference.real_positions.flatten(2),
+                         reference.real_action)
+    return {name: row[name] for name in METRICS}
+
+
+def metric_row(reference: Reference, sampler: ODMOSampler, n_per_class: int, n_sets: int = 10,
+               seed: int = 0) -> dict[str, Interval]:
+    """One row of Tables 1–2: ``{metric: Interval}`` over ``n_sets`` sample sets of ``n_per_class`` clips per class."""
+    def draw(generator: torch.Generator) -> tuple[Samples, np.random.Generator]:
+        rng = np.random.default_rng(generator.initial_seed())
+        return sampler.sample_classes(n_per_class, rng), rng
+
+    return repeat_metric(lambda drawn: set_metrics(reference, drawn[0].positions, drawn[0].action, drawn[1]),
+                         draw, n_sets, seed)
+
+
+def metric_table(reference: Reference, samplers: dict[str, ODMOSampler], n_per_class: int, n_sets: int = 10,
+                 seed: int = 0, processes: int = 2) -> dict[str, dict[str, Interval]]:
+    """Tables 1–2: :func:`metric_row` of every sampler, ``{row name: {metric: Interval}}``.
+
+    The rows are measured ``processes`` at a time in worker processes (:mod:`motionlab.train.parallel`);
+    each is seeded by ``seed`` alone, so they equal in-process rows.
+    """
+    rows = run_in_workers(metric_row, [(reference, sampler, n_per_class, n_sets, seed) for sampler in samplers.values()],
+                          processes)
+    return dict(zip(samplers, rows))
+
+
+def real_row(reference: Reference, test: MotionSet, floor_clearance: float, n_sets: int = 10,
+             seed: int = 0) -> dict[str, Interval]:
+    """The "real data" row: the test clips measured like a sample set (n-APD against the reference's clips).
+
+    The clips are fixed; the repeats redraw the Diversity and Multimodality pairs.
+    """
+    positions, action = canonical_positions(test, floor_clearance), np.asarray(test.action)
+    return repeat_metric(lambda rng: set_metrics(reference, positions, action, rng),
+                         lambda generator: np.random.default_rng(generator.initial_seed()), n_sets, seed)
+
+
+def mode_homogeneity_interval(reference: Reference, sampler: ODMOSampler, n_per_mode: int, n_sets: int = 10,
+                              seed: int = 0) -> Interval:
+    """Table 3: homogeneity of the true styles (recognised by the evaluator) among clips of each discovered mode."""
+    def draw(generator: torch.Generator) -> tuple[np.ndarray, np.ndarray]:
+        clips = sampler.sample_modes(n_per_mode, np.random.default_rng(generator.initial_seed()))
+        found = sampler.modes.global_ids(clips.action, clips.mode)
+        return found, reference.evaluator.predict(clips.positions, "mode").numpy()
+
+    return repeat_metric(lambda drawn: mode_homogeneity(*drawn), draw, n_sets, seed)
+
+
+def end_point_control(reference: Reference, sampler: ODMOSampler, n_codes: int = 40, n_end_points: int = 10,
+                      seed: int = 0) -> dict[str, Interval]:
+    """Table 4: ``accuracy`` and ``dist_e`` (metres) of end-point customisation, intervals over the code groups.
+
+    For each class, ``n_codes`` training codes are picked at random; each is sent to ``n_end_points`` end
+    points from its own clip's end point to that of another random clip of the class. ``dist_e`` is measured
+    on the generated motion's root; ``dist_e_trajectory`` on the trajectory generator's output, which the
+    motion was asked to follow.
+    """
+    rng = np.random.default_rng(seed)
+    modes = sampler.modes
+    accuracy, distance, trajectory_distance = [], [], []
+    for action in range(len(modes.classes)):
+        members = np.flatnonzero(modes.action == action)
+        source = rng.choice(members, size=n_codes)
+        other = rng.choice(members, size=n_codes)
+        targets = np.concatenate([end_point_sweep(modes.end_points[s], modes.end_points[o], n_end_points)
+                                  for s, o in zip(source, other)])
+        clips = to_end_point(sampler, action, np.repeat(modes.codes[source], n_end_points, axis=0), targets)
+        correct = (reference.evaluator.predict(clips.positions).numpy() == action).reshape(n_codes, n_end_points)
+        accuracy.extend(correct.mean(axis=1))
+        grouped_targets = targets.reshape(n_codes, n_end_points, 3)
+        for paths, found in ((clips.features[..., -3:], distance), (clips.trajectory, trajectory_distance)):
+            grouped = paths.numpy().reshape(n_codes, n_end_points, -1, 3)
+            found.extend(end_point_error(p, t) for p, t in zip(grouped, grouped_targets))
+    return {"accuracy": _interval(accuracy), "dist_e": _interval(distance),
+            "dist_e_trajectory": _interval(trajectory_distance)}
+
+
+def _interval(values: list[float]) -> Interval:
+    mean, half_width = mean_ci(values)
+    return Interval(mean, half_width, tuple(float(v) for v in values), 0.95)
+
+
+def mode_recovery(modes: ModeSet, true_mode: np.ndarray) -> np.ndarray:
+    """Adjusted Rand index between discovered and true modes of the training codes, per action ``(A,)``."""
+    true_mode = np.asarray(true_mode)
+    if true_mode.shape != modes.labels.shape:
+        raise ValueError(f"mode_recovery: true_mode must be ({modes.labels.shape[0]},), got {true_mode.shape}")
+    return np.array([adjusted_rand_index(modes.labels[modes.action == a], true_mode[modes.action == a])
+                     for a in range(len(modes.classes))])

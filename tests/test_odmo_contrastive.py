@@ -1,0 +1,100 @@
+"""ODMO's embedding loss: eq. 1 against hand computations, the prior term against torch.distributions, pairs, batches."""
+
+import math
+
+import pytest
+import torch
+from torch.distributions import Normal, kl_divergence
+
+from motionlab.models.odmo.contrastive import BalancedBatches, balanced_pairs, contrastive_loss, prior_term
+
+
+def test_contrastive_loss_matches_hand_computation():
+    mu_a = torch.tensor([[0.0, 0.0], [0.0, 0.0], [1.0, 1.0], [0.0, 0.0]])
+    mu_b = torch.tensor([[3.0, 4.0], [3.0, 4.0], [1.0, 1.0], [6.0, 8.0]])
+    same = torch.tensor([True, False, False, False])
+    loss = contrastive_loss(mu_a, mu_b, same, margin=5.0)
+    # same class at distance 5: 0.5 * 25; different at 5: at the margin, 0; identical codes of
+    # different classes: 0.5 * 5**2; different at 10: beyond the margin, 0
+    assert torch.allclose(loss, torch.tensor([12.5, 0.0, 12.5, 0.0]))
+    short = contrastive_loss(torch.zeros(1, 2), torch.tensor([[1.0, 0.0]]), torch.tensor([False]), margin=5.0)
+    assert torch.allclose(short, torch.tensor([0.5 * 16.0]))
+
+
+def test_contrastive_slack_frees_close_same_class_codes():
+    a, b = torch.zeros(2, 3), torch.tensor([[0.3, 0.0, 0.0], [0.0, 2.0, 0.0]])
+    loss = contrastive_loss(a, b, torch.tensor([True, True]), margin=5.0, slack=0.5)
+    assert torch.allclose(loss, torch.tensor([0.0, 0.5 * (4.0 - 0.25)]))
+
+
+def test_contrastive_gradient_is_finite_for_identical_codes():
+    mu = torch.zeros(1, 4, requires_grad=True)
+    contrastive_loss(mu, torch.zeros(1, 4), torch.tensor([False]), margin=5.0).sum().backward()
+    assert torch.isfinite(mu.grad).all()
+
+
+@pytest.mark.parametrize("target", ["code", "noise", "standard"])
+def test_prior_term_matches_torch_distributions(target):
+    gen = torch.Generator().manual_seed(0)
+    mu, logvar = torch.randn(5, 3, generator=gen), torch.randn(5, 3, generator=gen)
+    variance = 0.05
+    scale = torch.exp(0.5 * logvar)
+    if target == "code":
+        expected = kl_divergence(Normal(mu, scale), Normal(0.0, math.sqrt(variance)))
+    elif target == "noise":
+        expected = kl_divergence(Normal(torch.zeros_like(mu), scale), Normal(0.0, math.sqrt(variance)))
+    else:
+        expected = kl_divergence(Normal(mu, scale), Normal(0.0, 1.0))
+    assert torch.allclose(prior_term(mu, logvar, variance, target), expected.sum(-1), atol=1e-5)
+
+
+def test_noise_prior_ignores_the_mean_and_is_zero_at_the_prior_variance():
+    logvar = torch.full((2, 4), math.log(0.05))
+    assert torch.allclose(prior_term(torch.randn(2, 4) * 10, logvar, 0.05, "noise"), torch.zeros(2), atol=1e-6)
+
+
+def test_prior_term_rejects_bad_arguments():
+    with pytest.raises(ValueError, match="target"):
+        prior_term(torch.zeros(1, 2), torch.zeros(1, 2), 0.05, "other")
+    with pytest.raises(ValueError, match="prior_variance"):
+        prior_term(torch.zeros(1, 2), torch.zeros(1, 2), 0.0, "noise")
+
+
+def test_balanced_pairs_give_one_partner_of_each_kind():
+    labels = torch.tensor([0, 0, 1, 1, 1, 2, 2])
+    first, second, same = balanced_pairs(labels, torch.Generator().manual_seed(1))
+    n = len(labels)
+    assert first.tolist() == list(range(n)) * 2
+    assert same.tolist() == [True] * n + [False] * n
+    assert torch.equal(labels[first[:n]], labels[second[:n]])
+    assert (first[:n] != second[:n]).all()
+    assert (labels[first[n:]] != labels[second[n:]]).all()
+
+
+def test_balanced_pairs_reject_unpairable_batches():
+    with pytest.raises(ValueError, match="single clip"):
+        balanced_pairs(torch.tensor([0, 0, 1]))
+    with pytest.raises(ValueError, match="2 classes"):
+        balanced_pairs(torch.tensor([0, 0]))
+
+
+def test_balanced_batches_hold_every_class_equally_and_reuse_no_clip():
+    labels = torch.tensor([0] * 5 + [1] * 4 + [2] * 6)
+    features = torch.arange(15.0)[:, None, None]
+    batches = list(BalancedBatches(features, labels, 3)(0, torch.Generator().manual_seed(0), 6))
+    assert len(batches) == 2
+    seen = torch.cat([x.flatten() for x, _ in batches])
+    assert len(set(seen.tolist())) == 12
+    for x, y in batches:
+        assert torch.bincount(y, minlength=3).tolist() == [2, 2, 2]
+        assert torch.equal(labels[x.flatten().long()], y)
+    again = list(BalancedBatches(features, labels, 3)(0, torch.Generator().manual_seed(0), 6))
+    assert all(torch.equal(a[0], b[0]) for a, b in zip(batches, again))
+
+
+def test_balanced_batches_reject_bad_sizes():
+    source = BalancedBatches(torch.zeros(8, 1, 1), torch.tensor([0, 1] * 4), 2)
+    with pytest.raises(ValueError, match="multiple"):
+        next(source(0, torch.Generator(), 5))
+    with pytest.raises(ValueError, match="at least 2 clips"):
+        BalancedBatches(torch.zeros(3, 1, 1), torch.tensor([0, 0, 1]), 2)

@@ -1,0 +1,150 @@
+"""From codes to clips: the sampler, on-demand customisation, the evaluation tables and the chapter's widgets.
+
+A tiny untrained ODMO on a 3-joint skeleton and a stand-in evaluator keep these tests fast; what they check
+is the plumbing (shapes, which codes and end points reach the generators, how numbers are aggregated),
+against hand computations and scikit-learn.
+"""
+
+import ipywidgets as widgets
+import matplotlib.pyplot as plt
+import numpy as np
+import pytest
+import torch
+from matplotlib.figure import Figure
+from sklearn.metrics import adjusted_rand_score
+
+from motionlab.metrics import end_point_error
+from motionlab.models.odmo import customize, evaluate
+from motionlab.models.odmo.config import ODMOConfig
+from motionlab.models.odmo.data import ODMOData
+from motionlab.models.odmo.model import ODMO
+from motionlab.models.odmo.modes import discover_modes
+from motionlab.models.odmo.sampler import ODMOSampler, encode_clips
+from motionlab.widgets import odmo as odmo_widgets
+
+CFG = ODMOConfig(n_classes=2, n_frames=5, n_joints=3, code_dim=3, encoder_hidden=8, encoder_mlp=8,
+                 trajectory_hidden=8, motion_hidden=8)
+PARENTS = [-1, 0, 1]
+STRIDE = 2
+
+
+@pytest.fixture(scope="module")
+def data() -> ODMOData:
+    gen = torch.Generator().manual_seed(0)
+    n = 40
+    features = torch.randn(n, CFG.n_frames, CFG.feature_dim, generator=gen) * 0.1
+    features[..., 2:6:3] -= 0.5   # the two non-root joints hang below the root
+    features[..., -3:] = torch.cumsum(torch.rand(n, CFG.n_frames, 3, generator=gen) * 0.2, dim=1)
+    features[:, 0, -3:] = 0.0
+    action = torch.arange(n) % 2
+    mode = 2 * action + (torch.arange(n) // 2) % 2
+    return ODMOData(features, action, mode, torch.zeros(n, dtype=torch.int64), STRIDE, 0.05)
+
+
+@pytest.fixture(scope="module")
+def sampler(data) -> ODMOSampler:
+    torch.manual_seed(0)
+    model = ODMO(CFG).fit_standardizer(data.features).eval()
+    codes = encode_clips(model, data)
+    modes = discover_modes(codes, data.action.numpy(), data.end_point.numpy(), 2, k_values=[3], min_share=0.0)
+    return ODMOSampler(model, modes, data.frame_stride, data.floor_clearance)
+
+
+class StandInEvaluator:
+    """Features: per-clip mean and spread of the joint positions; "action" = whether the root ends at x > 0.2."""
+
+    def features(self, positions):
+        p = torch.as_tensor(positions, dtype=torch.float64).flatten(2)
+        return torch.cat([p.mean(1), p.std(1)], dim=-1)
+
+    def predict(self, positions, head="action"):
+        return (torch.as_tensor(positions)[:, -1, 0, 0] > 0.2).long()
+
+    def probs(self, positions, head="action"):
+        return torch.nn.functional.one_hot(self.predict(positions, head), 2).double() * 0.8 + 0.1
+
+
+def test_encode_and_sample_shapes_and_determinism(data, sampler):
+    codes = encode_clips(sampler.model, data)
+    assert codes.shape == (len(data), CFG.code_dim) and not sampler.model.training
+    a = sampler.sample(1, 6, np.random.default_rng(3))
+    b = sampler.sample(1, 6, np.random.default_rng(3))
+    assert a.positions.shape == (6, CFG.n_frames * STRIDE, 3, 3) and a.features.shape == (6, CFG.n_frames, CFG.feature_dim)
+    assert torch.equal(a.positions, b.positions) and (a.action == 1).all()
+    assert ODMOSampler.from_data(sampler.model, data, kind="conventional").modes.classes[0].n_modes == 1
+    both = sampler.sample_classes(4, np.random.default_rng(0))
+    assert both.action.tolist() == [0] * 4 + [1] * 4
+    per_mode = sampler.sample_modes(2, np.random.default_rng(0))
+    assert np.bincount(sampler.modes.global_ids(per_mode.action, per_mode.mode)).tolist() == [2] * 6
+    with pytest.raises(ValueError, match="kind"):
+        ODMOSampler.from_data(sampler.model, data, kind="other")
+
+
+def test_customisation_sends_the_requested_codes_and_end_points(sampler):
+    weights = np.array([0.0, 0.5, 1.0])
+    mixed = customize.mode_interpolation(sampler, 0, 0, 1, weights)
+    centres = sampler.modes.classes[0].means
+    assert np.allclose(mixed.codes[[0, 2]], centres[[0, 1]]) and np.allclose(mixed.codes[1], centres[:2].mean(0))
+    target = np.array([1.0, -0.5, 0.0])
+    styles = customize.styles_to_end_point(sampler, 1, target, np.random.default_rng(0), per_mode=2)
+    assert sorted(set(styles.mode.tolist())) == list(range(sampler.modes.classes[1].n_modes))
+    assert np.allclose(styles.end_points, target)
+    again = customize.to_end_point(sampler, 1, styles.codes, styles.end_points)
+    assert torch.equal(again.features, styles.features)
+    assert np.allclose(customize.end_point_sweep([0, 0, 0], [2, 4, 0], 3), [[0, 0, 0], [1, 2, 0], [2, 4, 0]])
+    with pytest.raises(ValueError, match="modes"):
+        customize.mode_interpolation(sampler, 0, 0, 99, weights)
+
+
+def test_mode_recovery_matches_scikit_learn(data, sampler):
+    ari = evaluate.mode_recovery(sampler.modes, data.mode.numpy())
+    labels, action, mode = sampler.modes.labels, sampler.modes.action, data.mode.numpy()
+    assert np.allclose(ari, [adjusted_rand_score(mode[action == a], labels[action == a]) for a in range(2)])
+
+
+def test_end_point_control_measures_the_generated_root(sampler):
+    reference = evaluate.Reference(StandInEvaluator(), torch.zeros(4, 12), torch.zeros(4, 10, 3, 3), np.array([0, 0, 1, 1]))
+    table = evaluate.end_point_control(reference, sampler, n_codes=3, n_end_points=4, seed=0)
+    assert len(table["dist_e"].values) == 6 and 0.0 <= table["accuracy"].mean <= 1.0
+    assert set(table) == {"accuracy", "dist_e", "dist_e_trajectory"}
+    # recompute the first code group by hand
+    rng = np.random.default_rng(0)
+    members = np.flatnonzero(sampler.modes.action == 0)
+    source, other = rng.choice(members, size=3), rng.choice(members, size=3)
+    targets = customize.end_point_sweep(sampler.modes.end_points[source[0]], sampler.modes.end_points[other[0]], 4)
+    clips = customize.to_end_point(sampler, 0, np.repeat(sampler.modes.codes[source[:1]], 4, axis=0), targets)
+    assert table["dist_e"].values[0] == pytest.approx(end_point_error(clips.features[..., -3:].numpy(), targets))
+    assert table["dist_e_trajectory"].values[0] == pytest.approx(end_point_error(clips.trajectory.numpy(), targets))
+
+
+def test_metric_and_homogeneity_tables(sampler):
+    real = torch.randn(8, CFG.n_frames * STRIDE, 3, 3)
+    reference = evaluate.Reference(StandInEvaluator(), StandInEvaluator().features(real), real, np.array([0, 1] * 4))
+    table = evaluate.metric_table(reference, {"tiny": sampler}, n_per_class=4, n_sets=2, seed=1)
+    assert list(table["tiny"]) == list(evaluate.METRICS)
+    assert all(len(interval.values) == 2 for interval in table["tiny"].values())
+    in_workers = evaluate.metric_table(reference, {"tiny": sampler, "again": sampler}, n_per_class=4, n_sets=2, seed=1,
+                                       processes=2)
+    assert list(in_workers) == ["tiny", "again"]
+    for row in in_workers.values():
+        assert all(row[metric].values == table["tiny"][metric].values for metric in evaluate.METRICS)
+    homogeneity = evaluate.mode_homogeneity_interval(reference, sampler, n_per_mode=2, n_sets=2)
+    assert all(0.0 <= v <= 1.0 for v in homogeneity.values)
+
+
+def test_widget_callbacks_and_builders(sampler):
+    for fig in (odmo_widgets.mode_sample_figure(sampler, PARENTS, 0, 0, seed=1),
+                odmo_widgets.interpolation_figure(sampler, PARENTS, 1, 0, 1, 0.5),
+                odmo_widgets.end_point_figure(sampler, 0, 1.0, 0.5, seed=0, per_mode=1)):
+        assert isinstance(fig, Figure) and fig.axes
+        plt.close(fig)
+    with pytest.raises(ValueError, match="discovered modes"):
+        odmo_widgets.mode_sample_figure(sampler, PARENTS, 0, 42, seed=0)
+    with pytest.raises(ValueError, match="weight"):
+        odmo_widgets.interpolation_figure(sampler, PARENTS, 0, 0, 1, 1.5)
+    names = ["a", "b"]
+    built = [odmo_widgets.mode_sampler_widget(sampler, PARENTS, names),
+             odmo_widgets.interpolation_widget(sampler, PARENTS, names),
+             odmo_widgets.end_point_widget(sampler, names)]
+    assert all(isinstance(w, widgets.VBox) for w in built)
+    plt.close("all")
