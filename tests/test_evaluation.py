@@ -7,7 +7,8 @@ import torch
 from motionlab.data.representations import rotate_xy
 from motionlab.data.synthetic import generate
 from motionlab.evaluation import EVAL_FEATURES, body_frame_features, hip_heading
-from motionlab.evaluation.benchmark import labels_of, sample_metrics
+from motionlab.evaluation.benchmark import Benchmark, labels_of, real_reference, sample_metrics
+from motionlab.metrics import mean_ci
 from motionlab.evaluation.evaluator import EvaluatorConfig, load_evaluator
 from motionlab.models.classifiers import ClassifierConfig, MotionClassifier
 
@@ -89,6 +90,10 @@ def test_evaluator_learns_actions_and_is_cached(clips):
                          np.random.default_rng(0))
     assert set(row) == {"accuracy", "fid", "diversity", "multimodality", "is"}
     assert all(np.isfinite(v) for v in row.values())
+    real = real_reference(evaluator, Benchmark(clips, held_out, held_out), n_repeats=3, seed=5)
+    by_hand = [sample_metrics(evaluator, held_out.positions, held_out.action, evaluator.features(clips.positions),
+                              np.random.default_rng([5, r])) for r in range(3)]
+    assert real == {key: mean_ci([row[key] for row in by_hand]) for key in row}
     with pytest.raises(KeyError, match="heads"):
         evaluator.logits(held_out.positions, "style")
 

@@ -70,8 +70,13 @@ def sample_metrics(evaluator: Evaluator, positions: np.ndarray | torch.Tensor, a
     Returns:
         ``accuracy``, ``fid``, ``diversity``, ``multimodality`` and the inception score ``is``.
     """
-    features = evaluator.features(positions)
-    probs = evaluator.probs(positions, "action")
+    return feature_metrics(evaluator.features(positions), evaluator.probs(positions, "action"), action,
+                           reference_features, rng)
+
+
+def feature_metrics(features: torch.Tensor, probs: torch.Tensor, action: np.ndarray, reference_features: torch.Tensor,
+                    rng: np.random.Generator) -> dict[str, float]:
+    """:func:`sample_metrics` from the evaluator's ``features`` ``(N, D)`` and action ``probs`` ``(N, C)``."""
     action = np.asarray(action)
     return {
         "accuracy": float((probs.argmax(dim=-1).numpy() == action).mean()),
@@ -89,6 +94,8 @@ def real_reference(evaluator: Evaluator, benchmark: Benchmark, n_repeats: int = 
     sample set); returns ``{metric: (mean, 95% CI half-width)}``.
     """
     reference = evaluator.features(benchmark.train.positions)
-    rows = [sample_metrics(evaluator, benchmark.test.positions, benchmark.test.action, reference,
-                           np.random.default_rng([seed, r])) for r in range(n_repeats)]
+    features = evaluator.features(benchmark.test.positions)
+    probs = evaluator.probs(benchmark.test.positions, "action")
+    rows = [feature_metrics(features, probs, benchmark.test.action, reference, np.random.default_rng([seed, r]))
+            for r in range(n_repeats)]
     return {key: mean_ci([row[key] for row in rows]) for key in rows[0]}
