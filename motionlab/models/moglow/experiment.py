@@ -22,7 +22,8 @@ from motionlab.models.moglow.data import MoGlowDataConfig, MoGlowFeatures, clip_
 from motionlab.models.moglow.generate import seed_features, splice_controls
 from motionlab.models.moglow.model import MoGlow
 from motionlab.models.moglow.training import PreparedData, data_identity, nll_per_frame_loss, prepare_data
-from motionlab.train import PiecewiseLinear, TensorBatches, TrainConfig, TrainResult, train_or_load
+from motionlab.train import PiecewiseLinear, TensorBatches, TrainConfig, TrainResult, is_cached, train_or_load
+from motionlab.train.parallel import run_in_workers
 
 #: Walk and jog as in the paper, plus wave: the only action of our data set that stands in place, so
 #: that "stand still" is a command the models have seen.
@@ -93,6 +94,31 @@ def train_baseline(data: PreparedData, dropout: float = 0.0, progress: bool | No
     """Fit the linear predictor, then train (or load) the Gaussian autoregressive baseline."""
     cfg = baseline_config(dropout)
     return _train("moglow_gaussian_ar", GaussianAR(cfg), cfg, data, baseline_train_config(), progress)
+
+
+def _train_in_worker(dropout: float | None, data: PreparedData) -> None:
+    """Body of a worker process: train MoGlow with ``dropout`` (``None``: the baseline) into the cache."""
+    if dropout is None:
+        train_baseline(data, progress=False)
+    else:
+        train_moglow(data, dropout, progress=False)
+
+
+def train_all(data: PreparedData, processes: int = 2,
+              progress: bool | None = None) -> tuple[dict[float, Trained], Trained]:
+    """MoGlow at every rate of :data:`DROPOUT_RATES` and the Gaussian baseline, ``processes`` runs at a time.
+
+    The runs train in worker processes (:mod:`motionlab.train.parallel`), one thread each, then every model
+    is loaded here from the cache (seeded runs: the weights do not depend on where they were trained).
+    Returns ``({rate: Trained}, baseline)``.
+    """
+    identity = data_identity(DATA, WINDOW, STRIDE)
+    pending = [rate for rate in DROPOUT_RATES if not is_cached("moglow", moglow_config(rate), moglow_train_config(), identity)]
+    if not is_cached("moglow_gaussian_ar", baseline_config(), baseline_train_config(), identity):
+        pending.append(None)
+    run_in_workers(_train_in_worker, [(rate, data) for rate in pending], processes)
+    runs = {rate: train_moglow(data, rate, progress) for rate in DROPOUT_RATES}
+    return runs, train_baseline(data, progress=progress)
 
 
 #: Seconds of each piece of the control test: walk, stand, jog, stand.
