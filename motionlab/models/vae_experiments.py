@@ -102,12 +102,13 @@ def kl_weight(steps: int, anneal: bool) -> KLAnneal | Constant:
 
 
 def train_vae(name: str, cfg: VAEConfig, x: Tensor, label: Tensor | None, steps: int, anneal: bool,
-              settings: ChapterSettings, seed: int = 0) -> tuple[MLPVAE, TrainResult]:
+              settings: ChapterSettings, seed: int = 0, progress: bool | None = None) -> tuple[MLPVAE, TrainResult]:
     """Build an :class:`MLPVAE` from ``cfg`` (initialised from ``seed``) and train or load it.
 
     Args:
         x: standardised training inputs ``(N, *cfg.input_shape)``; label: ``(N,)`` classes for a CVAE.
         steps: optimiser steps; anneal: ramp the KL weight (see :func:`kl_weight`) or keep it at 1.
+        progress: show a progress bar (default: in the full profile only).
     """
     torch.manual_seed(seed)
     model = MLPVAE(cfg)
@@ -115,7 +116,7 @@ def train_vae(name: str, cfg: VAEConfig, x: Tensor, label: Tensor | None, steps:
     train_cfg = TrainConfig(steps=steps, batch_size=settings.batch_size, lr=settings.lr, grad_clip=1.0,
                             seed=seed, schedules={"beta": kl_weight(steps, anneal)})
     fingerprint = {"x": data_fingerprint(x), "label": None if label is None else data_fingerprint(label.float())}
-    result = train_or_load(name, cfg, model, elbo_loss, data, train_cfg, data_config=fingerprint)
+    result = train_or_load(name, cfg, model, elbo_loss, data, train_cfg, data_config=fingerprint, progress=progress)
     return model, result
 
 
