@@ -19,7 +19,7 @@ course: $(STAMP)
 	MOTIONLAB_PROFILE=full $(BIN)/python -m motionlab.course
 
 test: $(STAMP)
-	MOTIONLAB_PROFILE=quick $(BIN)/python -m pytest --nbval-sanitize-with tests/nbval_sanitize.cfg
+	MOTIONLAB_PROFILE=quick $(BIN)/python -m pytest -n 2 --dist loadscope --nbval-sanitize-with tests/nbval_sanitize.cfg
 
 bench: $(STAMP)
 	$(BIN)/python -m motionlab.bench
