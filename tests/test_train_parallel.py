@@ -10,7 +10,7 @@ import torch
 from torch import nn
 
 from motionlab import config
-from motionlab.train import TensorBatches, TrainConfig, is_cached, train_or_load
+from motionlab.train import TensorBatches, TrainConfig, build_seeded, is_cached, train_or_load
 from motionlab.train.parallel import InBackground, run_in_workers, worker_pool
 
 CFG = TrainConfig(steps=15, batch_size=8, lr=1e-2, checkpoint_every=None)
@@ -93,3 +93,14 @@ def test_a_run_trained_in_a_worker_loads_here_with_the_weights_of_an_in_process_
     assert not train_or_load("tiny_here", {"hidden": 8}, here, loss_fn, batches(), CFG).loaded_from_cache
     for (key, a), b in zip(loaded.state_dict().items(), here.state_dict().values()):
         assert torch.equal(a, b), key
+
+
+def test_build_seeded_depends_on_the_seed_alone_and_leaves_the_callers_rng() -> None:
+    torch.manual_seed(123)
+    before = torch.get_rng_state()
+    first = build_seeded(lambda: nn.Linear(3, 2), 7)
+    assert torch.equal(torch.get_rng_state(), before)
+    torch.randn(100)  # whatever ran before does not matter
+    second = build_seeded(lambda: nn.Linear(3, 2), 7)
+    assert torch.equal(first.weight, second.weight) and torch.equal(first.bias, second.bias)
+    assert not torch.equal(first.weight, build_seeded(lambda: nn.Linear(3, 2), 8).weight)

@@ -17,7 +17,7 @@ Modules: :mod:`~motionlab.train.schedules` (schedules), :mod:`~motionlab.train.t
 """
 
 from motionlab.train.batches import TensorBatches
-from motionlab.train.cache import is_cached, resume_path, run_identity, train_or_load
+from motionlab.train.cache import build_seeded, is_cached, resume_path, run_identity, train_or_load
 from motionlab.train.history import History
 from motionlab.train.loop import NonFiniteLossError, TrainResult, loss_terms, train
 from motionlab.train.plot import plot_history
@@ -25,6 +25,7 @@ from motionlab.train.schedules import Constant, KLAnneal, LinearRamp, PiecewiseL
 from motionlab.train.train_config import TrainConfig
 
 __all__ = [
+    "build_seeded",
     "Constant",
     "History",
     "KLAnneal",

@@ -14,8 +14,9 @@ import warnings
 from collections.abc import Iterable
 from dataclasses import replace
 from pathlib import Path
-from typing import Any
+from typing import Any, Callable, TypeVar
 
+import torch
 from torch import nn
 
 from motionlab.checkpoints import checkpoint_path, config_dict, load_checkpoint, save_checkpoint
@@ -24,6 +25,8 @@ from motionlab.train.history import History
 from motionlab.train.loop import Callback, LossFn, TrainResult, train
 from motionlab.train.state import ResumeFile
 from motionlab.train.train_config import TrainConfig
+
+M = TypeVar("M", bound=nn.Module)
 
 
 def run_identity(model_config: Any, train_config: TrainConfig, data_config: Any | None = None) -> dict[str, Any]:
@@ -40,6 +43,17 @@ def run_identity(model_config: Any, train_config: TrainConfig, data_config: Any 
 def resume_path(name: str, identity: dict[str, Any]) -> Path:
     """``<name>-<hash>.resume.pt`` beside the cache entry of the run."""
     return checkpoint_path(name, identity).with_suffix(".resume.pt")
+
+
+def build_seeded(factory: Callable[[], M], seed: int) -> M:
+    """``factory()`` (a model's constructor) with torch's global RNG seeded by ``seed``, inside a fork.
+
+    A model's initial weights then depend on its config alone, not on what ran before it (a notebook's
+    earlier cells, or a worker process's other jobs); the caller's random state is left as it was.
+    """
+    with torch.random.fork_rng():
+        torch.manual_seed(seed)
+        return factory()
 
 
 def is_cached(name: str, model_config: Any, train_config: TrainConfig, data_config: Any | None = None) -> bool:

@@ -22,7 +22,8 @@ from motionlab.models.moglow.data import MoGlowDataConfig, MoGlowFeatures, clip_
 from motionlab.models.moglow.generate import seed_features, splice_controls
 from motionlab.models.moglow.model import MoGlow
 from motionlab.models.moglow.training import PreparedData, data_identity, nll_per_frame_loss, prepare_data
-from motionlab.train import PiecewiseLinear, TensorBatches, TrainConfig, TrainResult, is_cached, train_or_load
+from motionlab.train import (PiecewiseLinear, TensorBatches, TrainConfig, TrainResult, build_seeded, is_cached,
+                             train_or_load)
 from motionlab.train.parallel import run_in_workers
 
 #: Walk and jog as in the paper, plus wave: the only action of our data set that stands in place, so
@@ -76,8 +77,9 @@ class Trained(NamedTuple):
     linear_rms: float
 
 
-def _train(name: str, model: MoGlow | GaussianAR, cfg, data: PreparedData, train_cfg: TrainConfig,
+def _train(name: str, model_class: type[MoGlow] | type[GaussianAR], cfg, data: PreparedData, train_cfg: TrainConfig,
            progress: bool | None) -> Trained:
+    model = build_seeded(lambda: model_class(cfg), train_cfg.seed)
     linear_rms = model.initialize(data.train.pose, data.train.control)
     result = train_or_load(name, cfg, model, nll_per_frame_loss, TensorBatches((data.train.pose, data.train.control)),
                            train_cfg, data_config=data_identity(DATA, WINDOW, STRIDE), progress=progress)
@@ -87,13 +89,13 @@ def _train(name: str, model: MoGlow | GaussianAR, cfg, data: PreparedData, train
 def train_moglow(data: PreparedData, dropout: float, progress: bool | None = None) -> Trained:
     """Fit the linear predictor, then train (or load) the chapter's MoGlow with history dropout ``dropout``."""
     cfg = moglow_config(dropout)
-    return _train("moglow", MoGlow(cfg), cfg, data, moglow_train_config(), progress)
+    return _train("moglow", MoGlow, cfg, data, moglow_train_config(), progress)
 
 
 def train_baseline(data: PreparedData, dropout: float = 0.0, progress: bool | None = None) -> Trained:
     """Fit the linear predictor, then train (or load) the Gaussian autoregressive baseline."""
     cfg = baseline_config(dropout)
-    return _train("moglow_gaussian_ar", GaussianAR(cfg), cfg, data, baseline_train_config(), progress)
+    return _train("moglow_gaussian_ar", GaussianAR, cfg, data, baseline_train_config(), progress)
 
 
 def _train_in_worker(dropout: float | None, data: PreparedData) -> None:

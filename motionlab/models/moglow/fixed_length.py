@@ -29,7 +29,7 @@ from motionlab.models.moglow.data import (
     standardize,
 )
 from motionlab.models.moglow.training import data_identity
-from motionlab.train import PiecewiseLinear, TensorBatches, TrainConfig, TrainResult, train_or_load
+from motionlab.train import PiecewiseLinear, TensorBatches, TrainConfig, TrainResult, build_seeded, train_or_load
 
 #: Frames per clip (the benchmark's 4 s at 30 fps); divisible by 2**levels.
 CLIP_FRAMES = 120
@@ -81,10 +81,10 @@ def train_fixed_length_glow(benchmark: Benchmark, data_cfg: MoGlowDataConfig = M
     scalers = fit_scalers(train)
     train_x = channels_first(standardize(train, scalers))
     test_x = channels_first(standardize(clip_features(benchmark.test, data_cfg, augment=False), scalers))
-    model_cfg = glow_config()
-    model = Glow(model_cfg)
+    model_cfg, train_cfg = glow_config(), glow_train_config()
+    model = build_seeded(lambda: Glow(model_cfg), train_cfg.seed)
     result = train_or_load("fixed_length_glow", model_cfg, model, glow_nll_loss, TensorBatches(train_x),
-                           glow_train_config(), data_config=data_identity(data_cfg, CLIP_FRAMES, CLIP_FRAMES),
+                           train_cfg, data_config=data_identity(data_cfg, CLIP_FRAMES, CLIP_FRAMES),
                            progress=progress)
     return FixedLengthGlow(model, scalers, result, train_x, test_x)
 

@@ -10,7 +10,6 @@ from __future__ import annotations
 
 from typing import Any
 
-import torch
 from torch import nn
 
 from motionlab.models.motion_cell.baselines import FrameBaseline
@@ -19,7 +18,7 @@ from motionlab.models.motion_cell.data import PoseCodec
 from motionlab.models.motion_cell.denoise import DenoisingAutoencoder
 from motionlab.models.motion_cell.losses import LossFn
 from motionlab.models.motion_cell.model import MotionCellModel
-from motionlab.train import KLAnneal, LinearRamp, TrainConfig, TrainResult, train_or_load
+from motionlab.train import KLAnneal, LinearRamp, TrainConfig, TrainResult, build_seeded, train_or_load
 from motionlab.train import is_cached as cache_entry_exists
 from motionlab.train.batches import BatchSource
 from motionlab.train.schedules import Schedule
@@ -37,9 +36,7 @@ def build_model(cfg: ModelConfig, codec: PoseCodec, seed: int = 0) -> nn.Module:
         raise TypeError(f"build_model: unknown config type {type(cfg).__name__}")
     own_codec = PoseCodec(codec.offsets, codec.parents)
     own_codec.load_state_dict(codec.state_dict())
-    with torch.random.fork_rng():
-        torch.manual_seed(seed)
-        return builders[type(cfg)](cfg, own_codec)
+    return build_seeded(lambda: builders[type(cfg)](cfg, own_codec), seed)
 
 
 def motion_cell_schedules(steps: int, beta: float = 1.0, classifier: float = 0.0, word_drop: float = 0.0) -> dict[str, Schedule]:

@@ -78,10 +78,6 @@ class ODMOSampler:
         modes = build_modes(kind, encode_clips(model, data), data, model.cfg.n_classes, seed)
         return cls(model, modes, data.frame_stride, data.floor_clearance)
 
-    def with_modes(self, modes: ModeSet) -> ODMOSampler:
-        """The same model with other modes."""
-        return ODMOSampler(self.model, modes, self.frame_stride, self.floor_clearance)
-
     def generate(self, codes: np.ndarray | Tensor, action: np.ndarray | Tensor,
                  end_points: np.ndarray | Tensor) -> tuple[Tensor, Tensor, Tensor]:
         """Positions ``(N, T, J, 3)``, features ``(N, T_model, F)`` and the trajectory generator's trajectory
