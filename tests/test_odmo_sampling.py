@@ -13,6 +13,7 @@ import torch
 from matplotlib.figure import Figure
 from sklearn.metrics import adjusted_rand_score
 
+from motionlab.data.synthetic import generate
 from motionlab.metrics import end_point_error
 from motionlab.models.odmo import customize, evaluate
 from motionlab.models.odmo.config import ODMOConfig
@@ -148,3 +149,14 @@ def test_widget_callbacks_and_builders(sampler):
              odmo_widgets.end_point_widget(sampler, names)]
     assert all(isinstance(w, widgets.VBox) for w in built)
     plt.close("all")
+
+
+def test_real_row_equals_set_metrics_on_the_canonical_test_clips():
+    test = generate(seed=5, n_per_mode=1, seconds=1.0, split="test")
+    positions = evaluate.canonical_positions(test, 0.0)
+    reference = evaluate.Reference(StandInEvaluator(), StandInEvaluator().features(positions), positions,
+                                   np.asarray(test.action))
+    row = evaluate.real_row(reference, test, 0.0, n_sets=3, seed=2)
+    by_hand = evaluate.repeat_metric(lambda rng: evaluate.set_metrics(reference, positions, np.asarray(test.action), rng),
+                                     lambda generator: np.random.default_rng(generator.initial_seed()), 3, 2)
+    assert all(row[name].values == by_hand[name].values for name in evaluate.METRICS)
