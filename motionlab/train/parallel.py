@@ -27,10 +27,14 @@ def _in_worker(function: Callable[..., R], arguments: tuple[Any, ...]) -> R:
     return function(*arguments)
 
 
+def _check_processes(processes: int, where: str) -> None:
+    if isinstance(processes, bool) or not isinstance(processes, int) or processes < 1:
+        raise ValueError(f"{where}: processes must be a positive integer, got {processes!r}")
+
+
 def worker_pool(processes: int = 2) -> ProcessPoolExecutor:
     """A pool of ``processes`` fresh (``spawn``) worker processes; submit work with :func:`submit`."""
-    if isinstance(processes, bool) or not isinstance(processes, int) or processes < 1:
-        raise ValueError(f"worker_pool: processes must be a positive integer, got {processes!r}")
+    _check_processes(processes, "worker_pool")
     return ProcessPoolExecutor(max_workers=processes, mp_context=multiprocessing.get_context("spawn"))
 
 
@@ -48,8 +52,7 @@ def run_in_workers(function: Callable[..., R], calls: Sequence[tuple[Any, ...]],
     Calls start in the order given (put the longest first, so the last one to finish is short). With one
     process, or one call, everything runs here, in this process. An exception in a call is raised here.
     """
-    if isinstance(processes, bool) or not isinstance(processes, int) or processes < 1:
-        raise ValueError(f"run_in_workers: processes must be a positive integer, got {processes!r}")
+    _check_processes(processes, "run_in_workers")
     if processes == 1 or len(calls) <= 1:
         return [function(*arguments) for arguments in calls]
     with worker_pool(min(processes, len(calls))) as pool:

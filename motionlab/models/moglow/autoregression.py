@@ -24,6 +24,8 @@ from typing import Any
 import torch
 from torch import Tensor
 
+from motionlab.models.flows.prior import check_temperature
+
 FrameStep = Callable[[int, Tensor, Any], tuple[Tensor, Any]]
 """``step(t, cond_t (B, cond_dim), state) -> (pose_t (B, P), state)``: generated frame ``t`` (0-based)."""
 
@@ -52,6 +54,28 @@ def history_keep_mask(batch: int, frames: int, history: int, dropout: float,
                       generator: torch.Generator | None = None) -> Tensor:
     """Bernoulli keep flags ``(batch, frames, history)`` (1 keep, 0 drop), each dropped with prob. ``dropout``."""
     return (torch.rand(batch, frames, history, generator=generator) >= dropout).float()
+
+
+def sampling_setup(cfg: Any, control: Tensor, seed_pose: Tensor, temperature: float,
+                   generator: torch.Generator | None, where: str) -> tuple[Tensor | None, Tensor]:
+    """Checks and first draws shared by the models' ``sample``: ``(keep, noise)``.
+
+    ``cfg`` has ``pose_dim``, ``control_dim``, ``history`` and ``dropout``. ``keep`` are the history dropout
+    flags of every generated frame (``None`` without dropout), then ``noise`` ``(B, N, P)`` is the
+    standard-normal draw scaled by the temperature, in that order from ``generator``.
+    """
+    temperature = check_temperature(temperature, where)
+    history = cfg.history
+    check_pose_control(seed_pose, control, cfg.pose_dim, cfg.control_dim, history, where)
+    if seed_pose.shape[1] != history or control.shape[1] <= history:
+        raise ValueError(f"{where}: seed_pose must have tau={history} frames and control more than that, "
+                         f"got {tuple(seed_pose.shape)} and {tuple(control.shape)}")
+    batch, frames = control.shape[0], control.shape[1] - history
+    keep = None
+    if cfg.dropout > 0:
+        keep = history_keep_mask(batch, frames, history, cfg.dropout, generator).to(control.dtype)
+    noise = temperature * torch.randn(batch, frames, cfg.pose_dim, generator=generator, dtype=control.dtype)
+    return keep, noise
 
 
 def autoregressive_conditioning(pose: Tensor, control: Tensor, history: int, keep: Tensor | None = None) -> Tensor:

@@ -13,12 +13,12 @@ import torch
 from torch import Tensor, nn
 
 from motionlab.models.flows.coupling import zero_init
-from motionlab.models.flows.prior import check_temperature
 from motionlab.models.moglow.autoregression import (
     autoregressive_conditioning,
     autoregressive_sample,
     check_pose_control,
     history_keep_mask,
+    sampling_setup,
 )
 from motionlab.models.moglow.config import GaussianARConfig
 from motionlab.models.moglow.linear import LinearPredictor
@@ -74,18 +74,7 @@ class GaussianAR(nn.Module):
     def sample(self, control: Tensor, seed_pose: Tensor, temperature: float = 1.0,
                generator: torch.Generator | None = None) -> Tensor:
         """Generate poses ``(B, N, P)`` frame by frame, as :meth:`MoGlow.sample`."""
-        temperature = check_temperature(temperature, "GaussianAR.sample")
-        history = self.cfg.history
-        check_pose_control(seed_pose, control, self.cfg.pose_dim, self.cfg.control_dim, history, "GaussianAR.sample")
-        if seed_pose.shape[1] != history or control.shape[1] <= history:
-            raise ValueError(f"GaussianAR.sample: seed_pose must have tau={history} frames and control more than "
-                             f"that, got {tuple(seed_pose.shape)} and {tuple(control.shape)}")
-
-        batch, frames = control.shape[0], control.shape[1] - history
-        keep = None
-        if self.cfg.dropout > 0:
-            keep = history_keep_mask(batch, frames, history, self.cfg.dropout, generator).to(control.dtype)
-        noise = temperature * torch.randn(batch, frames, self.cfg.pose_dim, generator=generator, dtype=control.dtype)
+        keep, noise = sampling_setup(self.cfg, control, seed_pose, temperature, generator, "GaussianAR.sample")
 
         def step(t: int, cond: Tensor, state: tuple[Tensor, Tensor] | None) -> tuple[Tensor, tuple[Tensor, Tensor]]:
             hidden, state = self.lstm(cond[:, None], state)

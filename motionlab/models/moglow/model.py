@@ -28,12 +28,13 @@ from torch import Tensor, nn
 from motionlab.models.flows.actnorm import ActNorm
 from motionlab.models.flows.base import FlowSequence
 from motionlab.models.flows.invconv import InvertibleConv1x1
-from motionlab.models.flows.prior import StandardNormal, check_temperature
+from motionlab.models.flows.prior import StandardNormal
 from motionlab.models.moglow.autoregression import (
     autoregressive_conditioning,
     autoregressive_sample,
     check_pose_control,
     history_keep_mask,
+    sampling_setup,
 )
 from motionlab.models.moglow.config import MoGlowConfig
 from motionlab.models.moglow.coupling import FrameCoupling, LSTMAffineCoupling, LSTMState
@@ -120,18 +121,9 @@ class MoGlow(nn.Module):
             temperature: the prior's temperature (0 gives the model's mode-seeking path, 1 its distribution).
             generator: draws the history dropout flags of all frames, then their latents.
         """
-        temperature = check_temperature(temperature, "MoGlow.sample")
-        history = self.cfg.history
-        check_pose_control(seed_pose, control, self.cfg.pose_dim, self.cfg.control_dim, history, "MoGlow.sample")
-        if seed_pose.shape[1] != history or control.shape[1] <= history:
-            raise ValueError(f"MoGlow.sample: seed_pose must have tau={history} frames and control more than that, "
-                             f"got {tuple(seed_pose.shape)} and {tuple(control.shape)}")
+        keep, latents = sampling_setup(self.cfg, control, seed_pose, temperature, generator, "MoGlow.sample")
         steps = self.inverse_steps()
-        batch, frames = control.shape[0], control.shape[1] - history
-        keep = None
-        if self.cfg.dropout > 0:
-            keep = history_keep_mask(batch, frames, history, self.cfg.dropout, generator).to(control.dtype)
-        latents = temperature * torch.randn(batch, frames, self.cfg.pose_dim, generator=generator, dtype=control.dtype)
+        batch = control.shape[0]
         # the conditioning encoder and the linear predictor read the same vector: one matrix product for both
         weight = torch.cat([self.cond_encoder.weight, self.linear.weight]).detach().T
         bias = torch.cat([self.cond_encoder.bias, self.linear.bias]).detach()
