@@ -49,3 +49,18 @@ def test_set_threads():
     assert torch.get_num_threads() == 1
     with pytest.raises(ValueError, match="thread"):
         config.set_threads(0)
+
+
+def test_threads_sets_the_count_for_a_block_and_restores_it():
+    config.set_threads(1)
+    with config.threads(2) as n:
+        assert n == 2 and torch.get_num_threads() == 2
+    assert torch.get_num_threads() == 1
+    with pytest.raises(RuntimeError, match="inside"):
+        with config.threads(2):
+            raise RuntimeError("inside")
+    assert torch.get_num_threads() == 1
+    with pytest.raises(ValueError, match="thread"):
+        with config.threads(0):
+            pass
+    assert torch.get_num_threads() == 1

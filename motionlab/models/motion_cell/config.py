@@ -137,7 +137,7 @@ class LossConfig:
         classifier_every: the classifier loss is computed every this many steps, with this factor on its
             weight (the same weight on average, at a fraction of the cost).
         classifier_truncate: the classifier's gradient stops at the recurrent state between words (it
-            shapes each word's prior and decoder, not the earlier words; through a 40-word rollout the
+            shapes each word's prior and decoder, not the earlier words; through a rollout of tens of words the
             full gradient explodes and swamps the reconstruction).
     """
 
@@ -147,7 +147,7 @@ class LossConfig:
     feature_weight: float = 1.0
     entropy_weight: float = 1.0
     classifier_clips: int = 8
-    classifier_every: int = 2
+    classifier_every: int = 3
     classifier_truncate: bool = True
 
     def __post_init__(self) -> None:

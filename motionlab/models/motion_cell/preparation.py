@@ -13,6 +13,7 @@ import numpy as np
 import torch
 from torch import Tensor, nn
 
+from motionlab import config
 from motionlab.data.store import MotionSet
 from motionlab.evaluation.evaluator import data_fingerprint
 from motionlab.geometry import quat_geodesic
@@ -22,6 +23,10 @@ from motionlab.models.motion_cell.denoise import denoiser_loss, noisy_features
 from motionlab.models.motion_cell.settings import ChapterSettings
 from motionlab.models.motion_cell.training import train_model
 from motionlab.train import TensorBatches, TrainConfig, TrainResult
+
+#: Threads of the denoiser's training: it runs before every other job of the chapter, alone, and its
+#: convolutions gain from both cores (24 s on one thread, 17 s on two; the denoised clips are the same).
+DENOISER_THREADS = 2
 
 #: Seeds of the capture noise on the training split and of the denoiser's noisy copies of the validation split.
 CAPTURE_SEED, DENOISER_DATA_SEED = 1, 2
@@ -76,10 +81,12 @@ def prepare_training_data(train: MotionSet, val: MotionSet, settings: ChapterSet
     loss_cfg = LossConfig()
     train_cfg = TrainConfig(steps=settings.denoiser_steps, batch_size=min(settings.denoiser_batch, len(pairs)),
                             lr=settings.denoiser_lr, checkpoint_every=None)
-    denoiser, result = train_model("mcell_denoiser", denoiser_cfg, codec, denoiser_loss(loss_cfg), pairs, train_cfg,
-                                   data_config={"val": data_fingerprint(noisy_val.numpy()),
-                                                "codec": data_fingerprint(captured.numpy())},
-                                   loss_config=loss_cfg, progress=progress)
+    with config.threads(DENOISER_THREADS):
+        denoiser, result = train_model("mcell_denoiser", denoiser_cfg, codec, denoiser_loss(loss_cfg), pairs, train_cfg,
+                                       data_config={"val": data_fingerprint(noisy_val.numpy()),
+                                                    "codec": data_fingerprint(captured.numpy()),
+                                                    "window": settings.window},
+                                       loss_config=loss_cfg, progress=progress)
     captured_poses = codec.encode(captured)
     denoised = denoiser.denoise(captured_poses)
     clean = codec.encode(motion_cell_features(train.rotations, train.positions))

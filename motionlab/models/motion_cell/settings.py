@@ -59,7 +59,7 @@ def chapter_settings() -> ChapterSettings:
                               denoiser_copies=1, beta=0.2, classifier=1.0, word_drop=0.5, input_noise=0.05,
                               sampling=1.0, n_per_combination=2, n_repeats=2),
         full=ChapterSettings(MotionCellConfig(word_dim=48, feature_dim=48, latent_dim=16, hidden_dim=64, control_dim=16),
-                             DenoiserConfig(channels=96, bottleneck=64), window=120, batch_size=32, lr=3e-3, steps=300,
+                             DenoiserConfig(channels=96, bottleneck=64), window=96, batch_size=32, lr=3e-3, steps=300,
                              representation_steps=80, denoiser_steps=400, denoiser_batch=16, denoiser_lr=1e-3,
                              denoiser_copies=3, beta=0.2, classifier=1.0, word_drop=0.5, input_noise=0.05,
                              sampling=1.0, n_per_combination=20, n_repeats=5),
