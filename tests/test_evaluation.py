@@ -96,6 +96,13 @@ def test_evaluator_learns_actions_and_is_cached(clips):
     assert real == {key: mean_ci([row[key] for row in by_hand]) for key in row}
     with pytest.raises(KeyError, match="heads"):
         evaluator.logits(held_out.positions, "style")
+    # one pass for both: bitwise the same numbers as the two separate calls, with more clips than one chunk
+    many = np.concatenate([held_out.positions] * 30)
+    for head in ("action", "body"):
+        features, head_probs = evaluator.features_and_probs(many, head)
+        assert torch.equal(features, evaluator.features(many)) and torch.equal(head_probs, evaluator.probs(many, head))
+    with pytest.raises(KeyError, match="heads"):
+        evaluator.features_and_probs(held_out.positions, "style")
 
 
 def test_evaluator_rejects_mismatched_labels(clips):

@@ -18,6 +18,7 @@ from motionlab.metrics import end_point_error
 from motionlab.models.odmo import customize, evaluate
 from motionlab.models.odmo.config import ODMOConfig
 from motionlab.models.odmo.data import ODMOData
+from motionlab.models.odmo.experiment import MeasurePlan, measure_variant
 from motionlab.models.odmo.model import ODMO
 from motionlab.models.odmo.modes import discover_modes
 from motionlab.models.odmo.sampler import ODMOSampler, encode_clips
@@ -63,6 +64,9 @@ class StandInEvaluator:
 
     def probs(self, positions, head="action"):
         return torch.nn.functional.one_hot(self.predict(positions, head), 2).double() * 0.8 + 0.1
+
+    def features_and_probs(self, positions, head="action"):
+        return self.features(positions), self.probs(positions, head)
 
 
 def test_encode_and_sample_shapes_and_determinism(data, sampler):
@@ -121,16 +125,31 @@ def test_end_point_control_measures_the_generated_root(sampler):
 def test_metric_and_homogeneity_tables(sampler):
     real = torch.randn(8, CFG.n_frames * STRIDE, 3, 3)
     reference = evaluate.Reference(StandInEvaluator(), StandInEvaluator().features(real), real, np.array([0, 1] * 4))
-    table = evaluate.metric_table(reference, {"tiny": sampler}, n_per_class=4, n_sets=2, seed=1)
-    assert list(table["tiny"]) == list(evaluate.METRICS)
-    assert all(len(interval.values) == 2 for interval in table["tiny"].values())
-    in_workers = evaluate.metric_table(reference, {"tiny": sampler, "again": sampler}, n_per_class=4, n_sets=2, seed=1,
-                                       processes=2)
-    assert list(in_workers) == ["tiny", "again"]
-    for row in in_workers.values():
-        assert all(row[metric].values == table["tiny"][metric].values for metric in evaluate.METRICS)
+    row = evaluate.metric_row(reference, sampler, n_per_class=4, n_sets=2, seed=1)
+    assert list(row) == list(evaluate.METRICS)
+    assert all(len(interval.values) == 2 for interval in row.values())
+    assert row == evaluate.metric_row(reference, sampler, n_per_class=4, n_sets=2, seed=1)  # seeded by its arguments
     homogeneity = evaluate.mode_homogeneity_interval(reference, sampler, n_per_mode=2, n_sets=2)
     assert all(0.0 <= v <= 1.0 for v in homogeneity.values)
+
+
+def test_measure_variant_follows_the_plan(data, sampler):
+    real = torch.randn(8, CFG.n_frames * STRIDE, 3, 3)
+    reference = evaluate.Reference(StandInEvaluator(), StandInEvaluator().features(real), real, np.array([0, 1] * 4))
+    plan = MeasurePlan(n_per_class=4, n_sets=2, n_per_mode=2, n_codes=2, n_end_points=2, prior_sampled=("vae",),
+                       conventional=("odmo",), homogeneity=("odmo",), end_point=("vae",))
+    modes = ODMOSampler.from_data(sampler.model, data, kind="modes")
+    odmo = measure_variant("odmo", sampler.model, data, reference, plan)
+    assert set(odmo.samplers) == {"table", "modes", "conventional"} and odmo.samplers["table"] is odmo.samplers["modes"]
+    assert list(odmo.rows) == ["odmo", "odmo_conv"] and odmo.end_point is None
+    assert odmo.rows["odmo"] == evaluate.metric_row(reference, modes, 4, 2)
+    conventional = ODMOSampler.from_data(sampler.model, data, kind="conventional")
+    assert odmo.rows["odmo_conv"] == evaluate.metric_row(reference, conventional, 4, 2)
+    assert odmo.homogeneity == evaluate.mode_homogeneity_interval(reference, modes, 2, 2)
+    vae = measure_variant("vae", sampler.model, data, reference, plan)
+    assert list(vae.rows) == ["vae"] and vae.homogeneity is None
+    assert vae.rows["vae"] == evaluate.metric_row(reference, ODMOSampler.from_data(sampler.model, data, kind="prior"), 4, 2)
+    assert vae.end_point == evaluate.end_point_control(reference, modes, 2, 2)
 
 
 def test_widget_callbacks_and_builders(sampler):

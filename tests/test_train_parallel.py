@@ -11,20 +11,37 @@ from torch import nn
 
 from motionlab import config
 from motionlab.train import TensorBatches, TrainConfig, build_seeded, is_cached, train_or_load
-from motionlab.train.parallel import InBackground, run_in_workers, worker_pool
+from motionlab.train.parallel import (InBackground, close_shared_pools, run_chains, run_in_workers, shared_pool,
+                                      worker_pool)
 
 CFG = TrainConfig(steps=15, batch_size=8, lr=1e-2, checkpoint_every=None)
 
 
 @pytest.fixture(autouse=True)
 def own_build(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
-    # Spawned workers inherit the environment, so they share this test's cache directory.
+    # Every call carries the caller's MOTIONLAB_* settings to the worker, so workers share this test's cache
+    # directory even when the shared pool started them in an earlier test.
     monkeypatch.setenv("MOTIONLAB_BUILD", str(tmp_path / "build"))
     monkeypatch.setenv("MOTIONLAB_PROFILE", "quick")
 
 
 def where_and_threads(tag: str) -> tuple[str, int, int]:
     return tag, os.getpid(), torch.get_num_threads()
+
+
+def build_dir_and_seeded_draw(tag: str) -> tuple[str, str, float]:
+    draw = float(torch.rand(()))  # the global generator, seeded by the call's set-up
+    torch.rand(1000)  # moves the worker's generator on: the next call must not see it
+    return tag, str(config.build_dir()), draw
+
+
+def write_tag(path: str, tag: str) -> str:
+    Path(path).write_text(tag)
+    return f"wrote {tag}"
+
+
+def read_tag(path: str) -> str:
+    return Path(path).read_text()
 
 
 def fail(message: str) -> None:
@@ -53,6 +70,31 @@ def test_results_come_back_in_order_from_other_processes_on_one_thread() -> None
     assert [tag for tag, _, _ in results] == ["a", "b", "c"]
     assert all(pid != os.getpid() for _, pid, _ in results)
     assert all(threads == config.DEFAULT_THREADS for _, _, threads in results)
+
+
+def test_the_shared_pool_is_reused_and_each_call_is_set_up_afresh(tmp_path: Path,
+                                                                    monkeypatch: pytest.MonkeyPatch) -> None:
+    first = run_in_workers(where_and_threads, [("a",), ("b",)], processes=2)
+    assert shared_pool(2) is shared_pool(2)
+    monkeypatch.setenv("MOTIONLAB_BUILD", str(tmp_path / "other"))
+    rows = run_in_workers(build_dir_and_seeded_draw, [(tag,) for tag in "cdef"], processes=2)
+    assert {row[1] for row in rows} == {str(tmp_path / "other")}
+    assert len({row[2] for row in rows}) == 1  # every call starts from seed 0, whatever ran before it
+    again = run_in_workers(where_and_threads, [("g",), ("h",)], processes=2)
+    assert len({pid for _, pid, _ in first + again}) <= 2  # the same two workers (a pool per call: four)
+    close_shared_pools()
+    assert run_in_workers(where_and_threads, [("i",), ("j",)], processes=2)[0][0] == "i"  # a new pool after closing
+
+
+@pytest.mark.parametrize("processes", [1, 2])
+def test_chains_run_their_calls_in_order_and_side_by_side(tmp_path: Path, processes: int) -> None:
+    chains = [[(write_tag, (str(tmp_path / f"{tag}.txt"), tag)), (read_tag, (str(tmp_path / f"{tag}.txt"),))]
+              for tag in "abc"] + [[], [(where_and_threads, ("alone",))]]
+    results = run_chains(chains, processes=processes)
+    assert results[:3] == [[f"wrote {tag}", tag] for tag in "abc"]  # each second call saw its first call's file
+    assert results[3] == [] and results[4][0][0] == "alone"
+    with pytest.raises(RuntimeError, match="broken step"):
+        run_chains([[(where_and_threads, ("a",)), (fail, ("broken step",))], [(where_and_threads, ("b",))]], processes)
 
 
 def test_one_process_or_one_call_runs_here() -> None:

@@ -15,7 +15,6 @@ from motionlab.models.trajevae.evaluate import (
     ratio_and_worst_step,
     summarise,
     sweep_given_joints,
-    sweep_models,
     upsample_frames,
 )
 from motionlab.models.trajevae.masks import first_joints, joint_mask
@@ -100,13 +99,3 @@ def test_sweep_runs_for_every_model_and_is_seeded():
     start, given = windows[:, 0], windows[:, 1:] * first_joints(4).repeat_interleave(3)
     full = complete(model, start, given, 2, torch.Generator().manual_seed(0))
     assert full.shape == (4, 2, 9, 66) and torch.equal(full[:, :, 0], start[:, None].expand(-1, 2, -1))
-
-
-def test_sweeps_in_worker_processes_equal_the_in_process_ones():
-    windows = torch.randn(4, 9, 66, generator=torch.Generator().manual_seed(2))
-    vae = TrajeVAE(TrajeVAEConfig(n_frames=9, width=8, latent_dim=3, dct_components=4, heads=2)).eval()
-    gru = GRUCompletion(RecurrentConfig(n_frames=9, hidden=8)).eval()
-    tables = sweep_models({"vae": vae, "gru": gru}, windows, {"vae": (0, 2), "gru": (1, 3, 4)}, processes=2)
-    assert list(tables) == ["vae", "gru"]
-    assert tables["vae"] == sweep_given_joints(vae, windows, ks=(0, 2))
-    assert tables["gru"] == sweep_given_joints(gru, windows, ks=(1, 3, 4))

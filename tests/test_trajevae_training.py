@@ -9,6 +9,8 @@ import torch
 from motionlab.data.synthetic import generate
 from motionlab.models.trajevae.baselines import GRUCompletion
 from motionlab.models.trajevae.data import CompletionBatches, completion_task, completion_windows, decimate
+from motionlab.models.trajevae.evaluate import N_SAMPLES, multimodal_futures, sweep_given_joints
+from motionlab.models.trajevae.experiment import train_and_sweep
 from motionlab.models.trajevae.masks import first_joints
 from motionlab.models.trajevae.model import TrajeVAE
 from motionlab.models.trajevae.training import build_model, chapter_setup, loss_function, train_completion_model
@@ -69,6 +71,23 @@ def test_training_is_cached_and_reproducible(clips):
     g = torch.Generator
     assert torch.equal(model.sample(start, trajectories, 3, generator=g().manual_seed(1)),
                        again.sample(start, trajectories, 3, generator=g().manual_seed(1)))
+
+
+def test_train_and_sweep_trains_each_run_once_and_sweeps_it_as_in_process(clips):
+    positions, rotations = clips
+    setup = chapter_setup("quick")
+    train_cfg = TrainConfig(steps=3, batch_size=3, lr=1e-3, checkpoint_every=None)
+    runs = {"trajevae_sweep_test": setup.trajevae, "trajevae_gru_sweep_test": setup.gru}
+    windows = completion_windows(positions[:4])
+    ks = {"trajevae_sweep_test": (0, 2), "trajevae_gru_sweep_test": (1,)}
+    multimodal = multimodal_futures(windows)
+    models, results, seconds, sweeps = train_and_sweep(runs, positions, rotations, train_cfg, windows, ks, multimodal)
+    assert list(sweeps) == list(runs) and set(seconds) == set(runs) and all(s > 0 for s in seconds.values())
+    for name in runs:
+        assert results[name].loaded_from_cache and set(sweeps[name]) == set(ks[name])
+        assert sweeps[name] == sweep_given_joints(models[name], windows, ks[name], N_SAMPLES, 0, multimodal)
+    _, _, seconds_again, sweeps_again = train_and_sweep(runs, positions, rotations, train_cfg, windows, ks, multimodal)
+    assert seconds_again == {} and sweeps_again == sweeps
 
 
 def test_build_model_and_loss_by_config():

@@ -70,8 +70,7 @@ def sample_metrics(evaluator: Evaluator, positions: np.ndarray | torch.Tensor, a
     Returns:
         ``accuracy``, ``fid``, ``diversity``, ``multimodality`` and the inception score ``is``.
     """
-    return feature_metrics(evaluator.features(positions), evaluator.probs(positions, "action"), action,
-                           reference_features, rng)
+    return feature_metrics(*evaluator.features_and_probs(positions, "action"), action, reference_features, rng)
 
 
 def feature_metrics(features: torch.Tensor, probs: torch.Tensor, action: np.ndarray, reference_features: torch.Tensor,
@@ -94,8 +93,7 @@ def real_reference(evaluator: Evaluator, benchmark: Benchmark, n_repeats: int = 
     sample set); returns ``{metric: (mean, 95% CI half-width)}``.
     """
     reference = evaluator.features(benchmark.train.positions)
-    features = evaluator.features(benchmark.test.positions)
-    probs = evaluator.probs(benchmark.test.positions, "action")
+    features, probs = evaluator.features_and_probs(benchmark.test.positions, "action")
     rows = [feature_metrics(features, probs, benchmark.test.action, reference, np.random.default_rng([seed, r]))
             for r in range(n_repeats)]
     return {key: mean_ci([row[key] for row in rows]) for key in rows[0]}

@@ -2,8 +2,9 @@
 
 The course's models are small: one thread trains each of them fastest (see ``motionlab.config``), so the
 second core of the course machine is best used by a second *run*. :func:`run_in_workers` calls a function
-on each of several argument tuples in fresh worker processes (``spawn``: a new interpreter, safe with
-torch's thread pools) and returns the results in order. Runs that go through
+on each of several argument tuples in worker processes (``spawn``: a new interpreter, safe with torch's
+thread pools; started once per notebook and reused, each call set up as in a fresh worker) and returns
+the results in order. Runs that go through
 :func:`~motionlab.train.train_or_load` are seeded by their own configs, so their weights do not depend on
 which process trained them; the caller then loads every model from the checkpoint cache.
 :class:`InBackground` runs one call on the second core while the notebook goes on with its own work.
@@ -11,20 +12,37 @@ which process trained them; the caller then loads every model from the checkpoin
 
 from __future__ import annotations
 
+import atexit
 import multiprocessing
+import os
 from collections.abc import Callable, Sequence
-from concurrent.futures import Future, ProcessPoolExecutor
+from concurrent.futures import FIRST_COMPLETED, Future, ProcessPoolExecutor, wait
+from concurrent.futures.process import BrokenProcessPool
 from typing import Any, TypeVar
 
 from motionlab import config
 
 R = TypeVar("R")
 
+#: Environment variables that configure the package (profile, build directory); every call carries the
+#: caller's values to the worker, so a reused worker behaves like one started now.
+_ENV_PREFIX = "MOTIONLAB_"
 
-def _in_worker(function: Callable[..., R], arguments: tuple[Any, ...]) -> R:
-    """Body of a worker process: the course's thread count and seeds, then ``function(*arguments)``."""
+_shared_pools: dict[int, ProcessPoolExecutor] = {}
+
+
+def _in_worker(function: Callable[..., R], arguments: tuple[Any, ...], environment: dict[str, str]) -> R:
+    """Body of a worker call: the caller's package settings, the course's thread count and seeds, then
+    ``function(*arguments)`` (so a call does not depend on what the worker ran before)."""
+    for name in [name for name in os.environ if name.startswith(_ENV_PREFIX)]:
+        del os.environ[name]
+    os.environ.update(environment)
     config.setup(seed=0)
     return function(*arguments)
+
+
+def _package_environment() -> dict[str, str]:
+    return {name: value for name, value in os.environ.items() if name.startswith(_ENV_PREFIX)}
 
 
 def _check_processes(processes: int, where: str) -> None:
@@ -38,16 +56,40 @@ def worker_pool(processes: int = 2) -> ProcessPoolExecutor:
     return ProcessPoolExecutor(max_workers=processes, mp_context=multiprocessing.get_context("spawn"))
 
 
+def shared_pool(processes: int = 2) -> ProcessPoolExecutor:
+    """This process's long-lived pool of ``processes`` workers, started at the first use.
+
+    Starting a worker (a new interpreter importing torch and the package) costs 3-4 s of a core, so the
+    calls of a chapter share one pool instead of starting a pool each. Every call still runs as in a
+    fresh worker (:func:`submit`); the pool ends when this process does, or with :func:`close_shared_pools`.
+    """
+    _check_processes(processes, "shared_pool")
+    if processes not in _shared_pools:
+        _shared_pools[processes] = worker_pool(processes)
+    return _shared_pools[processes]
+
+
+def close_shared_pools() -> None:
+    """Shut the shared pools down (their workers exit once their calls have finished)."""
+    while _shared_pools:
+        _shared_pools.popitem()[1].shutdown()
+
+
+atexit.register(close_shared_pools)
+
+
 def submit(pool: ProcessPoolExecutor, function: Callable[..., R], *arguments: Any) -> Future[R]:
-    """Run ``function(*arguments)`` in ``pool`` after the course's set-up (one thread, seed 0).
+    """Run ``function(*arguments)`` in ``pool`` after the course's set-up (the caller's ``MOTIONLAB_*``
+    settings, one thread, seed 0), as a fresh worker would.
 
     ``function`` must be importable (a module-level function) and the arguments picklable.
     """
-    return pool.submit(_in_worker, function, arguments)
+    return pool.submit(_in_worker, function, arguments, _package_environment())
 
 
 def run_in_workers(function: Callable[..., R], calls: Sequence[tuple[Any, ...]], processes: int = 2) -> list[R]:
-    """``[function(*args) for args in calls]``, ``processes`` at a time in fresh worker processes.
+    """``[function(*args) for args in calls]``, ``processes`` at a time in worker processes (the
+    :func:`shared_pool`), each call set up as in a fresh worker.
 
     Calls start in the order given (put the longest first, so the last one to finish is short). With one
     process, or one call, everything runs here, in this process. An exception in a call is raised here.
@@ -55,9 +97,60 @@ def run_in_workers(function: Callable[..., R], calls: Sequence[tuple[Any, ...]],
     _check_processes(processes, "run_in_workers")
     if processes == 1 or len(calls) <= 1:
         return [function(*arguments) for arguments in calls]
-    with worker_pool(min(processes, len(calls))) as pool:
-        futures = [submit(pool, function, *arguments) for arguments in calls]
-        return [future.result() for future in futures]
+    return [results[0] for results in run_chains([[(function, arguments)] for arguments in calls], processes)]
+
+
+#: One call of a chain: ``(function, arguments)``.
+Step = tuple[Callable[..., Any], tuple[Any, ...]]
+
+
+def run_chains(chains: Sequence[Sequence[Step]], processes: int = 2) -> list[list[Any]]:
+    """Chains of dependent calls in worker processes (the :func:`shared_pool`): the calls of one chain one
+    after another, different chains side by side, ``processes`` calls at a time.
+
+    The first call of every chain is queued first, in the order given; the next call of a chain is queued
+    when its previous one has finished, behind the calls already waiting. So the later calls of the chains
+    (e.g. measuring a model that the chain's first call trained into the checkpoint cache) fill the cores
+    that would otherwise idle while the last first calls run. Calls of one chain pass nothing to each
+    other but what they leave on disk. Returns the results of each chain's calls. If calls fail, the calls
+    still waiting are cancelled, the running ones finish, and the exception of the first failed call (in
+    the order given) is raised here. With one process everything runs here, in order.
+    """
+    _check_processes(processes, "run_chains")
+    if processes == 1:
+        return [[function(*arguments) for function, arguments in chain] for chain in chains]
+    results: list[list[Any]] = [[None] * len(chain) for chain in chains]
+    pool = shared_pool(processes)
+    running: dict[Future[Any], tuple[int, int]] = {}
+
+    def start(chain: int, index: int) -> None:
+        function, arguments = chains[chain][index]
+        running[submit(pool, function, *arguments)] = (chain, index)
+
+    for chain in range(len(chains)):
+        if chains[chain]:
+            start(chain, 0)
+    failed: dict[tuple[int, int], BaseException] = {}
+    while running:
+        finished, _ = wait(running, return_when=FIRST_COMPLETED)
+        for future in sorted(finished, key=running.__getitem__):
+            chain, index = running.pop(future)
+            if future.cancelled():
+                continue
+            if future.exception() is not None:
+                failed[chain, index] = future.exception()
+                for waiting in running:  # nothing new starts; the calls already running finish
+                    waiting.cancel()
+            elif not failed:
+                results[chain][index] = future.result()
+                if index + 1 < len(chains[chain]):
+                    start(chain, index + 1)
+    if failed:
+        error = failed[min(failed)]  # the first failed call in the order given, whichever failed first in time
+        if isinstance(error, BrokenProcessPool):  # a worker died (e.g. killed): the next call starts a new pool
+            _shared_pools.pop(processes, None)
+        raise error
+    return results
 
 
 class InBackground:

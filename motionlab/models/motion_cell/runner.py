@@ -1,13 +1,12 @@
 """Training everything the chapter needs on both cores of the course machine.
 
 Every run uses one thread (small recurrent models do not gain from more), so :func:`train_chapter` runs
-two at a time, each in a fresh worker process (:mod:`motionlab.train.parallel`). Runs are seeded by their
-own configs, so a model's weights do not depend on which process trained it or in which order.
+two at a time in the workers of the notebook's shared pool (:mod:`motionlab.train.parallel`). Runs are
+seeded by their own configs, so a model's weights do not depend on which process trained it or in which order.
 """
 
 from __future__ import annotations
 
-import functools
 from typing import NamedTuple
 
 from torch import nn
@@ -18,17 +17,12 @@ from motionlab.models.motion_cell.jobs import Job, chapter_jobs, job_is_cached, 
 from motionlab.models.motion_cell.preparation import PreparedData, prepare_training_data
 from motionlab.models.motion_cell.settings import ChapterSettings
 from motionlab.train import TrainResult
-from motionlab.train.parallel import submit, worker_pool
-
-
-@functools.lru_cache(maxsize=1)
-def _worker_classifier() -> Evaluator:
-    return benchmark_evaluator("conv", progress=False)
+from motionlab.train.parallel import shared_pool, submit
 
 
 def _train_in_worker(job: Job, settings: ChapterSettings, data: PreparedData) -> float:
     """Body of a worker process: train ``job`` into the cache, return its training seconds."""
-    _, result = train_job(job, settings, data, _worker_classifier(), progress=False)
+    _, result = train_job(job, settings, data, benchmark_evaluator("conv", progress=False), progress=False)
     return result.metrics["train_seconds"]
 
 
@@ -54,21 +48,22 @@ def train_chapter(benchmark: Benchmark, settings: ChapterSettings, jobs: list[Jo
                   processes: int = 2, progress: bool | None = None) -> ChapterModels:
     """Train (or load) everything the chapter needs on the benchmark, using both cores of the course machine.
 
-    Every run uses one thread, so ``processes`` run at a time, each in a fresh worker process:
-    the two evaluators train in the workers while this process trains the denoiser; then the workers take
+    Every run uses one thread, so ``processes`` run at a time in worker processes (the shared pool): the two
+    evaluators train (or load) in the workers while this process trains the denoiser (on two threads when
+    nothing else runs); then the workers take
     the training jobs (default :func:`chapter_jobs`, longest first). Each run is seeded by
     its own config, so its weights do not depend on where or in which order it ran. At the end every model
     is loaded from the cache.
     """
     jobs = chapter_jobs() if jobs is None else jobs
-    with worker_pool(processes) as pool:
-        evaluators_ready = [submit(pool, cache_benchmark_evaluator, kind) for kind in ("conv", "gru")]
-        data = prepare_training_data(benchmark.train, benchmark.val, settings, progress=progress)
-        for future in evaluators_ready:  # the workers' classifier loss loads the conv evaluator from the cache
-            future.result()
-        pending = [job for job in jobs if not job_is_cached(job, settings, data)]
-        futures = {job: submit(pool, _train_in_worker, job, settings, data) for job in pending}
-        trained = {job: future.result() for job, future in futures.items()}
+    pool = shared_pool(processes)
+    evaluators_ready = [submit(pool, cache_benchmark_evaluator, kind) for kind in ("conv", "gru")]
+    data = prepare_training_data(benchmark.train, benchmark.val, settings, progress=progress)
+    for future in evaluators_ready:  # the workers' classifier loss loads the conv evaluator from the cache
+        future.result()
+    pending = [job for job in jobs if not job_is_cached(job, settings, data)]
+    futures = {job: submit(pool, _train_in_worker, job, settings, data) for job in pending}
+    trained = {job: future.result() for job, future in futures.items()}
     conv, gru = benchmark_evaluator("conv"), benchmark_evaluator("gru")
     loaded = {job: train_job(job, settings, data, conv, progress=progress) for job in jobs}
     return ChapterModels(data, conv, gru, {job: m for job, (m, _) in loaded.items()},

@@ -5,7 +5,8 @@ Modules, in the order of the chapter: :mod:`.data` (local movement profile + roo
 (eq. 1, the σ² prior term, class-balanced pairs), :mod:`.trajectory` and :mod:`.generator` (the two
 generators), :mod:`.model` (the joint objective, eq. 5), :mod:`.training`, :mod:`.modes` (mode discovery
 and sampling), :mod:`.sampler` (codes to joint positions), :mod:`.customize` (on-demand generation) and
-:mod:`.evaluate` (Tables 1–4 and the adjusted Rand index against the true modes).
+:mod:`.evaluate` (Tables 1–4 and the adjusted Rand index against the true modes) and :mod:`.experiment`
+(every variant trained and measured on both cores).
 """
 
 from motionlab.models.odmo.config import VARIANTS, ODMOConfig, variant_config
@@ -13,7 +14,7 @@ from motionlab.models.odmo.data import ODMOData, prepare, to_positions
 from motionlab.models.odmo.model import ODMO, joint_objective
 from motionlab.models.odmo.modes import ModeSet, choose_component_count, discover_modes
 from motionlab.models.odmo.sampler import ODMOSampler, Samples, encode_clips
-from motionlab.models.odmo.training import ODMOTraining, train_odmo, train_odmo_variants
+from motionlab.models.odmo.training import ODMOTraining, train_odmo
 
 __all__ = [
     "ODMO",
@@ -31,6 +32,5 @@ __all__ = [
     "prepare",
     "to_positions",
     "train_odmo",
-    "train_odmo_variants",
     "variant_config",
 ]

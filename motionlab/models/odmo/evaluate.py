@@ -1,6 +1,6 @@
 """ODMO's tables on the course benchmark, each number a mean with its 95 % interval over repeated sample sets.
 
-* Tables 1–2 (:func:`metric_table`): accuracy, FID, Diversity, Multimodality (the frozen GRU evaluator's
+* Tables 1–2 (:func:`metric_row`): accuracy, FID, Diversity, Multimodality (the frozen GRU evaluator's
   features, FID against the training clips) and n-APD (APD of each class's generated clips over that of
   the held-out real clips, in joint positions with every clip starting at the origin facing +x).
 * Table 3 (:func:`mode_homogeneity_interval`): clips drawn from each discovered mode, their true style
@@ -29,7 +29,6 @@ from motionlab.models.odmo.customize import end_point_sweep, to_end_point
 from motionlab.models.odmo.data import prepare, to_positions
 from motionlab.models.odmo.modes import ModeSet
 from motionlab.models.odmo.sampler import ODMOSampler, Samples
-from motionlab.train.parallel import run_in_workers
 
 #: Columns of Tables 1–2, in order.
 METRICS = ("accuracy", "fid", "diversity", "multimodality", "n_apd")
@@ -83,18 +82,6 @@ def metric_row(reference: Reference, sampler: ODMOSampler, n_per_class: int, n_s
                          draw, n_sets, seed)
 
 
-def metric_table(reference: Reference, samplers: dict[str, ODMOSampler], n_per_class: int, n_sets: int = 10,
-                 seed: int = 0, processes: int = 2) -> dict[str, dict[str, Interval]]:
-    """Tables 1–2: :func:`metric_row` of every sampler, ``{row name: {metric: Interval}}``.
-
-    The rows are measured ``processes`` at a time in worker processes (:mod:`motionlab.train.parallel`);
-    each is seeded by ``seed`` alone, so they equal in-process rows.
-    """
-    rows = run_in_workers(metric_row, [(reference, sampler, n_per_class, n_sets, seed) for sampler in samplers.values()],
-                          processes)
-    return dict(zip(samplers, rows))
-
-
 def real_row(reference: Reference, test: MotionSet, floor_clearance: float, n_sets: int = 10,
              seed: int = 0) -> dict[str, Interval]:
     """The "real data" row: the test clips measured like a sample set (n-APD against the reference's clips).
@@ -102,7 +89,7 @@ def real_row(reference: Reference, test: MotionSet, floor_clearance: float, n_se
     The clips are fixed; the repeats redraw the Diversity and Multimodality pairs.
     """
     positions, action = canonical_positions(test, floor_clearance), np.asarray(test.action)
-    features, probs = reference.evaluator.features(positions), reference.evaluator.probs(positions, "action")
+    features, probs = reference.evaluator.features_and_probs(positions, "action")
     real_n_apd = n_apd(positions.flatten(2), action, reference.real_positions.flatten(2), reference.real_action)
 
     def row(rng: np.random.Generator) -> dict[str, float]:  # set_metrics, with the fixed clips' parts computed once

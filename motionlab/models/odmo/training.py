@@ -17,8 +17,7 @@ from motionlab.models.odmo.config import ODMOConfig
 from motionlab.models.odmo.contrastive import BalancedBatches
 from motionlab.models.odmo.data import ODMOData
 from motionlab.models.odmo.model import ODMO, joint_objective
-from motionlab.train import LinearRamp, TrainConfig, TrainResult, is_cached, train_or_load
-from motionlab.train.parallel import run_in_workers
+from motionlab.train import LinearRamp, TrainConfig, TrainResult, train_or_load
 
 
 @dataclass(frozen=True)
@@ -65,27 +64,3 @@ def odmo_data_config(data: ODMOData) -> dict:
     """What defines ODMO's training data (part of every variant's cache key)."""
     return {"features": data_fingerprint(data.features), "action": data_fingerprint(data.action.float()),
             "frame_stride": data.frame_stride}
-
-
-def _train_in_worker(variant: str, cfg: ODMOConfig, data: ODMOData, training: ODMOTraining) -> float:
-    """Body of a worker process: train one variant into the checkpoint cache, return its training seconds."""
-    _, result = train_odmo(variant, cfg, data, training, progress=False)
-    return result.metrics["train_seconds"]
-
-
-def train_odmo_variants(configs: dict[str, ODMOConfig], data: ODMOData, training: ODMOTraining, processes: int = 2,
-                        progress: bool | None = None) -> tuple[dict[str, ODMO], dict[str, TrainResult], dict[str, float]]:
-    """:func:`train_odmo` for every ``{variant: config}``, ``processes`` at a time.
-
-    Variants not in the cache yet train in worker processes (:mod:`motionlab.train.parallel`), one thread
-    each; then every model is loaded here from the cache. Returns the models and training results keyed by
-    variant, and the training seconds of the variants that were trained now.
-    """
-    pending = [variant for variant, cfg in configs.items()
-               if not is_cached(run_name(variant), cfg, training.train_config(), odmo_data_config(data))]
-    seconds = run_in_workers(_train_in_worker, [(variant, configs[variant], data, training) for variant in pending],
-                             processes)
-    models, results = {}, {}
-    for variant, cfg in configs.items():
-        models[variant], results[variant] = train_odmo(variant, cfg, data, training, progress=progress)
-    return models, results, dict(zip(pending, seconds))

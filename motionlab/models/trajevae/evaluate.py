@@ -35,7 +35,6 @@ from motionlab.metrics import apd, mean_ci, min_ade, min_fde, mmade, mmfde, mult
 from motionlab.models.trajevae.data import completion_task
 from motionlab.models.trajevae.inputs import check_finite_tensor
 from motionlab.models.trajevae.masks import FULL_ORDER, channel_mask, first_joints
-from motionlab.train.parallel import run_in_workers
 
 #: Samples per input window, as in DLow and the paper.
 N_SAMPLES = 50
@@ -54,6 +53,9 @@ MULTIMODAL_THRESHOLD = 0.5
 CHUNK = 16
 
 DLOW_METRICS = ("apd", "ade", "fde", "mmade", "mmfde")
+
+#: One model's k sweep: ``{k: {metric: (mean, 95% CI half-width)}}`` (:func:`sweep_given_joints`).
+Sweep = dict[int, dict[str, tuple[float, float]]]
 
 
 class Completer(Protocol):
@@ -123,7 +125,7 @@ def summarise(values: dict[str, np.ndarray]) -> dict[str, tuple[float, float]]:
 
 def sweep_given_joints(model: Completer, windows: Tensor, ks: Sequence[int] = PAPER_KS, n_samples: int = N_SAMPLES,
                        seed: int = 0, multimodal: Sequence[np.ndarray] | None = None,
-                       order: Sequence[str] = FULL_ORDER) -> dict[int, dict[str, tuple[float, float]]]:
+                       order: Sequence[str] = FULL_ORDER) -> Sweep:
     """DLow metrics with ``k`` given trajectories for each ``k`` in ``ks``: ``{k: {metric: (mean, ci95)}}``.
 
     The samples of ``k`` come from a generator seeded with ``(seed, k)``, so a row does not depend on the others.
@@ -137,22 +139,6 @@ def sweep_given_joints(model: Completer, windows: Tensor, ks: Sequence[int] = PA
         samples = complete(model, initial_pose, trajectories, n_samples, generator)
         table[k] = summarise(dlow_metrics(samples, windows, multimodal))
     return table
-
-
-def sweep_models(models: dict[str, Completer], windows: Tensor, ks: dict[str, Sequence[int]],
-                 multimodal: Sequence[np.ndarray] | None = None, processes: int = 2) -> dict[str, dict[int, dict[str, tuple[float, float]]]]:
-    """:func:`sweep_given_joints` of every model (with its own ``ks[name]``), ``processes`` at a time.
-
-    The sweeps run in worker processes (:mod:`motionlab.train.parallel`), the longest first; each is seeded
-    as an in-process call is, so the tables are the same.
-    """
-    windows = _windows(windows, "sweep_models")
-    multimodal = multimodal_futures(windows) if multimodal is None else multimodal
-    order = sorted(models, key=lambda name: -len(ks[name]))
-    tables = run_in_workers(sweep_given_joints, [(models[name], windows, ks[name], N_SAMPLES, 0, multimodal)
-                                                 for name in order], processes)
-    by_name = dict(zip(order, tables))
-    return {name: by_name[name] for name in models}
 
 
 def ratio_and_worst_step(values: Sequence[float]) -> tuple[float, float]:

@@ -16,7 +16,6 @@ from motionlab.models.trajevae.losses import cvae_rnn_loss, gru_loss, trajevae_l
 from motionlab.models.trajevae.model import TrajeVAE
 from motionlab.train import PiecewiseLinear, TrainConfig, TrainResult, is_cached, train_or_load
 from motionlab.train.loop import LossFn
-from motionlab.train.parallel import run_in_workers
 
 ModelConfig = Union[TrajeVAEConfig, RecurrentConfig]
 
@@ -96,30 +95,3 @@ def train_completion_model(name: str, cfg: ModelConfig, positions: Tensor, rotat
 def completion_data_config(positions: Tensor) -> dict:
     """What defines a completion model's training data (part of its cache key): the clips and the frame step."""
     return {"clips": data_fingerprint(positions), "frame_step": FRAME_STEP}
-
-
-def _train_in_worker(name: str, cfg: ModelConfig, positions: Tensor, rotations: Tensor,
-                     train_config: TrainConfig) -> float:
-    """Body of a worker process: train one model into the checkpoint cache, return its training seconds."""
-    _, result = train_completion_model(name, cfg, positions, rotations, train_config, progress=False)
-    return 0.0 if result.loaded_from_cache else result.metrics["train_seconds"]
-
-
-def train_completion_models(runs: dict[str, ModelConfig], positions: Tensor, rotations: Tensor,
-                            train_config: TrainConfig, processes: int = 2,
-                            progress: bool | None = None) -> tuple[dict[str, nn.Module], dict[str, TrainResult], dict[str, float]]:
-    """:func:`train_completion_model` for every ``{cache name: config}`` of ``runs``, ``processes`` at a time.
-
-    The runs not in the cache yet train in worker processes (:mod:`motionlab.train.parallel`), one thread
-    each, in the order given; then every model is loaded here from the cache. Returns the models and their
-    results keyed like ``runs``, and the training seconds of the runs that were trained now.
-    """
-    data_config = completion_data_config(CompletionBatches(positions, rotations, augment=False).positions)
-    pending = [name for name, cfg in runs.items() if not is_cached(name, cfg, train_config, data_config)]
-    seconds = run_in_workers(_train_in_worker, [(name, runs[name], positions, rotations, train_config)
-                                                for name in pending], processes)
-    models, results = {}, {}
-    for name, cfg in runs.items():
-        models[name], results[name] = train_completion_model(name, cfg, positions, rotations, train_config,
-                                                             progress=progress)
-    return models, results, dict(zip(pending, seconds))
