@@ -18,7 +18,8 @@ from motionlab.metrics import end_point_error
 from motionlab.models.odmo import customize, evaluate
 from motionlab.models.odmo.config import ODMOConfig
 from motionlab.models.odmo.data import ODMOData
-from motionlab.models.odmo.experiment import MeasurePlan, measure_variant
+from motionlab.models.odmo.experiment import MeasurePlan, measure_variant, train_and_measure
+from motionlab.models.odmo.training import ODMOTraining
 from motionlab.models.odmo.model import ODMO
 from motionlab.models.odmo.modes import discover_modes
 from motionlab.models.odmo.sampler import ODMOSampler, encode_clips
@@ -150,6 +151,24 @@ def test_measure_variant_follows_the_plan(data, sampler):
     assert list(vae.rows) == ["vae"] and vae.homogeneity is None
     assert vae.rows["vae"] == evaluate.metric_row(reference, ODMOSampler.from_data(sampler.model, data, kind="prior"), 4, 2)
     assert vae.end_point == evaluate.end_point_control(reference, modes, 2, 2)
+
+
+def test_train_and_measure_trains_in_workers_and_measures_like_in_process(data, tmp_path, monkeypatch):
+    monkeypatch.setenv("MOTIONLAB_BUILD", str(tmp_path))  # the workers get it with every call
+    real = torch.randn(8, CFG.n_frames * STRIDE, 3, 3)
+    reference = evaluate.Reference(StandInEvaluator(), StandInEvaluator().features(real), real, np.array([0, 1] * 4))
+    plan = MeasurePlan(n_per_class=2, n_sets=2, n_per_mode=2, n_codes=2, n_end_points=2, prior_sampled=("vae",),
+                       conventional=(), homogeneity=("odmo",), end_point=())
+    configs = {"odmo": CFG, "vae": CFG}
+    training = ODMOTraining(steps=2, batch_size=4)
+    models, results, seconds, measured = train_and_measure(configs, data, training, reference, plan, processes=2)
+    assert list(measured) == ["odmo", "vae"] and set(seconds) == {"odmo", "vae"} and all(results[n].loaded_from_cache
+                                                                                          for n in configs)
+    for name, model in models.items():
+        assert measured[name] == measure_variant(name, model, data, reference, plan)._replace(
+            samplers=measured[name].samplers)  # the same numbers as measuring here
+    _, _, seconds_again, again = train_and_measure(configs, data, training, reference, plan, processes=2)
+    assert seconds_again == {} and [m.rows for m in again.values()] == [m.rows for m in measured.values()]
 
 
 def test_widget_callbacks_and_builders(sampler):

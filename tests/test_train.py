@@ -401,6 +401,7 @@ def test_resume_from_the_last_periodic_state_after_a_hard_crash(tmp_path: Path) 
 
 
 def test_ctrl_c_is_held_to_the_step_boundary_then_saved() -> None:
+    handler = signal.getsignal(signal.SIGINT)  # the default one, or SIG_IGN in a background job
     reference = make_model()
     train(reference, loss_fn, TensorBatches(data()), CFG, progress=False)
 
@@ -410,7 +411,7 @@ def test_ctrl_c_is_held_to_the_step_boundary_then_saved() -> None:
 
     with pytest.raises(KeyboardInterrupt, match="after step 7"):
         train_or_load("tiny", MODEL_CONFIG, make_model(), loss_fn, TensorBatches(data()), CFG, callbacks=[press_ctrl_c])
-    assert signal.getsignal(signal.SIGINT) is signal.default_int_handler
+    assert signal.getsignal(signal.SIGINT) is handler  # restored
     model = make_model()
     result = train_or_load("tiny", MODEL_CONFIG, model, loss_fn, TensorBatches(data()), CFG)
     assert result.resumed_from_step == 7

@@ -95,6 +95,11 @@ def test_chains_run_their_calls_in_order_and_side_by_side(tmp_path: Path, proces
     assert results[3] == [] and results[4][0][0] == "alone"
     with pytest.raises(RuntimeError, match="broken step"):
         run_chains([[(where_and_threads, ("a",)), (fail, ("broken step",))], [(where_and_threads, ("b",))]], processes)
+    never = tmp_path / "never.txt"
+    with pytest.raises(RuntimeError, match="first failure"):  # the first in the order given, and no later step runs
+        run_chains([[(fail, ("first failure",)), (write_tag, (str(never), "x"))], [(fail, ("second failure",))]],
+                   processes)
+    assert not never.exists()
 
 
 def test_one_process_or_one_call_runs_here() -> None:

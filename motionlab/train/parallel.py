@@ -70,9 +70,16 @@ def shared_pool(processes: int = 2) -> ProcessPoolExecutor:
 
 
 def close_shared_pools() -> None:
-    """Shut the shared pools down (their workers exit once their calls have finished)."""
+    """Shut the shared pools down: calls still waiting are cancelled, the workers exit after their current one."""
     while _shared_pools:
-        _shared_pools.popitem()[1].shutdown()
+        _shared_pools.popitem()[1].shutdown(cancel_futures=True)
+
+
+def _drop_broken_pool(processes: int) -> None:
+    """Forget the shared pool of ``processes`` after a worker died, so the next call starts a new one."""
+    pool = _shared_pools.pop(processes, None)
+    if pool is not None:
+        pool.shutdown(wait=False, cancel_futures=True)
 
 
 atexit.register(close_shared_pools)
@@ -112,9 +119,10 @@ def run_chains(chains: Sequence[Sequence[Step]], processes: int = 2) -> list[lis
     when its previous one has finished, behind the calls already waiting. So the later calls of the chains
     (e.g. measuring a model that the chain's first call trained into the checkpoint cache) fill the cores
     that would otherwise idle while the last first calls run. Calls of one chain pass nothing to each
-    other but what they leave on disk. Returns the results of each chain's calls. If calls fail, the calls
-    still waiting are cancelled, the running ones finish, and the exception of the first failed call (in
-    the order given) is raised here. With one process everything runs here, in order.
+    other but what they leave on disk. Returns the results of each chain's calls. If calls fail, no new call
+    starts, the calls still waiting are cancelled (the pool may already have handed one more to a worker:
+    that one runs), the running ones finish, and the exception of the first failed call (in the order
+    given) is raised here. With one process everything runs here, in order.
     """
     _check_processes(processes, "run_chains")
     if processes == 1:
@@ -131,25 +139,29 @@ def run_chains(chains: Sequence[Sequence[Step]], processes: int = 2) -> list[lis
         if chains[chain]:
             start(chain, 0)
     failed: dict[tuple[int, int], BaseException] = {}
-    while running:
-        finished, _ = wait(running, return_when=FIRST_COMPLETED)
-        for future in sorted(finished, key=running.__getitem__):
-            chain, index = running.pop(future)
-            if future.cancelled():
-                continue
-            if future.exception() is not None:
-                failed[chain, index] = future.exception()
-                for waiting in running:  # nothing new starts; the calls already running finish
-                    waiting.cancel()
-            elif not failed:
-                results[chain][index] = future.result()
-                if index + 1 < len(chains[chain]):
-                    start(chain, index + 1)
+    try:
+        while running:
+            finished, _ = wait(running, return_when=FIRST_COMPLETED)
+            for future in sorted(finished, key=running.__getitem__):
+                chain, index = running.pop(future)
+                if future.cancelled():
+                    continue
+                if future.exception() is not None:
+                    failed[chain, index] = future.exception()
+                    for waiting in running:  # nothing new starts; the calls already running finish
+                        waiting.cancel()
+                elif not failed:
+                    results[chain][index] = future.result()
+                    if index + 1 < len(chains[chain]):
+                        start(chain, index + 1)
+    except BaseException:  # e.g. Ctrl-C while waiting: leave nothing queued in the shared pool
+        for waiting in running:
+            waiting.cancel()
+        raise
     if failed:
-        error = failed[min(failed)]  # the first failed call in the order given, whichever failed first in time
-        if isinstance(error, BrokenProcessPool):  # a worker died (e.g. killed): the next call starts a new pool
-            _shared_pools.pop(processes, None)
-        raise error
+        if any(isinstance(error, BrokenProcessPool) for error in failed.values()):  # a worker died (e.g. killed)
+            _drop_broken_pool(processes)
+        raise failed[min(failed)]  # the first failed call in the order given, whichever failed first in time
     return results
 
 

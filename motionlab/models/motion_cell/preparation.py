@@ -24,8 +24,9 @@ from motionlab.models.motion_cell.settings import ChapterSettings
 from motionlab.models.motion_cell.training import train_model
 from motionlab.train import TensorBatches, TrainConfig, TrainResult
 
-#: Threads of the denoiser's training: it runs before every other job of the chapter, alone, and its
-#: convolutions gain from both cores (24 s on one thread, 17 s on two; the denoised clips are the same).
+#: Threads of the denoiser's training: it runs before the chapter's other training jobs (with the evaluators
+#: cached by chapter 03, nothing else runs meanwhile), and its convolutions gain from both cores (24 s on one
+#: thread, 17 s on two; the denoised clips had the same fingerprint on one and on two threads).
 DENOISER_THREADS = 2
 
 #: Seeds of the capture noise on the training split and of the denoiser's noisy copies of the validation split.

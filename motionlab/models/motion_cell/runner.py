@@ -17,7 +17,7 @@ from motionlab.models.motion_cell.jobs import Job, chapter_jobs, job_is_cached, 
 from motionlab.models.motion_cell.preparation import PreparedData, prepare_training_data
 from motionlab.models.motion_cell.settings import ChapterSettings
 from motionlab.train import TrainResult
-from motionlab.train.parallel import shared_pool, submit
+from motionlab.train.parallel import run_in_workers, shared_pool, submit
 
 
 def _train_in_worker(job: Job, settings: ChapterSettings, data: PreparedData) -> float:
@@ -49,8 +49,8 @@ def train_chapter(benchmark: Benchmark, settings: ChapterSettings, jobs: list[Jo
     """Train (or load) everything the chapter needs on the benchmark, using both cores of the course machine.
 
     Every run uses one thread, so ``processes`` run at a time in worker processes (the shared pool): the two
-    evaluators train (or load) in the workers while this process trains the denoiser (on two threads when
-    nothing else runs); then the workers take
+    evaluators train (or load) in the workers while this process trains the denoiser (on two threads: after
+    chapter 03 the evaluators load from the cache at once); then the workers take
     the training jobs (default :func:`chapter_jobs`, longest first). Each run is seeded by
     its own config, so its weights do not depend on where or in which order it ran. At the end every model
     is loaded from the cache.
@@ -62,8 +62,7 @@ def train_chapter(benchmark: Benchmark, settings: ChapterSettings, jobs: list[Jo
     for future in evaluators_ready:  # the workers' classifier loss loads the conv evaluator from the cache
         future.result()
     pending = [job for job in jobs if not job_is_cached(job, settings, data)]
-    futures = {job: submit(pool, _train_in_worker, job, settings, data) for job in pending}
-    trained = {job: future.result() for job, future in futures.items()}
+    trained = dict(zip(pending, run_in_workers(_train_in_worker, [(job, settings, data) for job in pending], processes)))
     conv, gru = benchmark_evaluator("conv"), benchmark_evaluator("gru")
     loaded = {job: train_job(job, settings, data, conv, progress=progress) for job in jobs}
     return ChapterModels(data, conv, gru, {job: m for job, (m, _) in loaded.items()},

@@ -4,7 +4,7 @@ Modules, in the order of the chapter: :mod:`.data` (local movement profile + roo
 :mod:`.config` (sizes, objective, ablation switches), :mod:`.encoder` (LMP encoder), :mod:`.contrastive`
 (eq. 1, the σ² prior term, class-balanced pairs), :mod:`.trajectory` and :mod:`.generator` (the two
 generators), :mod:`.model` (the joint objective, eq. 5), :mod:`.training`, :mod:`.modes` (mode discovery
-and sampling), :mod:`.sampler` (codes to joint positions), :mod:`.customize` (on-demand generation) and
+and sampling), :mod:`.sampler` (codes to joint positions), :mod:`.customize` (on-demand generation),
 :mod:`.evaluate` (Tables 1–4 and the adjusted Rand index against the true modes) and :mod:`.experiment`
 (every variant trained and measured on both cores).
 """

@@ -4,8 +4,9 @@ Modules, in the order the chapter uses them: :mod:`.masks` (structured joint mas
 :mod:`.dct` (the orthonormal DCT-II over time), :mod:`.config` (the model config with the ablation switches),
 :mod:`.layers` and :mod:`.model` (TrajeVAE), :mod:`.baselines` (deterministic GRU, CVAE-RNN), :mod:`.losses`,
 :mod:`.data` (windows and training batches), :mod:`.training` (build, train or load; the chapter's settings),
-:mod:`.ablations` (the Table 4 ladder) and :mod:`.evaluate` (DLow metrics against the number of trajectories,
-borrowed trajectories, evaluator accuracy helpers).
+:mod:`.ablations` (the Table 4 ladder), :mod:`.evaluate` (DLow metrics against the number of trajectories,
+borrowed trajectories, evaluator accuracy helpers) and :mod:`.experiment` (every model trained and swept on
+both cores).
 """
 
 from motionlab.models.trajevae.ablations import RUNGS, ladder

@@ -14,7 +14,7 @@ from motionlab.models.trajevae.config import TrajeVAEConfig
 from motionlab.models.trajevae.data import FRAME_STEP, CompletionBatches
 from motionlab.models.trajevae.losses import cvae_rnn_loss, gru_loss, trajevae_loss
 from motionlab.models.trajevae.model import TrajeVAE
-from motionlab.train import PiecewiseLinear, TrainConfig, TrainResult, is_cached, train_or_load
+from motionlab.train import PiecewiseLinear, TrainConfig, TrainResult, train_or_load
 from motionlab.train.loop import LossFn
 
 ModelConfig = Union[TrajeVAEConfig, RecurrentConfig]
