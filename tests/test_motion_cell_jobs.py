@@ -80,3 +80,9 @@ def test_cut_windows_and_rotation_error():
     reference[..., :84] = torch.tensor([1.0, 0.0, 0.0, 0.0]).repeat(21)
     assert rotation_error_degrees(c, turned, reference) == pytest.approx(10.0, rel=1e-4)
     assert rotation_error_degrees(c, poses, poses) == pytest.approx(0.0, abs=1e-2)
+
+
+def test_only_the_variants_with_a_classifier_loss_need_the_evaluator():
+    settings = chapter_settings()
+    needing = {job for job in jobs.chapter_jobs() if jobs.uses_classifier(job, settings)}
+    assert needing == {("variant", "mcell"), ("variant", "nl"), ("variant", "sl")}

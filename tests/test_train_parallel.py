@@ -11,8 +11,8 @@ from torch import nn
 
 from motionlab import config
 from motionlab.train import TensorBatches, TrainConfig, build_seeded, is_cached, train_or_load
-from motionlab.train.parallel import (InBackground, close_shared_pools, run_chains, run_in_workers, shared_pool,
-                                      worker_pool)
+from motionlab.train.parallel import (InBackground, close_shared_pools, run_chains, run_in_workers, run_paired,
+                                      shared_pool, worker_pool)
 
 CFG = TrainConfig(steps=15, batch_size=8, lr=1e-2, checkpoint_every=None)
 
@@ -100,6 +100,14 @@ def test_chains_run_their_calls_in_order_and_side_by_side(tmp_path: Path, proces
         run_chains([[(fail, ("first failure",)), (write_tag, (str(never), "x"))], [(fail, ("second failure",))]],
                    processes)
     assert not never.exists()
+
+
+def test_paired_calls_run_the_first_only_where_there_is_one(tmp_path: Path) -> None:
+    files = {tag: str(tmp_path / f"{tag}.txt") for tag in "ab"}
+    Path(files["b"]).write_text("already there")
+    before = {"a": (write_tag, (files["a"], "a"))}
+    first, then = run_paired(before, {tag: (read_tag, (path,)) for tag, path in files.items()}, processes=2)
+    assert first == {"a": "wrote a"} and then == {"a": "a", "b": "already there"}
 
 
 def test_one_process_or_one_call_runs_here() -> None:

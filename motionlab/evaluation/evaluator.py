@@ -82,10 +82,14 @@ class Evaluator(nn.Module):
         self.eval()
         return torch.cat([fn(self.inputs(positions[i:i + CHUNK])) for i in range(0, positions.shape[0], CHUNK)])
 
-    def logits(self, positions: Tensor | np.ndarray, head: str = "action") -> Tensor:
-        """Class logits ``(N, C)`` of one head (``action``, ``mode`` or ``body``)."""
+    def _head(self, head: str) -> nn.Module:
         if head not in self.classifier.heads:
             raise KeyError(f"Evaluator has heads {list(self.classifier.heads)}, not {head!r}")
+        return self.classifier.heads[head]
+
+    def logits(self, positions: Tensor | np.ndarray, head: str = "action") -> Tensor:
+        """Class logits ``(N, C)`` of one head (``action``, ``mode`` or ``body``)."""
+        self._head(head)
         return self._chunked(positions, lambda x: self.classifier(x)[head])
 
     def probs(self, positions: Tensor | np.ndarray, head: str = "action") -> Tensor:
@@ -103,13 +107,11 @@ class Evaluator(nn.Module):
     def features_and_probs(self, positions: Tensor | np.ndarray, head: str = "action") -> tuple[Tensor, Tensor]:
         """:meth:`features` ``(N, D)`` and :meth:`probs` ``(N, C)`` of one head from a single pass over the clips
         (the same numbers as the two calls, at half the cost: the recurrent trunk dominates)."""
-        if head not in self.classifier.heads:
-            raise KeyError(f"Evaluator has heads {list(self.classifier.heads)}, not {head!r}")
-        width = self.classifier.feature_dim
+        classify, width = self._head(head), self.classifier.feature_dim
 
         def both(x: Tensor) -> Tensor:
             features = self.classifier.features(x)
-            return torch.cat([features, self.classifier.heads[head](features)], dim=-1)
+            return torch.cat([features, classify(features)], dim=-1)
 
         out = self._chunked(positions, both)
         return out[:, :width], torch.softmax(out[:, width:].double(), dim=-1)

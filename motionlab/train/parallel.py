@@ -23,6 +23,7 @@ from typing import Any, TypeVar
 from motionlab import config
 
 R = TypeVar("R")
+K = TypeVar("K")
 
 #: Environment variables that configure the package (profile, build directory); every call carries the
 #: caller's values to the worker, so a reused worker behaves like one started now.
@@ -163,6 +164,18 @@ def run_chains(chains: Sequence[Sequence[Step]], processes: int = 2) -> list[lis
             _drop_broken_pool(processes)
         raise failed[min(failed)]  # the first failed call in the order given, whichever failed first in time
     return results
+
+
+def run_paired(before: dict[K, Step], after: dict[K, Step], processes: int = 2) -> tuple[dict[K, Any], dict[K, Any]]:
+    """For every key of ``after``: its ``before`` call, if it has one, then its ``after`` call, as chains of
+    :func:`run_chains` (e.g. train a model if it is not cached yet, then measure it).
+
+    Returns the results of the ``before`` calls and of the ``after`` calls, keyed like the calls.
+    """
+    keys = list(after)
+    outcomes = run_chains([[before[key], after[key]] if key in before else [after[key]] for key in keys], processes)
+    return ({key: outcome[0] for key, outcome in zip(keys, outcomes) if key in before},
+            {key: outcome[-1] for key, outcome in zip(keys, outcomes)})
 
 
 class InBackground:

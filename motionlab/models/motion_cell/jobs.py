@@ -97,12 +97,18 @@ def train_job(job: Job, settings: ChapterSettings, data: PreparedData, classifie
     if job[0] == "baseline":
         loss_fn = baseline_loss(run.loss)
     else:
-        uses_classifier = run.train.schedules["classifier"](run.train.steps) > 0
-        if uses_classifier and classifier is None:
+        needs_classifier = uses_classifier(job, settings)
+        if needs_classifier and classifier is None:
             raise ValueError(f"train_job: {job} uses the classifier loss; pass the conv evaluator as classifier")
-        loss_fn = motion_cell_loss(run.loss, classifier_loss(classifier, data) if uses_classifier else None)
+        loss_fn = motion_cell_loss(run.loss, classifier_loss(classifier, data) if needs_classifier else None)
     return train_model(run.name, run.model, data.codec, loss_fn, data.batches, run.train,
                        data_config=job_data_config(settings, data), loss_config=run.loss, progress=progress)
+
+
+def uses_classifier(job: Job, settings: ChapterSettings) -> bool:
+    """Whether ``job`` trains with the classifier loss of eq. 24 (and so needs the conv evaluator)."""
+    run = job_run(job, settings)
+    return "classifier" in run.train.schedules and run.train.schedules["classifier"](run.train.steps) > 0
 
 
 def classifier_loss(classifier: Evaluator, data: PreparedData) -> ClassifierLoss:

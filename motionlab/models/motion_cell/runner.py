@@ -13,7 +13,7 @@ from torch import nn
 
 from motionlab.evaluation.benchmark import Benchmark, cache_benchmark_evaluator, benchmark_evaluator
 from motionlab.evaluation.evaluator import Evaluator
-from motionlab.models.motion_cell.jobs import Job, chapter_jobs, job_is_cached, train_job
+from motionlab.models.motion_cell.jobs import Job, chapter_jobs, job_is_cached, train_job, uses_classifier
 from motionlab.models.motion_cell.preparation import PreparedData, prepare_training_data
 from motionlab.models.motion_cell.settings import ChapterSettings
 from motionlab.train import TrainResult
@@ -22,7 +22,8 @@ from motionlab.train.parallel import run_in_workers, shared_pool, submit
 
 def _train_in_worker(job: Job, settings: ChapterSettings, data: PreparedData) -> float:
     """Body of a worker process: train ``job`` into the cache, return its training seconds."""
-    _, result = train_job(job, settings, data, benchmark_evaluator("conv", progress=False), progress=False)
+    classifier = benchmark_evaluator("conv", progress=False) if uses_classifier(job, settings) else None
+    _, result = train_job(job, settings, data, classifier, progress=False)
     return result.metrics["train_seconds"]
 
 

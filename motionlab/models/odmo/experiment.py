@@ -1,7 +1,7 @@
 """The chapter's experiment on both cores: train every variant and measure it as soon as it has trained.
 
 Seven variants on two cores leave one core idle while the last one trains. :func:`train_and_measure`
-chains every variant's training with its measurements (:func:`~motionlab.train.parallel.run_chains`):
+chains every variant's training with its measurements (:func:`~motionlab.train.parallel.run_paired`):
 its samplers (:class:`~motionlab.models.odmo.sampler.ODMOSampler`), its rows of Tables 1-2 and, if the
 :class:`MeasurePlan` asks, its Table 3 (mode homogeneity) and Table 4 (end-point control) rows. The
 measurements of the variants that are done fill the idle core. A measurement loads its model from the
@@ -19,10 +19,10 @@ from motionlab.models.odmo.config import ODMOConfig
 from motionlab.models.odmo.data import ODMOData
 from motionlab.models.odmo.evaluate import Reference, end_point_control, metric_row, mode_homogeneity_interval
 from motionlab.models.odmo.model import ODMO
-from motionlab.models.odmo.sampler import ODMOSampler
+from motionlab.models.odmo.sampler import ODMOSampler, encode_clips
 from motionlab.models.odmo.training import ODMOTraining, odmo_data_config, run_name, train_odmo
 from motionlab.train import TrainResult, is_cached
-from motionlab.train.parallel import Step, run_chains
+from motionlab.train.parallel import run_paired
 
 
 @dataclass(frozen=True)
@@ -68,12 +68,13 @@ class Measured(NamedTuple):
 
 def measure_variant(variant: str, model: ODMO, data: ODMOData, reference: Reference, plan: MeasurePlan) -> Measured:
     """Build the samplers of a trained ``model`` and measure what ``plan`` asks of ``variant``."""
-    modes = ODMOSampler.from_data(model, data, kind="modes")
-    samplers = {"table": ODMOSampler.from_data(model, data, kind="prior") if variant in plan.prior_sampled else modes,
-                "modes": modes}
+    codes = encode_clips(model, data)  # once, for every sampler of the variant
+    modes = ODMOSampler.from_codes(model, codes, data, kind="modes")
+    samplers = {"table": ODMOSampler.from_codes(model, codes, data, kind="prior") if variant in plan.prior_sampled
+                else modes, "modes": modes}
     rows = {variant: metric_row(reference, samplers["table"], plan.n_per_class, plan.n_sets)}
     if variant in plan.conventional:
-        samplers["conventional"] = ODMOSampler.from_data(model, data, kind="conventional")
+        samplers["conventional"] = ODMOSampler.from_codes(model, codes, data, kind="conventional")
         rows[f"{variant}_conv"] = metric_row(reference, samplers["conventional"], plan.n_per_class, plan.n_sets)
     homogeneity = (mode_homogeneity_interval(reference, modes, plan.n_per_mode, plan.n_sets)
                    if variant in plan.homogeneity else None)
@@ -104,15 +105,12 @@ def train_and_measure(configs: dict[str, ODMOConfig], data: ODMOData, training: 
     models and training results (loaded here from the cache), the training seconds of the variants trained
     now, and every variant's :class:`Measured`; all keyed like ``configs``.
     """
-    pending = {variant for variant, cfg in configs.items()
-               if not is_cached(run_name(variant), cfg, training.train_config(), odmo_data_config(data))}
-    chains: list[list[Step]] = []
-    for variant, cfg in configs.items():
-        measure: Step = (_measure_in_worker, (variant, cfg, data, training, reference, plan))
-        chains.append([(_train_in_worker, (variant, cfg, data, training)), measure] if variant in pending else [measure])
-    outcomes = run_chains(chains, processes)
+    trainings = {variant: (_train_in_worker, (variant, cfg, data, training)) for variant, cfg in configs.items()
+                 if not is_cached(run_name(variant), cfg, training.train_config(), odmo_data_config(data))}
+    measurements = {variant: (_measure_in_worker, (variant, cfg, data, training, reference, plan))
+                    for variant, cfg in configs.items()}
+    seconds, measured = run_paired(trainings, measurements, processes)
     models, results = {}, {}
     for variant, cfg in configs.items():
         models[variant], results[variant] = train_odmo(variant, cfg, data, training)
-    seconds = {variant: outcome[0] for variant, outcome in zip(configs, outcomes) if variant in pending}
-    return models, results, seconds, {variant: outcome[-1] for variant, outcome in zip(configs, outcomes)}
+    return models, results, seconds, measured

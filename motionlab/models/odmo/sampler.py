@@ -75,8 +75,14 @@ class ODMOSampler:
     @classmethod
     def from_data(cls, model: ODMO, data: ODMOData, kind: str = "modes", seed: int = 0) -> ODMOSampler:
         """Encode ``data`` (the training clips), build the modes of ``kind`` and wrap everything."""
-        modes = build_modes(kind, encode_clips(model, data), data, model.cfg.n_classes, seed)
-        return cls(model, modes, data.frame_stride, data.floor_clearance)
+        return cls.from_codes(model, encode_clips(model, data), data, kind, seed)
+
+    @classmethod
+    def from_codes(cls, model: ODMO, codes: np.ndarray, data: ODMOData, kind: str = "modes",
+                   seed: int = 0) -> ODMOSampler:
+        """:meth:`from_data` with the training clips' codes ``(N, D)`` (:func:`encode_clips`) already computed."""
+        return cls(model, build_modes(kind, codes, data, model.cfg.n_classes, seed), data.frame_stride,
+                   data.floor_clearance)
 
     def generate(self, codes: np.ndarray | Tensor, action: np.ndarray | Tensor,
                  end_points: np.ndarray | Tensor) -> tuple[Tensor, Tensor, Tensor]:

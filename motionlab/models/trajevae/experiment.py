@@ -1,7 +1,7 @@
 """The chapter's models trained and swept on both cores, each model's sweep as soon as it has trained.
 
 Seven training runs on two cores leave one core idle while the last run trains; :func:`train_and_sweep`
-chains every run with its k sweep (:func:`~motionlab.train.parallel.run_chains`), so the sweeps of the
+chains every run with its k sweep (:func:`~motionlab.train.parallel.run_paired`), so the sweeps of the
 models that are done fill that core. The sweep of a model loads it from the checkpoint cache and is seeded
 as an in-process :func:`~motionlab.models.trajevae.evaluate.sweep_given_joints` call, so the tables do not
 depend on where or when it ran.
@@ -18,7 +18,7 @@ from motionlab.models.trajevae.data import CompletionBatches
 from motionlab.models.trajevae.evaluate import N_SAMPLES, Sweep, sweep_given_joints
 from motionlab.models.trajevae.training import ModelConfig, completion_data_config, train_completion_model
 from motionlab.train import TrainConfig, TrainResult, is_cached
-from motionlab.train.parallel import Step, run_chains
+from motionlab.train.parallel import run_paired
 
 
 def _train_in_worker(name: str, cfg: ModelConfig, positions: Tensor, rotations: Tensor,
@@ -51,15 +51,12 @@ def train_and_sweep(runs: dict[str, ModelConfig], positions: Tensor, rotations: 
         trained now, and each run's sweep ``{k: {metric: (mean, ci95)}}``; all keyed like ``runs``.
     """
     data_config = completion_data_config(CompletionBatches(positions, rotations, augment=False).positions)
-    pending = {name for name, cfg in runs.items() if not is_cached(name, cfg, train_config, data_config)}
-    chains: list[list[Step]] = []
-    for name, cfg in runs.items():
-        sweep: Step = (_sweep_in_worker, (name, cfg, positions, rotations, train_config, windows, ks[name], multimodal))
-        chains.append([(_train_in_worker, (name, cfg, positions, rotations, train_config)), sweep] if name in pending
-                      else [sweep])
-    outcomes = run_chains(chains, processes)
+    trainings = {name: (_train_in_worker, (name, cfg, positions, rotations, train_config))
+                 for name, cfg in runs.items() if not is_cached(name, cfg, train_config, data_config)}
+    sweeps = {name: (_sweep_in_worker, (name, cfg, positions, rotations, train_config, windows, ks[name], multimodal))
+              for name, cfg in runs.items()}
+    seconds, sweeps = run_paired(trainings, sweeps, processes)
     models, results = {}, {}
     for name, cfg in runs.items():
         models[name], results[name] = train_completion_model(name, cfg, positions, rotations, train_config)
-    seconds = {name: outcome[0] for name, outcome in zip(runs, outcomes) if name in pending}
-    return models, results, seconds, {name: outcome[-1] for name, outcome in zip(runs, outcomes)}
+    return models, results, seconds, sweeps
