@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import os
+import signal
 from pathlib import Path
 
 import pytest
@@ -33,6 +34,10 @@ def build_dir_and_seeded_draw(tag: str) -> tuple[str, str, float]:
     draw = float(torch.rand(()))  # the global generator, seeded by the call's set-up
     torch.rand(1000)  # moves the worker's generator on: the next call must not see it
     return tag, str(config.build_dir()), draw
+
+
+def interrupt_handler() -> object:
+    return signal.getsignal(signal.SIGINT)
 
 
 def write_tag(path: str, tag: str) -> str:
@@ -108,6 +113,10 @@ def test_paired_calls_run_the_first_only_where_there_is_one(tmp_path: Path) -> N
     before = {"a": (write_tag, (files["a"], "a"))}
     first, then = run_paired(before, {tag: (read_tag, (path,)) for tag, path in files.items()}, processes=2)
     assert first == {"a": "wrote a"} and then == {"a": "a", "b": "already there"}
+
+
+def test_idle_workers_ignore_ctrl_c() -> None:
+    assert run_in_workers(interrupt_handler, [(), ()], processes=2) == [signal.SIG_IGN, signal.SIG_IGN]
 
 
 def test_one_process_or_one_call_runs_here() -> None:

@@ -15,6 +15,7 @@ from __future__ import annotations
 import atexit
 import multiprocessing
 import os
+import signal
 from collections.abc import Callable, Sequence
 from concurrent.futures import FIRST_COMPLETED, Future, ProcessPoolExecutor, wait
 from concurrent.futures.process import BrokenProcessPool
@@ -51,10 +52,18 @@ def _check_processes(processes: int, where: str) -> None:
         raise ValueError(f"{where}: processes must be a positive integer, got {processes!r}")
 
 
+def _ignore_interrupts() -> None:
+    """Worker start-up: Ctrl-C (SIGINT, which Jupyter sends to the kernel's whole process group, and again when it
+    shuts the kernel down) is for the notebook, not for idle workers; a training run still catches it at a step
+    boundary (:func:`~motionlab.train.train_or_load` installs its own handler while it runs)."""
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+
+
 def worker_pool(processes: int = 2) -> ProcessPoolExecutor:
     """A pool of ``processes`` fresh (``spawn``) worker processes; submit work with :func:`submit`."""
     _check_processes(processes, "worker_pool")
-    return ProcessPoolExecutor(max_workers=processes, mp_context=multiprocessing.get_context("spawn"))
+    return ProcessPoolExecutor(max_workers=processes, mp_context=multiprocessing.get_context("spawn"),
+                               initializer=_ignore_interrupts)
 
 
 def shared_pool(processes: int = 2) -> ProcessPoolExecutor:
