@@ -101,10 +101,10 @@ def test_invconv_starts_orthogonal_and_caches_its_inverse():
     np.testing.assert_allclose((w @ w.T).numpy(), np.eye(6), atol=1e-6)
     assert abs(abs(np.linalg.det(w.numpy())) - 1) < 1e-6
     with torch.no_grad():
-        first = conv._matrices()[1]
-        assert conv._matrices()[1] is first  # reused while parameters are unchanged
+        first = conv.matrices()[1]
+        assert conv.matrices()[1] is first  # reused while parameters are unchanged
         conv.log_s.add_(0.1)  # an in-place update (like an optimiser step) invalidates the cache
-        second = conv._matrices()[1]
+        second = conv.matrices()[1]
     assert second is not first
     np.testing.assert_allclose((second.double() @ conv.weight().detach().double()).numpy(), np.eye(6), atol=1e-5)
 

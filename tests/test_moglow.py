@@ -21,6 +21,7 @@ from motionlab.models.moglow import (
     MoGlowFeatures,
     nll_per_frame_loss,
 )
+from motionlab.models.moglow.sampler import sample_frames
 
 SMALL = dict(pose_dim=6, control_dim=2, history=3)
 
@@ -60,7 +61,7 @@ def test_history_keep_mask_rate_and_seed():
     assert set(a.unique().tolist()) <= {0.0, 1.0}
 
 
-def test_lstm_coupling_logdet_roundtrip_and_frame_inverse():
+def test_lstm_coupling_logdet_roundtrip_and_frame_weights():
     torch.manual_seed(0)
     layer = perturb_parameters_(LSTMAffineCoupling(6, cond_channels=3, hidden=8).double(), 0.3,
                                 torch.Generator().manual_seed(0)).eval()
@@ -72,12 +73,15 @@ def test_lstm_coupling_logdet_roundtrip_and_frame_inverse():
     y, _ = layer(x, cond)
     layer.out.bias.data[3:] += 0.4  # a non-zero raw-scale bias checks that the offset is folded correctly
     y, _ = layer(x, cond)
-    frames = layer.frame_inverse()
-    state = frames.zero_state(2, y)
+    # the split weights, used as the generator uses them, invert the layer frame by frame
+    w = layer.frame_weights()
+    h = c = torch.zeros(2, 8, dtype=torch.float64)
     rebuilt = []
     for t in range(5):
-        x_t, state = frames.inverse(y[:, :, t], cond[:, :, t], state)
-        rebuilt.append(x_t)
+        y_a, y_b, cond_t = y[:, :3, t], y[:, 3:, t], cond[:, :, t]
+        h, c = torch.lstm_cell(y_a, (h, c), w.lstm_input_a, w.lstm_hidden, cond_t @ w.lstm_input_cond.T, w.lstm_bias)
+        shift, raw_scale = (h @ w.out_hidden + y_a @ w.out_input_a + cond_t @ w.out_input_cond + w.out_bias).chunk(2, 1)
+        rebuilt.append(torch.cat([y_a, y_b / torch.sigmoid(raw_scale) - shift], dim=1))
     assert torch.allclose(torch.stack(rebuilt, dim=2), x, atol=1e-12)
 
 
@@ -117,6 +121,23 @@ def test_sampling_is_deterministic_by_seed():
     b = model.sample(control, seed_pose, 0.8, torch.Generator().manual_seed(0))
     c = model.sample(control, seed_pose, 0.8, torch.Generator().manual_seed(1))
     assert torch.equal(a, b) and not torch.equal(a, c)
+
+
+def test_scripted_generation_loop_matches_plain_python_and_reports_divergence():
+    model = _moglow(dropout=0.5, dtype=torch.float32)
+    seed_pose, control = _data(frames=3, dtype=torch.float32)[0], _data(frames=3 + 9, seed=1, dtype=torch.float32)[1]
+    keep = history_keep_mask(2, 9, 3, 0.5, torch.Generator().manual_seed(0))
+    noise = torch.randn(2, 9, 6, generator=torch.Generator().manual_seed(1))
+    plan = model.generation_plan()
+    scripted = sample_frames(plan, control, seed_pose, keep, noise)
+    plain = sample_frames(plan, control, seed_pose, keep, noise, scripted=False)
+    assert torch.allclose(scripted, plain, atol=1e-5) and not torch.equal(scripted, sample_frames(plan, control, seed_pose, None, noise))
+    with pytest.raises(ValueError, match=r"shapes disagree: control \(2, 12, 2\)"):
+        sample_frames(plan, control, seed_pose, keep, noise[:, :8])
+    with torch.no_grad():
+        model.linear.weight[:, :6] = 1e20  # the last pose amplified without bound: overflows within a few frames
+    with pytest.raises(ValueError, match="MoGlow.sample: generation diverged: non-finite poses from generated frame"):
+        model.sample(control, seed_pose, 1.0, torch.Generator().manual_seed(0))
 
 
 def test_likelihood_sums_frame_terms_and_loss_is_per_frame():

@@ -76,8 +76,9 @@ class InvertibleConv1x1(FlowLayer):
         """``W^{-1}`` ``(C, C)``, computed in float64 and returned in the parameters' dtype."""
         return torch.linalg.inv(self.weight(torch.float64)).to(self.log_s.dtype)
 
-    def _matrices(self) -> tuple[Tensor, Tensor | None]:
-        """``(W, W^{-1})``; cached when autograd is off, else ``(W, None)`` freshly built."""
+    def matrices(self) -> tuple[Tensor, Tensor | None]:
+        """``(W, W^{-1})``, both ``(C, C)``: cached while the parameters are unchanged when autograd is off (the
+        inverse costs an LU solve in float64); with autograd on, ``(W, None)`` freshly built."""
         if torch.is_grad_enabled():
             self._cache = None
             return self.weight(), None
@@ -89,14 +90,14 @@ class InvertibleConv1x1(FlowLayer):
 
     def forward(self, x: Tensor, cond: Tensor | None = None) -> tuple[Tensor, Tensor]:
         check_sequence(x, "x", "InvertibleConv1x1.forward", self.channels)
-        weight, _ = self._matrices()
+        weight, _ = self.matrices()
         y = torch.einsum("ij,bjt->bit", weight.to(x.dtype), x)
         logdet = (x.shape[2] * self.log_s.sum()).to(x.dtype).expand(x.shape[0])
         return y, logdet
 
     def inverse(self, y: Tensor, cond: Tensor | None = None) -> Tensor:
         check_sequence(y, "y", "InvertibleConv1x1.inverse", self.channels)
-        _, inverse = self._matrices()
+        _, inverse = self.matrices()
         if inverse is None:
             inverse = self.inverse_weight()
         return torch.einsum("ij,bjt->bit", inverse.to(y.dtype), y)

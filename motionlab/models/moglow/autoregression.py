@@ -1,4 +1,7 @@
-"""The autoregressive conditioning shared by MoGlow and its baseline, its dropout, and the sampling loop.
+"""The autoregressive conditioning shared by MoGlow and its baseline, its dropout, and a generic sampling loop.
+
+The loop, :func:`autoregressive_sample`, runs any one-frame ``step`` function (the baseline's); MoGlow has
+its own loop, arranged for speed (:mod:`.sampler`), which builds the same conditioning.
 
 The pose of frame ``t`` is generated given the conditioning vector
 
@@ -135,9 +138,14 @@ def autoregressive_sample(step: FrameStep, control: Tensor, seed_pose: Tensor, s
         pose_t, state = step(t, frame_conditioning(visible, control[:, t:t + history + 1]), state)
         poses.append(pose_t)
         past = torch.cat([past[:, 1:], pose_t[:, None]], dim=1)
-    generated = torch.stack(poses, dim=1)
+    return check_generated(torch.stack(poses, dim=1), "autoregressive_sample")
+
+
+def check_generated(generated: Tensor, where: str) -> Tensor:
+    """Return generated poses ``(B, N, P)``; raise ``ValueError`` naming the first frame that is not finite
+    (a model can diverge on inputs far from its training data)."""
     finite = torch.isfinite(generated).all(dim=(0, 2))
     if not bool(finite.all()):
-        raise ValueError(f"autoregressive_sample: generation diverged: non-finite poses from generated frame "
-                         f"{int(torch.nonzero(~finite)[0])} of {frames}")
+        raise ValueError(f"{where}: generation diverged: non-finite poses from generated frame "
+                         f"{int(torch.nonzero(~finite)[0])} of {generated.shape[1]}")
     return generated

@@ -7,8 +7,8 @@ while each frame's transform stays a plain, exactly invertible affine coupling.
 
 Over a whole sequence (training, likelihoods) the LSTM runs from a zero state in one call; inverting a
 whole sequence is parallel as well, since ``x_a = y_a`` is known for every frame. Generation is
-different: the conditioning of frame ``t`` contains the pose generated at ``t - 1``, so
-:class:`FrameCoupling` inverts one frame at a time and hands back the updated state.
+different: the conditioning of frame ``t`` contains the pose generated at ``t - 1``, so it inverts one
+frame at a time (:mod:`.sampler`), from the weights that :meth:`LSTMAffineCoupling.frame_weights` hands out.
 """
 
 from __future__ import annotations
@@ -20,10 +20,6 @@ from torch import Tensor, nn
 
 from motionlab.models.flows.base import FlowLayer, check_cond, check_sequence
 from motionlab.models.flows.coupling import SCALE_OFFSET, affine_forward, affine_inverse, zero_init
-
-LSTMState = tuple[Tensor, Tensor]
-"""An LSTM state ``(h, c)``, each ``(batch, hidden)``."""
-
 
 class LSTMAffineCoupling(FlowLayer):
     """Affine coupling on ``(batch, channels, time)`` whose network is a one-layer LSTM over time.
@@ -73,44 +69,34 @@ class LSTMAffineCoupling(FlowLayer):
         y_a, y_b = y[:, :self.n_a], y[:, self.n_a:]
         return torch.cat([y_a, affine_inverse(y_b, self._params(y_a, cond), self.scale_offset)], dim=1)
 
-    def frame_inverse(self) -> FrameCoupling:
-        """This coupling's tensors bundled for inverting one frame at a time (see :class:`FrameCoupling`)."""
-        lstm, hidden = self.lstm, self.hidden
-        weight = self.out.weight.detach().T
-        bias = self.out.bias.detach().clone()
-        bias[bias.shape[0] // 2:] += self.scale_offset  # the sigmoid's offset, folded into the raw-scale bias
-        return FrameCoupling(self.n_a, hidden, (lstm.weight_ih_l0.detach(), lstm.weight_hh_l0.detach(),
-                                                lstm.bias_ih_l0.detach(), lstm.bias_hh_l0.detach()),
-                             weight[:hidden], weight[hidden:], bias)
+    def frame_weights(self) -> FrameCoupling:
+        """This coupling's weights split by what they read, for generating one frame at a time (:mod:`.sampler`)."""
+        n_a, hidden = self.n_a, self.hidden
+        lstm_input = self.lstm.weight_ih_l0.detach()
+        out_weight = self.out.weight.detach().T
+        out_bias = self.out.bias.detach().clone()
+        out_bias[out_bias.shape[0] // 2:] += self.scale_offset  # the sigmoid's offset, folded into the raw-scale bias
+        return FrameCoupling(lstm_input[:, :n_a], lstm_input[:, n_a:], self.lstm.weight_hh_l0.detach(),
+                             (self.lstm.bias_ih_l0 + self.lstm.bias_hh_l0).detach(), out_weight[:hidden],
+                             out_weight[hidden:hidden + n_a], out_weight[hidden + n_a:], out_bias)
 
 
 class FrameCoupling(NamedTuple):
-    """An :class:`LSTMAffineCoupling` prepared for generation: plain tensors, no module look-ups.
+    """An :class:`LSTMAffineCoupling`'s weights split by what they read (``H`` LSTM units, ``C_a`` untouched
+    and ``C_b`` transformed channels, ``C_c`` conditioning features).
 
-    Generation inverts one frame at a time, because the conditioning of frame ``t`` contains the pose
-    generated at ``t - 1``; :meth:`inverse` does it and hands back the updated LSTM state. It skips input
-    checks (the caller checked the sequence) and gives the same result as
-    :meth:`LSTMAffineCoupling.inverse` on the whole sequence. The output layer's weight is split into its
-    rows for the LSTM output and for the skip connection, and the sigmoid's offset is in the bias.
+    For one frame, the LSTM's gates are ``x_a @ lstm_input_a.T + cond @ lstm_input_cond.T + h @ lstm_hidden.T
+    + lstm_bias`` and the shift and raw scale are ``h' @ out_hidden + x_a @ out_input_a + cond @ out_input_cond
+    + out_bias`` (``h'`` the updated LSTM output), the sigmoid's offset being folded into ``out_bias``: the
+    layer's arithmetic, rearranged so that a generator can compute the conditioning's parts of all
+    couplings at once.
     """
 
-    n_a: int
-    hidden: int
-    lstm_weights: tuple[Tensor, Tensor, Tensor, Tensor]
-    out_weight_hidden: Tensor
-    out_weight_inputs: Tensor
-    out_bias: Tensor
-
-    def zero_state(self, batch: int, like: Tensor) -> LSTMState:
-        """The LSTM's initial state for ``batch`` sequences (dtype and device of ``like``)."""
-        zeros = like.new_zeros(batch, self.hidden)
-        return zeros, zeros
-
-    def inverse(self, y: Tensor, cond: Tensor, state: LSTMState) -> tuple[Tensor, LSTMState]:
-        """Invert one frame ``y`` ``(B, C)`` given its conditioning ``(B, C_c)`` and the LSTM state;
-        return ``(x, new_state)``."""
-        y_a = y[:, :self.n_a]
-        inputs = torch.cat([y_a, cond], dim=1)
-        h, c = torch.lstm_cell(inputs, state, *self.lstm_weights)
-        params = torch.addmm(self.out_bias, h, self.out_weight_hidden).addmm_(inputs, self.out_weight_inputs)
-        return torch.cat([y_a, affine_inverse(y[:, self.n_a:], params, 0.0)], dim=1), (h, c)
+    lstm_input_a: Tensor     # (4H, C_a)
+    lstm_input_cond: Tensor  # (4H, C_c)
+    lstm_hidden: Tensor      # (4H, H)
+    lstm_bias: Tensor        # (4H,)
+    out_hidden: Tensor       # (H, 2 C_b)
+    out_input_a: Tensor      # (C_a, 2 C_b)
+    out_input_cond: Tensor   # (C_c, 2 C_b)
+    out_bias: Tensor         # (2 C_b,)

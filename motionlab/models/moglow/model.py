@@ -8,7 +8,7 @@ LSTM states inside the coupling networks, which summarise everything before ``t`
 
 ``f`` is ``K`` Glow steps (ActNorm, 1x1 convolution, :class:`~.coupling.LSTMAffineCoupling`) acting on
 one frame at a time, so a clip's exact log-likelihood is the sum over frames, computed for all frames
-in one pass. Generation runs frame by frame, carrying the LSTM states.
+in one pass. Generation runs frame by frame, carrying the LSTM states (:mod:`.sampler`).
 
 Two additions to the paper's model, for training on a CPU in about a minute: the first layer (data side)
 subtracts a least-squares linear prediction of ``x_t`` from ``c_t`` and divides by the residual scale
@@ -20,8 +20,6 @@ Everything here is in standard units (see :mod:`.data`); :mod:`.generate` conver
 
 from __future__ import annotations
 
-from typing import NamedTuple
-
 import torch
 from torch import Tensor, nn
 
@@ -31,24 +29,15 @@ from motionlab.models.flows.invconv import InvertibleConv1x1
 from motionlab.models.flows.prior import StandardNormal
 from motionlab.models.moglow.autoregression import (
     autoregressive_conditioning,
-    autoregressive_sample,
+    check_generated,
     check_pose_control,
     history_keep_mask,
     sampling_setup,
 )
 from motionlab.models.moglow.config import MoGlowConfig
-from motionlab.models.moglow.coupling import FrameCoupling, LSTMAffineCoupling, LSTMState
+from motionlab.models.moglow.coupling import LSTMAffineCoupling
 from motionlab.models.moglow.linear import LinearPredictor
-
-
-class InverseStep(NamedTuple):
-    """One Glow step prepared for generation: its coupling, then ActNorm and 1x1 convolution folded into
-    one affine map of row vectors, ``x = v @ matrix + shift``."""
-
-    coupling: FrameCoupling
-    matrix: Tensor
-    shift: Tensor
-
+from motionlab.models.moglow.sampler import GenerationPlan, InverseStep, sample_frames
 
 class MoGlow(nn.Module):
     """The MoGlow model of :class:`MoGlowConfig` (see the module notes)."""
@@ -100,45 +89,44 @@ class MoGlow(nn.Module):
         z, logdet = self.latents(pose, control, generator)
         return self.prior.log_prob(z) + logdet
 
-    def inverse_steps(self) -> list[InverseStep]:
-        """The Glow steps in inverse order, each with its ActNorm and 1x1 convolution folded into one map."""
-        steps = []
+    @torch.no_grad()
+    def generation_plan(self) -> GenerationPlan:
+        """The weights arranged for generating one frame at a time (:mod:`.sampler`), steps in inverse order.
+
+        Each step's ActNorm and 1x1 convolution are folded into one matrix; the couplings' weights are split by
+        what they read, and the conditioning features' parts of all couplings are stacked side by side.
+        """
+        cfg = self.cfg
+        past = cfg.history * cfg.pose_dim
         layers = list(self.flow.layers)
-        for k in reversed(range(self.cfg.steps)):
+        steps, feature_weights = [], []
+        for k in reversed(range(cfg.steps)):
             actnorm, conv, coupling = layers[3 * k:3 * k + 3]
-            matrix = conv.inverse_weight().T * torch.exp(-actnorm.log_scale)[None, :]
-            steps.append(InverseStep(coupling.frame_inverse(), matrix.detach(), -actnorm.bias.detach()))
-        return steps
+            matrix = conv.matrices()[1].T * torch.exp(-actnorm.log_scale)[None, :]
+            split = coupling.frame_weights()
+            steps.append(InverseStep(split.lstm_input_a, split.lstm_hidden, split.lstm_bias, split.out_hidden,
+                                     split.out_input_a, split.out_bias, matrix[:coupling.n_a], matrix[coupling.n_a:],
+                                     -actnorm.bias))
+            feature_weights += [split.lstm_input_cond.T, split.out_input_cond]
+        weight = torch.cat([self.cond_encoder.weight, self.linear.weight]).T  # (cond_dim, F + P)
+        return GenerationPlan(weight[:past].contiguous(), weight[past:].contiguous(),
+                              torch.cat([self.cond_encoder.bias, self.linear.bias]),
+                              torch.cat(feature_weights, dim=1).contiguous(), torch.exp(self.linear.log_scale), steps)
 
     @torch.no_grad()
     def sample(self, control: Tensor, seed_pose: Tensor, temperature: float = 1.0,
                generator: torch.Generator | None = None) -> Tensor:
-        """Generate poses ``(B, N, P)`` frame by frame.
+        """Generate poses ``(B, N, P)`` frame by frame (:mod:`.sampler`).
 
         Args:
             control: ``(B, tau + N, C)``: the seed frames' controls, then those of the frames to generate.
             seed_pose: ``(B, tau, P)``, the poses that start the history.
             temperature: the prior's temperature (0 gives the model's mode-seeking path, 1 its distribution).
             generator: draws the history dropout flags of all frames, then their latents.
+
+        Raises ``ValueError`` on bad inputs, and naming the first frame when the generated poses stop being
+        finite.
         """
         keep, latents = sampling_setup(self.cfg, control, seed_pose, temperature, generator, "MoGlow.sample")
-        steps = self.inverse_steps()
-        batch = control.shape[0]
-        # the conditioning encoder and the linear predictor read the same vector: one matrix product for both
-        weight = torch.cat([self.cond_encoder.weight, self.linear.weight]).detach().T
-        bias = torch.cat([self.cond_encoder.bias, self.linear.bias]).detach()
-        linear_scale = torch.exp(self.linear.log_scale.detach())
-        features = self.cfg.cond_features
-
-        def step(t: int, cond: Tensor, state: list[LSTMState]) -> tuple[Tensor, list[LSTMState]]:
-            both = torch.addmm(bias, cond, weight)
-            encoded, mean = both[:, :features], both[:, features:]
-            x, new_state = latents[:, t], []
-            for (coupling, matrix, shift), layer_state in zip(steps, state):
-                x, layer_state = coupling.inverse(x, encoded, layer_state)
-                x = torch.addmm(shift, x, matrix)
-                new_state.append(layer_state)
-            return mean.addcmul_(x, linear_scale), new_state
-
-        initial = [s.coupling.zero_state(batch, control) for s in steps]
-        return autoregressive_sample(step, control, seed_pose, initial, keep)
+        generated = sample_frames(self.generation_plan(), control, seed_pose, keep, latents)
+        return check_generated(generated, "MoGlow.sample")
