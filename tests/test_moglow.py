@@ -98,20 +98,26 @@ def test_moglow_causality():
     assert not torch.allclose(z[:, 6:], z_changed[:, 6:])
 
 
-def test_sampling_inverts_the_training_pass_exactly():
-    model = _moglow(dropout=0.5)
-    seed_pose, control = _data(frames=3)[0], _data(frames=3 + 7, seed=1)[1]
+@pytest.mark.parametrize("pose_dim", [6, 7])  # 7: the coupling halves differ in size
+def test_sampling_inverts_the_training_pass_exactly(pose_dim):
+    torch.manual_seed(0)
+    cfg = MoGlowConfig(pose_dim=pose_dim, control_dim=2, history=3, steps=3, hidden=8, cond_features=5, dropout=0.5)
+    model = perturb_parameters_(MoGlow(cfg).double(), 0.1, torch.Generator().manual_seed(1)).eval()
+    generator = torch.Generator().manual_seed(0)
+    seed_pose = torch.randn(2, 3, pose_dim, generator=generator, dtype=torch.float64)
+    control = torch.randn(2, 3 + 7, 2, generator=generator, dtype=torch.float64)
     sample = model.sample(control, seed_pose, temperature=1.0, generator=torch.Generator().manual_seed(4))
-    assert sample.shape == (2, 7, 6)
+    assert sample.shape == (2, 7, pose_dim)
     # replay the generator: the history masks of all frames are drawn first, then the latents
     replay = torch.Generator().manual_seed(4)
     keep = history_keep_mask(2, 7, 3, 0.5, replay)
-    latents = torch.randn(2, 7, 6, generator=replay, dtype=torch.float64)
-    full = torch.cat([seed_pose, sample], dim=1)
-    cond = autoregressive_conditioning(full, control, 3, keep)
-    u, _ = model.linear(sample.transpose(1, 2), cond.transpose(1, 2))
-    z, _ = model.flow(u, model.cond_encoder(cond).transpose(1, 2))
-    assert torch.allclose(z.transpose(1, 2), latents, atol=1e-9)
+    latents = torch.randn(2, 7, pose_dim, generator=replay, dtype=torch.float64)
+    for generated in (sample, sample_frames(model.generation_plan(), control, seed_pose, keep, latents, scripted=False)):
+        full = torch.cat([seed_pose, generated], dim=1)
+        cond = autoregressive_conditioning(full, control, 3, keep)
+        u, _ = model.linear(generated.transpose(1, 2), cond.transpose(1, 2))
+        z, _ = model.flow(u, model.cond_encoder(cond).transpose(1, 2))
+        assert torch.allclose(z.transpose(1, 2), latents, atol=1e-9)
 
 
 def test_sampling_is_deterministic_by_seed():
@@ -125,15 +131,29 @@ def test_sampling_is_deterministic_by_seed():
 
 def test_scripted_generation_loop_matches_plain_python_and_reports_divergence():
     model = _moglow(dropout=0.5, dtype=torch.float32)
-    seed_pose, control = _data(frames=3, dtype=torch.float32)[0], _data(frames=3 + 9, seed=1, dtype=torch.float32)[1]
+    seed_pose = _data(frames=3, dtype=torch.float32)[0]
+    control = _data(frames=3 + 9, seed=1, dtype=torch.float32)[1]
     keep = history_keep_mask(2, 9, 3, 0.5, torch.Generator().manual_seed(0))
     noise = torch.randn(2, 9, 6, generator=torch.Generator().manual_seed(1))
     plan = model.generation_plan()
     scripted = sample_frames(plan, control, seed_pose, keep, noise)
     plain = sample_frames(plan, control, seed_pose, keep, noise, scripted=False)
-    assert torch.allclose(scripted, plain, atol=1e-5) and not torch.equal(scripted, sample_frames(plan, control, seed_pose, None, noise))
+    assert torch.allclose(scripted, plain, atol=1e-5)
+    assert not torch.equal(scripted, sample_frames(plan, control, seed_pose, None, noise))  # the flags are used
     with pytest.raises(ValueError, match=r"shapes disagree: control \(2, 12, 2\)"):
         sample_frames(plan, control, seed_pose, keep, noise[:, :8])
+    with pytest.raises(ValueError, match=r"plan's tau \* P = 18"):
+        sample_frames(plan, control, seed_pose[:, :, :5], keep, noise[:, :, :5])
+    with pytest.raises(ValueError, match="share one dtype"):
+        sample_frames(plan, control.double(), seed_pose.double(), keep, noise.double())
+    def plan_tensors(p):
+        return list(p[:-1]) + [t for step in p.steps for t in (*step.coupling, *step[1:])]
+
+    before = [t.clone() for t in plan_tensors(plan)]
+    with torch.no_grad():
+        for parameter in model.parameters():
+            parameter.add_(0.1)
+    assert all(torch.equal(a, b) for a, b in zip(plan_tensors(plan), before))  # a plan is a snapshot of the weights
     with torch.no_grad():
         model.linear.weight[:, :6] = 1e20  # the last pose amplified without bound: overflows within a few frames
     with pytest.raises(ValueError, match="MoGlow.sample: generation diverged: non-finite poses from generated frame"):

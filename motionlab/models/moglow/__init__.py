@@ -3,8 +3,9 @@
 Modules: :mod:`~.data` (features, augmentation, standardisation, windows), :mod:`~.config`,
 :mod:`~.autoregression` (conditioning, history dropout, a frame-by-frame loop), :mod:`~.coupling`
 (the LSTM affine coupling), :mod:`~.model` (MoGlow), :mod:`~.sampler` (MoGlow's generation loop),
-:mod:`~.baseline` (Gaussian autoregressive LSTM), :mod:`~.training` (data splits, loss, held-out NLL), :mod:`~.generate` (control programmes, physical
-units, joint positions), :mod:`~.measures` (support-foot slide, joint-speed ratio).
+:mod:`~.baseline` (Gaussian autoregressive LSTM), :mod:`~.training` (data splits, loss, held-out NLL),
+:mod:`~.generate` (control programmes, physical units, joint positions), :mod:`~.measures` (support-foot
+slide, joint-speed ratio).
 """
 
 from motionlab.models.moglow.autoregression import (

@@ -11,15 +11,35 @@ different: the conditioning of frame ``t`` contains the pose generated at ``t - 
 frame at a time (:mod:`.sampler`), from the weights that :meth:`LSTMAffineCoupling.frame_weights` hands out.
 """
 
-from __future__ import annotations
-
-from typing import NamedTuple
+from typing import NamedTuple  # TorchScript reads FrameCoupling's annotations: no ``from __future__ import annotations``
 
 import torch
 from torch import Tensor, nn
 
 from motionlab.models.flows.base import FlowLayer, check_cond, check_sequence
 from motionlab.models.flows.coupling import SCALE_OFFSET, affine_forward, affine_inverse, zero_init
+
+
+class FrameCoupling(NamedTuple):
+    """An :class:`LSTMAffineCoupling`'s weights split by what they read (``H`` LSTM units, ``C_a`` untouched
+    and ``C_b`` transformed channels, ``C_c`` conditioning features).
+
+    For one frame, the LSTM's gates are ``x_a @ lstm_input_a.T + cond @ lstm_input_cond.T + h @ lstm_hidden.T
+    + lstm_bias`` and the shift and raw scale are ``h' @ out_hidden + x_a @ out_input_a + cond @ out_input_cond
+    + out_bias`` (``h'`` the updated LSTM output), the sigmoid's offset being folded into ``out_bias``: the
+    layer's arithmetic, rearranged so that a generator can compute the conditioning's parts of all
+    couplings at once. The tensors are copies (a snapshot of the weights), contiguous.
+    """
+
+    lstm_input_a: Tensor     # (4H, C_a)
+    lstm_input_cond: Tensor  # (4H, C_c)
+    lstm_hidden: Tensor      # (4H, H)
+    lstm_bias: Tensor        # (4H,)
+    out_hidden: Tensor       # (H, 2 C_b)
+    out_input_a: Tensor      # (C_a, 2 C_b)
+    out_input_cond: Tensor   # (C_c, 2 C_b)
+    out_bias: Tensor         # (2 C_b,)
+
 
 class LSTMAffineCoupling(FlowLayer):
     """Affine coupling on ``(batch, channels, time)`` whose network is a one-layer LSTM over time.
@@ -76,27 +96,7 @@ class LSTMAffineCoupling(FlowLayer):
         out_weight = self.out.weight.detach().T
         out_bias = self.out.bias.detach().clone()
         out_bias[out_bias.shape[0] // 2:] += self.scale_offset  # the sigmoid's offset, folded into the raw-scale bias
-        return FrameCoupling(lstm_input[:, :n_a], lstm_input[:, n_a:], self.lstm.weight_hh_l0.detach(),
-                             (self.lstm.bias_ih_l0 + self.lstm.bias_hh_l0).detach(), out_weight[:hidden],
-                             out_weight[hidden:hidden + n_a], out_weight[hidden + n_a:], out_bias)
-
-
-class FrameCoupling(NamedTuple):
-    """An :class:`LSTMAffineCoupling`'s weights split by what they read (``H`` LSTM units, ``C_a`` untouched
-    and ``C_b`` transformed channels, ``C_c`` conditioning features).
-
-    For one frame, the LSTM's gates are ``x_a @ lstm_input_a.T + cond @ lstm_input_cond.T + h @ lstm_hidden.T
-    + lstm_bias`` and the shift and raw scale are ``h' @ out_hidden + x_a @ out_input_a + cond @ out_input_cond
-    + out_bias`` (``h'`` the updated LSTM output), the sigmoid's offset being folded into ``out_bias``: the
-    layer's arithmetic, rearranged so that a generator can compute the conditioning's parts of all
-    couplings at once.
-    """
-
-    lstm_input_a: Tensor     # (4H, C_a)
-    lstm_input_cond: Tensor  # (4H, C_c)
-    lstm_hidden: Tensor      # (4H, H)
-    lstm_bias: Tensor        # (4H,)
-    out_hidden: Tensor       # (H, 2 C_b)
-    out_input_a: Tensor      # (C_a, 2 C_b)
-    out_input_cond: Tensor   # (C_c, 2 C_b)
-    out_bias: Tensor         # (2 C_b,)
+        parts = (lstm_input[:, :n_a], lstm_input[:, n_a:], self.lstm.weight_hh_l0.detach(),
+                 (self.lstm.bias_ih_l0 + self.lstm.bias_hh_l0).detach(), out_weight[:hidden],
+                 out_weight[hidden:hidden + n_a], out_weight[hidden + n_a:], out_bias)
+        return FrameCoupling(*(part.clone(memory_format=torch.contiguous_format) for part in parts))

@@ -39,6 +39,7 @@ from motionlab.models.moglow.coupling import LSTMAffineCoupling
 from motionlab.models.moglow.linear import LinearPredictor
 from motionlab.models.moglow.sampler import GenerationPlan, InverseStep, sample_frames
 
+
 class MoGlow(nn.Module):
     """The MoGlow model of :class:`MoGlowConfig` (see the module notes)."""
 
@@ -103,11 +104,9 @@ class MoGlow(nn.Module):
         for k in reversed(range(cfg.steps)):
             actnorm, conv, coupling = layers[3 * k:3 * k + 3]
             matrix = conv.matrices()[1].T * torch.exp(-actnorm.log_scale)[None, :]
-            split = coupling.frame_weights()
-            steps.append(InverseStep(split.lstm_input_a, split.lstm_hidden, split.lstm_bias, split.out_hidden,
-                                     split.out_input_a, split.out_bias, matrix[:coupling.n_a], matrix[coupling.n_a:],
-                                     -actnorm.bias))
-            feature_weights += [split.lstm_input_cond.T, split.out_input_cond]
+            weights = coupling.frame_weights()
+            steps.append(InverseStep(weights, matrix[:coupling.n_a], matrix[coupling.n_a:], -actnorm.bias))
+            feature_weights += [weights.lstm_input_cond.T, weights.out_input_cond]
         weight = torch.cat([self.cond_encoder.weight, self.linear.weight]).T  # (cond_dim, F + P)
         return GenerationPlan(weight[:past].contiguous(), weight[past:].contiguous(),
                               torch.cat([self.cond_encoder.bias, self.linear.bias]),

@@ -17,7 +17,7 @@ and dispatch overhead, while its arithmetic costs well under one, so the loop is
   all couplings, instead of a concatenation and larger products in each.
 * The loop itself, :func:`generate_frames`, runs in TorchScript (compiled once per process), with no
   Python interpreter between the operations; the same function also runs as plain Python
-  (``scripted=False``, for reading and debugging), with the same result.
+  (``scripted=False``, for reading and debugging), with the same result up to float rounding.
 """
 
 import functools
@@ -28,31 +28,26 @@ from typing import List, NamedTuple  # TorchScript reads these annotations: no `
 import torch
 from torch import Tensor
 
+from motionlab.models.moglow.coupling import FrameCoupling
+
 
 class InverseStep(NamedTuple):
-    """One Glow step's weights for inverting a frame ``(B, P)``, the untouched half ``x_a`` being ``(B, C_a)``.
+    """One Glow step's weights for inverting a frame ``(B, P)`` whose untouched half ``x_a`` is ``(B, C_a)``.
 
-    The coupling's LSTM gates are ``x_a @ lstm_input.T + h @ lstm_hidden.T + lstm_bias`` plus the
-    conditioning features' part (from :attr:`GenerationPlan.feature_weight`); its shift and raw scale
-    ``(B, 2 C_b)`` are ``h @ out_hidden + x_a @ out_input + out_bias`` plus the features' part, the sigmoid's
-    offset folded into the raw-scale half of ``out_bias``. The step's ActNorm and 1x1 convolution are undone
-    by ``x = x_a @ matrix_a + x_b @ matrix_b + shift``.
+    ``coupling`` holds the coupling's weights (:class:`~.coupling.FrameCoupling`; the loop reads its
+    conditioning features' parts through :attr:`GenerationPlan.feature_weight`). The step's ActNorm and 1x1
+    convolution are undone by ``x = x_a @ matrix_a + x_b @ matrix_b + shift``.
     """
 
-    lstm_input: Tensor   # (4H, C_a)
-    lstm_hidden: Tensor  # (4H, H)
-    lstm_bias: Tensor    # (4H,)
-    out_hidden: Tensor   # (H, 2 C_b)
-    out_input: Tensor    # (C_a, 2 C_b)
-    out_bias: Tensor     # (2 C_b,)
-    matrix_a: Tensor     # (C_a, P)
-    matrix_b: Tensor     # (C_b, P)
-    shift: Tensor        # (P,)
+    coupling: FrameCoupling
+    matrix_a: Tensor  # (C_a, P)
+    matrix_b: Tensor  # (C_b, P)
+    shift: Tensor     # (P,)
 
 
 class GenerationPlan(NamedTuple):
     """A MoGlow's weights arranged for :func:`generate_frames` (``F`` conditioning features, ``P`` pose channels,
-    ``tau`` history frames, ``C`` control channels, ``K`` steps).
+    ``tau`` history frames, ``C`` control channels, ``K`` steps); a snapshot, built again after training.
 
     The conditioning encoder and the linear predictor read the same vector ``c_t``, so their weights are
     side by side: ``[features | mean] = past @ past_weight + controls @ control_weight + bias`` ``(B, F + P)``.
@@ -81,27 +76,26 @@ def generate_frames(plan: GenerationPlan, control_part: Tensor, past: Tensor, ke
     """
     batch, frames, pose_dim = noise.shape
     features = plan.feature_weight.shape[0]
-    n_a = plan.steps[0].lstm_input.shape[1]
-    hidden = plan.steps[0].lstm_hidden.shape[1]
-    gates, width = 4 * hidden, 4 * hidden + 2 * (pose_dim - n_a)
+    n_a = plan.steps[0].matrix_a.shape[0]
+    hidden = plan.steps[0].coupling.lstm_hidden.shape[1]
+    gates, step_width = 4 * hidden, 4 * hidden + 2 * (pose_dim - n_a)
     h = [noise.new_zeros(batch, hidden) for _ in plan.steps]
     c = [noise.new_zeros(batch, hidden) for _ in plan.steps]
     poses: List[Tensor] = []
     for t in range(frames):
-        both = torch.addmm(control_part[:, t], past * keep[:, t], plan.past_weight)
-        by_step = torch.mm(both[:, :features], plan.feature_weight)
+        features_and_mean = torch.addmm(control_part[:, t], past * keep[:, t], plan.past_weight)
+        features_by_step = torch.mm(features_and_mean[:, :features], plan.feature_weight)
         x = noise[:, t]
         for k, step in enumerate(plan.steps):
-            first = k * width
+            weights, offset = step.coupling, k * step_width
             x_a = x[:, :n_a]
-            h[k], c[k] = torch.lstm_cell(x_a, (h[k], c[k]), step.lstm_input, step.lstm_hidden,
-                                         by_step[:, first:first + gates], step.lstm_bias)
-            params = torch.addmm(step.out_bias, h[k], step.out_hidden).addmm_(x_a, step.out_input)
-            params = params.add_(by_step[:, first + gates:first + width])
-            shift, raw_scale = params.chunk(2, dim=1)
+            h[k], c[k] = torch.lstm_cell(x_a, (h[k], c[k]), weights.lstm_input_a, weights.lstm_hidden,
+                                         features_by_step[:, offset:offset + gates], weights.lstm_bias)
+            params = torch.addmm(weights.out_bias, h[k], weights.out_hidden).addmm_(x_a, weights.out_input_a)
+            shift, raw_scale = params.add_(features_by_step[:, offset + gates:offset + step_width]).chunk(2, dim=1)
             x_b = x[:, n_a:].div(torch.sigmoid(raw_scale)).sub_(shift)
             x = torch.addmm(step.shift, x_a, step.matrix_a).addmm_(x_b, step.matrix_b)
-        pose = both[:, features:].addcmul(x, plan.residual_scale)
+        pose = features_and_mean[:, features:].addcmul(x, plan.residual_scale)
         poses.append(pose)
         past = torch.cat([past[:, pose_dim:], pose], dim=1)
     return torch.stack(poses, dim=1)
@@ -117,6 +111,29 @@ def _scripted_loop() -> Callable[..., Tensor]:
         return torch.jit.script(generate_frames)
 
 
+def _check_inputs(plan: GenerationPlan, control: Tensor, seed_pose: Tensor, keep: Tensor | None,
+                  noise: Tensor) -> None:
+    """Raise ``ValueError`` unless the inputs' shapes and dtype fit each other and the plan."""
+    dims_ok = control.dim() == 3 and seed_pose.dim() == 3 and noise.dim() == 3
+    if dims_ok:
+        batch, history, pose_dim = seed_pose.shape
+        frames = noise.shape[1]
+        dims_ok = (control.shape[:2] == (batch, history + frames) and noise.shape == (batch, frames, pose_dim)
+                   and (keep is None or keep.shape == (batch, frames, history))
+                   and plan.past_weight.shape[0] == history * pose_dim and plan.residual_scale.shape[0] == pose_dim
+                   and plan.control_weight.shape[0] == (history + 1) * control.shape[2])
+    if not dims_ok:
+        raise ValueError(f"sample_frames: shapes disagree: control {tuple(control.shape)} must be (B, tau + N, C), "
+                         f"seed_pose {tuple(seed_pose.shape)} (B, tau, P), noise {tuple(noise.shape)} (B, N, P), keep "
+                         f"{None if keep is None else tuple(keep.shape)} (B, N, tau), with the plan's tau * P = "
+                         f"{plan.past_weight.shape[0]}, P = {plan.residual_scale.shape[0]}, (tau + 1) * C = "
+                         f"{plan.control_weight.shape[0]}")
+    dtypes = {x.dtype for x in (control, seed_pose, noise, plan.bias)}
+    if len(dtypes) != 1:
+        raise ValueError(f"sample_frames: control, seed_pose, noise and the model must share one dtype, got "
+                         f"{control.dtype}, {seed_pose.dtype}, {noise.dtype} and {plan.bias.dtype}")
+
+
 def sample_frames(plan: GenerationPlan, control: Tensor, seed_pose: Tensor, keep: Tensor | None, noise: Tensor,
                   scripted: bool = True) -> Tensor:
     """Generate ``N`` poses ``(B, N, P)`` after the seed (standard units; values checked by the caller).
@@ -128,18 +145,16 @@ def sample_frames(plan: GenerationPlan, control: Tensor, seed_pose: Tensor, keep
         keep: history dropout flags ``(B, N, tau)`` (1 keep, 0 drop), or ``None`` for no dropout.
         noise: the latents ``(B, N, P)``.
         scripted: run the TorchScript-compiled loop (``False``: the same function as plain Python).
+
+    Raises ``ValueError`` when the shapes or dtypes disagree with each other or with the plan.
     """
+    _check_inputs(plan, control, seed_pose, keep, noise)
     batch, history, pose_dim = seed_pose.shape
     frames = noise.shape[1]
-    if control.shape[:2] != (batch, history + frames) or noise.shape != (batch, frames, pose_dim) or (
-            keep is not None and keep.shape != (batch, frames, history)):
-        raise ValueError(f"sample_frames: shapes disagree: control {tuple(control.shape)} must be (B, tau + N, C), "
-                         f"seed_pose {tuple(seed_pose.shape)} (B, tau, P), noise {tuple(noise.shape)} (B, N, P), keep "
-                         f"{None if keep is None else tuple(keep.shape)} (B, N, tau)")
     windows = control.unfold(1, history + 1, 1).transpose(2, 3).reshape(batch * frames, -1)  # (B N, (tau+1) C)
     control_part = torch.addmm(plan.bias, windows, plan.control_weight).view(batch, frames, -1)
     if keep is None:
         keep = noise.new_ones(batch, frames, history)
     loop = _scripted_loop() if scripted else generate_frames
     return loop(plan, control_part, seed_pose.reshape(batch, history * pose_dim),
-                keep.repeat_interleave(pose_dim, dim=2), noise)
+                keep.to(noise.dtype).repeat_interleave(pose_dim, dim=2), noise)
