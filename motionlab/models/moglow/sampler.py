@@ -111,25 +111,28 @@ def _scripted_loop() -> Callable[..., Tensor]:
         return torch.jit.script(generate_frames)
 
 
+def _shapes_fit(plan: GenerationPlan, control: Tensor, seed_pose: Tensor, keep: Tensor | None, noise: Tensor) -> bool:
+    """Whether the inputs' shapes fit each other and the plan (see :func:`sample_frames`)."""
+    if not control.dim() == seed_pose.dim() == noise.dim() == 3:
+        return False
+    batch, history, pose_dim = seed_pose.shape
+    frames = noise.shape[1]
+    return (control.shape[:2] == (batch, history + frames) and noise.shape == (batch, frames, pose_dim)
+            and (keep is None or keep.shape == (batch, frames, history))
+            and plan.past_weight.shape[0] == history * pose_dim and plan.residual_scale.shape[0] == pose_dim
+            and plan.control_weight.shape[0] == (history + 1) * control.shape[2])
+
+
 def _check_inputs(plan: GenerationPlan, control: Tensor, seed_pose: Tensor, keep: Tensor | None,
                   noise: Tensor) -> None:
     """Raise ``ValueError`` unless the inputs' shapes and dtype fit each other and the plan."""
-    dims_ok = control.dim() == 3 and seed_pose.dim() == 3 and noise.dim() == 3
-    if dims_ok:
-        batch, history, pose_dim = seed_pose.shape
-        frames = noise.shape[1]
-        dims_ok = (control.shape[:2] == (batch, history + frames) and noise.shape == (batch, frames, pose_dim)
-                   and (keep is None or keep.shape == (batch, frames, history))
-                   and plan.past_weight.shape[0] == history * pose_dim and plan.residual_scale.shape[0] == pose_dim
-                   and plan.control_weight.shape[0] == (history + 1) * control.shape[2])
-    if not dims_ok:
+    if not _shapes_fit(plan, control, seed_pose, keep, noise):
         raise ValueError(f"sample_frames: shapes disagree: control {tuple(control.shape)} must be (B, tau + N, C), "
                          f"seed_pose {tuple(seed_pose.shape)} (B, tau, P), noise {tuple(noise.shape)} (B, N, P), keep "
                          f"{None if keep is None else tuple(keep.shape)} (B, N, tau), with the plan's tau * P = "
                          f"{plan.past_weight.shape[0]}, P = {plan.residual_scale.shape[0]}, (tau + 1) * C = "
                          f"{plan.control_weight.shape[0]}")
-    dtypes = {x.dtype for x in (control, seed_pose, noise, plan.bias)}
-    if len(dtypes) != 1:
+    if len({x.dtype for x in (control, seed_pose, noise, plan.bias)}) != 1:
         raise ValueError(f"sample_frames: control, seed_pose, noise and the model must share one dtype, got "
                          f"{control.dtype}, {seed_pose.dtype}, {noise.dtype} and {plan.bias.dtype}")
 
