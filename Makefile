@@ -1,6 +1,7 @@
 # motionlab: two commands do everything (`make course`, `make test`); `make bench` measures speed.
 # Each target bootstraps .venv (editable install with pinned dependencies) when it is missing or
-# when pyproject.toml changed since the last install.
+# when pyproject.toml changed since the last install. `make test` and `make course` keep their output in
+# build/logs/<target>-<time>.log (the newest ten of each; motionlab/runlog.py).
 PYTHON ?= python3
 VENV   := .venv
 BIN    := $(VENV)/bin
@@ -16,10 +17,12 @@ $(STAMP): pyproject.toml
 	@touch $@
 
 course: $(STAMP)
-	MOTIONLAB_PROFILE=full $(BIN)/python -m motionlab.course
+	MOTIONLAB_PROFILE=full $(BIN)/python -m motionlab.runlog course -- \
+		$(BIN)/python -m motionlab.course
 
 test: $(STAMP)
-	MOTIONLAB_PROFILE=quick $(BIN)/python -m pytest -n 2 --dist loadscope --nbval-sanitize-with tests/nbval_sanitize.cfg
+	MOTIONLAB_PROFILE=quick $(BIN)/python -m motionlab.runlog test -- \
+		$(BIN)/python -m pytest -n 2 --dist loadscope --nbval-sanitize-with tests/nbval_sanitize.cfg
 
 bench: $(STAMP)
 	$(BIN)/python -m motionlab.bench

@@ -8,6 +8,13 @@ budget, and the metrics and claims tables of ``results.json``.
 A chapter that fails (an error, or a claim that stopped holding in the full profile) does not stop the
 build: the remaining chapters still run so the report shows everything, and the command exits non-zero.
 
+Each cell may run at most :data:`CELL_BUDGET_FACTOR` times its chapter's whole budget
+(:func:`cell_limits`); a cell past that fails its chapter. A kernel that stops answering (alive and idle,
+but a request never started or a finished cell's reply never came; see :mod:`motionlab.execution`) is
+killed within half a minute and the chapter is executed once more in a fresh kernel: trained models are
+cached, so a second execution costs little. The retry is recorded in ``results.json`` (the chapter's
+``"retries"``) and shown in the report; a second hang fails the chapter with the cell and the diagnosis.
+
 Usage: ``python -m motionlab.course [--only 01 03] [--notebooks DIR]``.
 """
 
@@ -16,17 +23,15 @@ from __future__ import annotations
 import argparse
 import html
 import sys
-import time
-import traceback
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
 import nbformat
-from nbclient import NotebookClient
 from nbconvert import HTMLExporter
 
 from motionlab import config
+from motionlab.execution import CellLimits, execute_notebook, read_notebook
 from motionlab.results import load_results, results_path, update_notebook
 
 #: Wall-clock budgets per chapter in seconds (design notes), as (full, quick).
@@ -41,7 +46,19 @@ BUDGETS: dict[str, tuple[float, float]] = {
     "08": (180, 40),
 }
 
-CELL_TIMEOUT_SECONDS = 1200
+#: A cell may take at most this many times its chapter's budget (a chapter's slowest cell trains for well
+#: under its whole budget; a machine 30 % slower than the reference one still stays clear of the limit).
+CELL_BUDGET_FACTOR = 1.5
+
+#: Cell limit of a chapter without a budget (e.g. a notebook a user adds), in seconds.
+DEFAULT_CELL_SECONDS = 600.0
+
+#: How long a kernel may take to start a request or to send a finished cell's reply (seconds); see
+#: :class:`~motionlab.execution.CellLimits`.
+ANSWER_SECONDS = 30.0
+
+#: How many times a chapter whose kernel stopped answering is executed again in a fresh kernel.
+HANG_RETRIES = 1
 
 
 @dataclass(frozen=True)
@@ -51,6 +68,8 @@ class ChapterRun:
     name: str
     seconds: float
     error: str | None
+    #: One line per execution that was abandoned because the kernel stopped answering.
+    retries: tuple[str, ...] = ()
 
 
 def chapter_notebooks(directory: Path) -> list[Path]:
@@ -69,29 +88,42 @@ def budget_seconds(name: str) -> float | None:
     return pair[1] if config.is_quick() else pair[0]
 
 
+def cell_limits(name: str) -> CellLimits:
+    """The time limits for the cells of chapter ``name`` in the active profile (:data:`CELL_BUDGET_FACTOR`
+    times its budget)."""
+    budget = budget_seconds(name)
+    cell_seconds = DEFAULT_CELL_SECONDS if budget is None else CELL_BUDGET_FACTOR * budget
+    return CellLimits(cell_seconds=cell_seconds, answer_seconds=ANSWER_SECONDS)
+
+
+def _describe(error: BaseException, cell: int | None) -> str:
+    where = "" if cell is None else f"cell {cell}: "
+    text = str(error).strip()
+    return where + f"{type(error).__name__}: {text.splitlines()[-1] if text else ''}"[:2000]
+
+
 def execute_chapter(path: Path, out_dir: Path) -> ChapterRun:
-    """Execute one notebook; write ``<name>.ipynb`` and ``<name>.html`` to ``out_dir`` (even on failure)."""
+    """Execute one notebook; write ``<name>.ipynb`` and ``<name>.html`` to ``out_dir`` (even on failure).
+
+    A kernel that stops answering is killed and the chapter executed again (:data:`HANG_RETRIES` times);
+    the seconds reported are those of the last execution, the abandoned ones are listed in ``retries``.
+    """
     name = path.stem
-    notebook = nbformat.read(path, as_version=4)
-    client = NotebookClient(
-        notebook,
-        timeout=CELL_TIMEOUT_SECONDS,
-        kernel_name="python3",
-        resources={"metadata": {"path": str(path.parent)}},
-        store_widget_state=True,
-    )
-    error = None
-    start = time.perf_counter()
-    try:
-        client.execute()
-    except Exception as exc:  # the report shows what failed; the build's exit code says it failed
-        error = f"{type(exc).__name__}: {exc}"
-    seconds = time.perf_counter() - start
-    update_notebook(name, lambda entry: entry.update(seconds=round(seconds, 2)))
-    nbformat.write(notebook, out_dir / f"{name}.ipynb")
-    body, _ = HTMLExporter(template_name="lab").from_notebook_node(notebook)
+    retries: list[str] = []
+    while True:
+        execution = execute_notebook(read_notebook(path), path.parent, cell_limits(name))
+        if not execution.hung or len(retries) >= HANG_RETRIES:
+            break
+        retries.append(f"{_describe(execution.error, execution.failed_cell)} (after {execution.seconds:.0f} s)")
+        print(f"[course] {name}: the kernel stopped answering; executing the chapter again in a fresh kernel "
+              f"({retries[-1]})", flush=True)
+    error = None if execution.error is None else _describe(execution.error, execution.failed_cell)
+    seconds = execution.seconds
+    update_notebook(name, lambda entry: entry.update(seconds=round(seconds, 2), retries=retries))
+    nbformat.write(execution.notebook, out_dir / f"{name}.ipynb")
+    body, _ = HTMLExporter(template_name="lab").from_notebook_node(execution.notebook)
     (out_dir / f"{name}.html").write_text(body, encoding="utf-8")
-    return ChapterRun(name, seconds, error)
+    return ChapterRun(name, seconds, error, tuple(retries))
 
 
 def _claim_rows(results: dict[str, Any]) -> str:
@@ -132,6 +164,8 @@ def write_index(out_dir: Path, runs: list[ChapterRun]) -> Path:
         budget = budget_seconds(run.name)
         over = budget is not None and run.seconds > budget
         status = "failed: " + html.escape(run.error) if run.error else ("over budget" if over else "ok")
+        if run.retries:
+            status += "".join(f"<br>executed again after: {html.escape(retry)}" for retry in run.retries)
         css = "bad" if run.error or over else "ok"
         chapter_rows.append(
             f"<tr class='{css}'><td><a href='{run.name}.html'>{html.escape(run.name)}</a></td>"
@@ -172,15 +206,30 @@ does not hold here after investigation; the chapter explains why.</p>
     return index
 
 
+def select_chapters(notebook_dir: Path, only: list[str] | None = None) -> list[Path]:
+    """The chapters of ``notebook_dir`` in course order: all, or those whose two-digit number is in ``only``.
+
+    Raises ``ValueError`` for a number that is not two digits or matches no chapter, ``FileNotFoundError``
+    when the directory holds no chapter."""
+    if not notebook_dir.is_dir():
+        raise FileNotFoundError(f"--notebooks {notebook_dir}: no such directory")
+    chapters = chapter_notebooks(notebook_dir)
+    if not only:
+        return chapters
+    numbers = {path.stem[:2] for path in chapters}
+    for number in only:
+        if len(number) != 2 or not number.isdigit():
+            raise ValueError(f"--only takes two-digit chapter numbers such as 01 or 07, got {number!r}")
+        if number not in numbers:
+            raise ValueError(f"--only {number}: no chapter {number} in {notebook_dir} (there are {', '.join(sorted(numbers))})")
+    return [path for path in chapters if path.stem[:2] in only]
+
+
 def build(notebook_dir: Path, only: list[str] | None = None) -> list[ChapterRun]:
     """Execute the chapters (all, or those whose number is in ``only``) and write the report."""
+    chapters = select_chapters(notebook_dir, only)
     out_dir = config.course_dir()
     out_dir.mkdir(parents=True, exist_ok=True)
-    chapters = chapter_notebooks(notebook_dir)
-    if only:
-        chapters = [p for p in chapters if p.stem[:2] in only]
-        if not chapters:
-            raise SystemExit(f"no chapter matches --only {only}")
     config.set_threads()
     runs = []
     for path in chapters:
@@ -196,15 +245,18 @@ def build(notebook_dir: Path, only: list[str] | None = None) -> list[ChapterRun]
 
 
 def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    parser.add_argument("--notebooks", type=Path, default=config.REPO_ROOT / "notebooks")
-    parser.add_argument("--only", nargs="*", help="chapter numbers to run, e.g. 01 03")
+    parser = argparse.ArgumentParser(prog="python -m motionlab.course", description=__doc__,
+                                     formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("--notebooks", type=Path, default=config.REPO_ROOT / "notebooks",
+                        help="directory of the chapters NN_name.ipynb (default: the course's)")
+    parser.add_argument("--only", nargs="+", metavar="NN", help="chapter numbers to run, e.g. 01 03")
     args = parser.parse_args(argv)
     try:
-        runs = build(args.notebooks, args.only)
-    except Exception:
-        traceback.print_exc()
-        return 1
+        config.profile()
+        select_chapters(args.notebooks, args.only)
+    except (OSError, ValueError) as exc:  # a bad argument or setting: one line, no traceback
+        parser.error(str(exc))
+    runs = build(args.notebooks, args.only)
     failed = [run.name for run in runs if run.error]
     if failed:
         print(f"[course] failed chapters: {', '.join(failed)}", file=sys.stderr)

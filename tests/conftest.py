@@ -1,9 +1,20 @@
-"""Shared test settings: quick profile, one torch thread."""
+"""Shared test settings: quick profile, one torch thread, and each notebook cell's time limit under nbval."""
 
 import os
+from pathlib import Path
 
 os.environ.setdefault("MOTIONLAB_PROFILE", "quick")
 
 from motionlab import config  # noqa: E402
 
 config.set_threads()
+
+
+def pytest_runtest_setup(item) -> None:
+    """A notebook cell under nbval may run as long as the course build would let it (1.5 times its chapter's
+    quick budget), not nbval's default of 2,000 s: a kernel that stops answering fails the cell within a
+    minute, naming it (nbval then stops the kernel, and the chapter's later cells fail at once)."""
+    if type(item).__name__ == "IPyNbCell":
+        from motionlab.course import cell_limits
+
+        item.config.option.nbval_cell_timeout = cell_limits(Path(str(item.fspath)).stem).cell_seconds

@@ -16,6 +16,8 @@ import atexit
 import multiprocessing
 import os
 import signal
+import threading
+import time
 from collections.abc import Callable, Sequence
 from concurrent.futures import FIRST_COMPLETED, Future, ProcessPoolExecutor, wait
 from concurrent.futures.process import BrokenProcessPool
@@ -52,18 +54,34 @@ def _check_processes(processes: int, where: str) -> None:
         raise ValueError(f"{where}: processes must be a positive integer, got {processes!r}")
 
 
-def _ignore_interrupts() -> None:
-    """Worker start-up: Ctrl-C (SIGINT, which Jupyter sends to the kernel's whole process group, and again when it
-    shuts the kernel down) is for the notebook, not for idle workers; a training run still catches it at a step
-    boundary (:func:`~motionlab.train.train_or_load` installs its own handler while it runs)."""
+#: How often a worker checks that the process that started it is still there (seconds).
+PARENT_CHECK_SECONDS = 0.5
+
+
+def _exit_with_parent(parent: int) -> None:
+    """Body of a worker's watch thread: end the worker as soon as ``parent`` is gone (the worker is then
+    re-parented, so its parent id changes). A kernel that is killed runs no clean-up of its own, and its
+    idle workers would otherwise wait on their task queue for ever."""
+    while os.getppid() == parent:
+        time.sleep(PARENT_CHECK_SECONDS)
+    os._exit(1)
+
+
+def _start_worker(parent: int) -> None:
+    """Worker start-up. Ctrl-C (SIGINT, which Jupyter sends to the kernel's whole process group, and again when
+    it shuts the kernel down) is for the notebook, not for idle workers; a training run still catches it at a
+    step boundary (:func:`~motionlab.train.train_or_load` installs its own handler while it runs). And the
+    worker ends with ``parent``, the process that started it, however that one ends (:func:`_exit_with_parent`)."""
     signal.signal(signal.SIGINT, signal.SIG_IGN)
+    threading.Thread(target=_exit_with_parent, args=(parent,), name="exit-with-parent", daemon=True).start()
 
 
 def worker_pool(processes: int = 2) -> ProcessPoolExecutor:
-    """A pool of ``processes`` fresh (``spawn``) worker processes; submit work with :func:`submit`."""
+    """A pool of ``processes`` fresh (``spawn``) worker processes that end with this process; submit work with
+    :func:`submit`."""
     _check_processes(processes, "worker_pool")
     return ProcessPoolExecutor(max_workers=processes, mp_context=multiprocessing.get_context("spawn"),
-                               initializer=_ignore_interrupts)
+                               initializer=_start_worker, initargs=(os.getpid(),))
 
 
 def shared_pool(processes: int = 2) -> ProcessPoolExecutor:

@@ -1,0 +1,223 @@
+"""Executing a notebook headless, with a time limit per cell and a watch for a kernel that stops answering.
+
+:func:`execute_notebook` runs every code cell of a notebook in a fresh kernel (nbclient), as ``make course``
+and the stress harness (:mod:`motionlab.stress`) do. Two things can keep a cell from finishing:
+
+* **The cell is slow**: it runs past its limit (:class:`CellLimits.cell_seconds`), which the course derives
+  from the chapter's budget, so a cell that should take seconds never gets twenty minutes. This raises
+  nbclient's ``CellTimeoutError``.
+* **The kernel stopped answering**: it is alive and idle, but the request never started (no message on
+  IOPub carries the request as its parent), or the cell finished (IOPub said ``idle``) but its reply never
+  came. Waiting longer cannot help: after :class:`CellLimits.answer_seconds` this raises
+  :class:`KernelNotAnswering`, naming the cell and what was missing, with a short diagnosis (is the process
+  alive, did it use CPU, does it still answer on its control channel).
+
+In both cases the kernel is killed, not asked to shut down, and the executed part of the notebook is kept.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import os
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+from queue import Empty
+from typing import Any
+
+import nbformat
+from nbclient import NotebookClient
+from nbclient.exceptions import CellTimeoutError, DeadKernelError
+from nbclient.util import ensure_async
+from nbformat import NotebookNode
+
+#: How often the reply channel is polled while a cell runs (seconds).
+POLL_SECONDS = 1.0
+
+
+@dataclass(frozen=True)
+class CellLimits:
+    """Time limits for the cells of one notebook.
+
+    ``cell_seconds``: the longest any one cell may run. ``answer_seconds``: how long the kernel may take
+    to start a request it was sent, or to send the reply of a cell it has finished; a healthy kernel does
+    either in milliseconds, so a few tens of seconds only ever trip on a kernel that stopped answering.
+    """
+
+    cell_seconds: float
+    answer_seconds: float = 30.0
+
+    def __post_init__(self) -> None:
+        for name in ("cell_seconds", "answer_seconds"):
+            value = getattr(self, name)
+            if isinstance(value, bool) or not isinstance(value, (int, float)) or not 0 < value < float("inf"):
+                raise ValueError(f"CellLimits.{name} must be a positive finite number of seconds, got {value!r}")
+
+
+class KernelNotAnswering(RuntimeError):
+    """The kernel is alive but no longer answers a request: which cell, what was missing, and a diagnosis."""
+
+    def __init__(self, cell_index: int, missing: str, waited: float, diagnosis: dict[str, Any]) -> None:
+        self.cell_index = cell_index
+        self.missing = missing
+        self.waited = waited
+        self.diagnosis = diagnosis
+        super().__init__(
+            f"cell {cell_index}: the kernel stopped answering ({missing} after {waited:.0f} s; "
+            + ", ".join(f"{key} {value}" for key, value in diagnosis.items()) + ")"
+        )
+
+
+@dataclass
+class Execution:
+    """What :func:`execute_notebook` did: the notebook with the outputs it got, the time, and the failure."""
+
+    notebook: NotebookNode
+    seconds: float
+    error: BaseException | None = None
+    #: The index of the cell that failed (None when none did, or the failure was outside a cell).
+    failed_cell: int | None = None
+    notes: list[str] = field(default_factory=list)
+
+    @property
+    def hung(self) -> bool:
+        """Whether the kernel stopped answering."""
+        return isinstance(self.error, KernelNotAnswering)
+
+
+def _process_cpu_seconds(pid: int) -> float | None:
+    """User plus system CPU time of a process (Linux ``/proc``), or None where that cannot be read."""
+    try:
+        fields = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()
+    except (OSError, IndexError):
+        return None
+    return (int(fields[11]) + int(fields[12])) / os.sysconf("SC_CLK_TCK")
+
+
+class WatchedClient(NotebookClient):
+    """nbclient's client with :class:`CellLimits`: polls the reply in short steps and, between them, checks
+    that the kernel started the request and, once it finished the cell, that the reply arrives."""
+
+    def __init__(self, nb: NotebookNode, limits: CellLimits, **kw: Any) -> None:
+        super().__init__(nb, timeout=int(limits.cell_seconds), **kw)
+        self.limits = limits
+        #: For each request: when its first IOPub message came, and when IOPub said it is idle.
+        self._first_seen: dict[str, float] = {}
+        self._idle_seen: dict[str, float] = {}
+        self._current_cell = -1
+
+    def process_message(self, msg: dict[str, Any], cell: NotebookNode, cell_index: int) -> Any:
+        parent = msg.get("parent_header", {}).get("msg_id")
+        now = time.monotonic()
+        self._first_seen.setdefault(parent, now)
+        if msg.get("msg_type") == "status" and msg.get("content", {}).get("execution_state") == "idle":
+            self._idle_seen.setdefault(parent, now)
+        return super().process_message(msg, cell, cell_index)
+
+    async def async_execute_cell(self, cell: NotebookNode, cell_index: int, *args: Any, **kwargs: Any) -> Any:
+        self._current_cell = cell_index
+        return await super().async_execute_cell(cell, cell_index, *args, **kwargs)
+
+    async def _async_poll_for_reply(  # nbclient 0.11's reply loop, polled in steps of POLL_SECONDS
+        self,
+        msg_id: str,
+        cell: NotebookNode,
+        timeout: int | None,
+        task_poll_output_msg: asyncio.Future[Any],
+        task_poll_kernel_alive: asyncio.Future[Any],
+    ) -> dict[str, Any]:
+        assert self.kc is not None
+        sent = time.monotonic()
+        while True:
+            try:
+                msg = await ensure_async(self.kc.shell_channel.get_msg(timeout=POLL_SECONDS))
+            except Empty:
+                now = time.monotonic()
+                await self._async_check_alive()
+                missing, since = self._missing(msg_id, sent, now)
+                if missing is not None:
+                    task_poll_kernel_alive.cancel()
+                    diagnosis = await self._diagnose()
+                    self.shutdown_kernel = "immediate"
+                    raise KernelNotAnswering(self._current_cell, missing, now - since, diagnosis) from None
+                if timeout is not None and now - sent > timeout:
+                    task_poll_kernel_alive.cancel()
+                    self.shutdown_kernel = "immediate"
+                    raise CellTimeoutError.error_from_timeout_and_cell(
+                        f"Cell execution timed out (limit {timeout} s)", timeout, cell
+                    ) from None
+                continue
+            if msg["parent_header"].get("msg_id") != msg_id:
+                continue
+            try:
+                await asyncio.wait_for(task_poll_output_msg, self.iopub_timeout)
+            except (asyncio.TimeoutError, Empty):
+                self.log.warning("Timeout waiting for IOPub output")
+            task_poll_kernel_alive.cancel()
+            return msg
+
+    def _missing(self, msg_id: str, sent: float, now: float) -> tuple[str | None, float]:
+        """What the kernel owes for request ``msg_id`` past :attr:`CellLimits.answer_seconds`, and since when."""
+        answer = self.limits.answer_seconds
+        if msg_id not in self._first_seen:
+            return ("the request never started: no IOPub message" if now - sent > answer else None), sent
+        idle = self._idle_seen.get(msg_id)
+        if idle is not None and now - idle > answer:
+            return "the cell finished (IOPub idle) but its reply never came", idle
+        return None, sent
+
+    async def _diagnose(self) -> dict[str, Any]:
+        """A short diagnosis of a kernel that stopped answering: its CPU use over one second and whether it
+        still answers a ``kernel_info_request`` on its control channel."""
+        assert self.km is not None and self.kc is not None
+        diagnosis: dict[str, Any] = {}
+        pid = getattr(getattr(self.km, "provisioner", None), "pid", None)
+        if pid is not None:
+            before = _process_cpu_seconds(pid)
+            await asyncio.sleep(1.0)
+            after = _process_cpu_seconds(pid)
+            if before is not None and after is not None:
+                diagnosis["cpu_seconds_in_1s"] = round(after - before, 3)
+        try:
+            request = self.kc.session.msg("kernel_info_request")
+            self.kc.control_channel.send(request)
+            deadline = time.monotonic() + 5.0
+            answered = False
+            while time.monotonic() < deadline and not answered:
+                reply = await ensure_async(self.kc.control_channel.get_msg(timeout=1.0))
+                answered = reply["parent_header"].get("msg_id") == request["header"]["msg_id"]
+        except Empty:
+            answered = False
+        diagnosis["control_answers"] = answered
+        return diagnosis
+
+
+def execute_notebook(
+    notebook: NotebookNode, cwd: Path, limits: CellLimits, *, store_widget_state: bool = True
+) -> Execution:
+    """Execute ``notebook`` (in place) in a fresh ``python3`` kernel started in ``cwd``.
+
+    Never raises for what happens inside the notebook: an error, a cell over its limit, a dead kernel or one
+    that stopped answering are returned as :attr:`Execution.error` with the index of the cell.
+    """
+    client = WatchedClient(
+        notebook,
+        limits,
+        kernel_name="python3",
+        resources={"metadata": {"path": str(cwd)}},
+        store_widget_state=store_widget_state,
+    )
+    start = time.perf_counter()
+    error: BaseException | None = None
+    try:
+        client.execute()
+    except (Exception, DeadKernelError) as exc:  # reported to the caller, with the cell
+        error = exc
+    seconds = time.perf_counter() - start
+    failed = client._current_cell if error is not None and client._current_cell >= 0 else None
+    return Execution(notebook, seconds, error, failed)
+
+
+def read_notebook(path: Path) -> NotebookNode:
+    """A notebook file as nbformat v4."""
+    return nbformat.read(path, as_version=4)

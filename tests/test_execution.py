@@ -1,0 +1,126 @@
+"""Executing notebooks: a cell over its limit fails, a kernel that stops answering is caught within seconds,
+named and killed, and the course build executes such a chapter once more in a fresh kernel."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import nbformat
+import pytest
+
+from motionlab import course
+from motionlab.execution import CellLimits, KernelNotAnswering, execute_notebook
+
+#: Makes the kernel drop the reply of every execute request from this one on (as a lost reply would look).
+DROP_REPLIES = """\
+kernel = get_ipython().kernel
+send = kernel.session.send
+def send_but_execute_replies(stream, msg_or_type, *args, **kwargs):
+    kind = msg_or_type if isinstance(msg_or_type, str) else msg_or_type["header"]["msg_type"]
+    if kind == "execute_reply":
+        return {"content": {"status": "ok"}}
+    return send(stream, msg_or_type, *args, **kwargs)
+kernel.session.send = send_but_execute_replies"""
+
+#: Makes the kernel ignore every later shell request (as a request that is never read would look).
+IGNORE_REQUESTS = """\
+kernel = get_ipython().kernel
+async def ignore(*args, **kwargs):
+    return None
+kernel.dispatch_shell = ignore"""
+
+
+def _notebook(*sources: str) -> nbformat.NotebookNode:
+    notebook = nbformat.v4.new_notebook()
+    notebook.cells = [nbformat.v4.new_code_cell(source) for source in sources]
+    notebook.metadata["kernelspec"] = {"name": "python3", "display_name": "Python 3", "language": "python"}
+    return notebook
+
+
+@pytest.mark.parametrize(("breaker", "missing", "cell"), [(DROP_REPLIES, "reply never came", 1),
+                                                          (IGNORE_REQUESTS, "never started", 2)])
+def test_a_kernel_that_stops_answering_is_named_diagnosed_and_killed(tmp_path: Path, breaker: str, missing: str,
+                                                                     cell: int):
+    limits = CellLimits(cell_seconds=120, answer_seconds=2)
+    execution = execute_notebook(_notebook("print('fine')", breaker, "print('never answered')"), tmp_path, limits)
+    assert execution.hung and execution.failed_cell == cell
+    error = execution.error
+    assert isinstance(error, KernelNotAnswering) and missing in error.missing
+    assert 2 <= error.waited < 10
+    assert error.diagnosis["control_answers"] is True  # the control channel still answers
+    assert execution.notebook.cells[0].outputs[0]["text"] == "fine\n"
+    assert execution.seconds < 60
+
+
+def test_a_cell_past_its_limit_fails_with_the_limit_in_the_message(tmp_path: Path):
+    execution = execute_notebook(_notebook("1", "import time\ntime.sleep(60)"), tmp_path, CellLimits(cell_seconds=2))
+    assert not execution.hung and execution.failed_cell == 1
+    assert "timed out (limit 2 s)" in str(execution.error)
+    assert execution.seconds < 30
+
+
+def test_cell_limits_come_from_the_chapter_budget(monkeypatch):
+    monkeypatch.setenv("MOTIONLAB_PROFILE", "full")
+    assert course.cell_limits("04_motion_cell").cell_seconds == course.CELL_BUDGET_FACTOR * 240
+    assert course.cell_limits("99_extra").cell_seconds == course.DEFAULT_CELL_SECONDS
+    monkeypatch.setenv("MOTIONLAB_PROFILE", "quick")
+    assert course.cell_limits("01_rotation_geometry").cell_seconds == course.CELL_BUDGET_FACTOR * 20
+    with pytest.raises(ValueError, match="cell_seconds"):
+        CellLimits(cell_seconds=0)
+
+
+def _chapter(tmp_path: Path, name: str, *sources: str) -> Path:
+    path = tmp_path / "notebooks" / f"{name}.ipynb"
+    path.parent.mkdir(exist_ok=True)
+    nbformat.write(_notebook(*sources), path)
+    return path
+
+
+@pytest.fixture
+def build(monkeypatch, tmp_path: Path) -> Path:
+    monkeypatch.setenv("MOTIONLAB_BUILD", str(tmp_path / "build"))
+    monkeypatch.setattr(course, "ANSWER_SECONDS", 2.0)
+    return tmp_path / "build" / "course-quick"
+
+
+def test_a_chapter_whose_kernel_hangs_once_is_executed_again_and_the_retry_is_reported(tmp_path: Path, build):
+    marker = tmp_path / "hung-once"
+    hang_first_time = f"import pathlib\nif not pathlib.Path({str(marker)!r}).exists():\n" + "".join(
+        "    " + line + "\n" for line in [f"pathlib.Path({str(marker)!r}).touch()", *DROP_REPLIES.splitlines()])
+    _chapter(tmp_path, "01_flaky", hang_first_time, "print('done')")
+    [run] = course.build(tmp_path / "notebooks")
+    assert run.error is None and len(run.retries) == 1 and "cell 0" in run.retries[0]
+    results = json.loads((build / "results.json").read_text())
+    assert results["notebooks"]["01_flaky"]["retries"] == list(run.retries)
+    assert "executed again after" in (build / "index.html").read_text()
+
+
+def test_a_chapter_whose_kernel_hangs_twice_fails_naming_the_cell(tmp_path: Path, build):
+    _chapter(tmp_path, "01_stuck", DROP_REPLIES, "print('never answered')")
+    [run] = course.build(tmp_path / "notebooks")
+    assert run.error.startswith("cell 0: KernelNotAnswering") and len(run.retries) == 1
+    assert course.main(["--notebooks", str(tmp_path / "notebooks")]) == 1
+
+
+@pytest.mark.parametrize(("argv", "message"), [
+    (["--only", "7"], "two-digit"),
+    (["--only", "42"], "no chapter 42"),
+    (["--notebooks", "/no/such/dir"], "no such directory"),
+    (["--bogus"], "unrecognized arguments"),
+])
+def test_the_command_refuses_bad_arguments_in_one_line(tmp_path: Path, build, capsys, argv, message):
+    _chapter(tmp_path, "01_ok", "1")
+    with pytest.raises(SystemExit) as exit_info:
+        course.main(["--notebooks", str(tmp_path / "notebooks"), *argv])
+    assert exit_info.value.code == 2
+    err = capsys.readouterr().err
+    assert message in err and "Traceback" not in err
+
+
+def test_the_command_refuses_an_unknown_profile(tmp_path: Path, build, capsys, monkeypatch):
+    _chapter(tmp_path, "01_ok", "1")
+    monkeypatch.setenv("MOTIONLAB_PROFILE", "fast")
+    with pytest.raises(SystemExit):
+        course.main(["--notebooks", str(tmp_path / "notebooks")])
+    assert "MOTIONLAB_PROFILE" in capsys.readouterr().err
