@@ -7,7 +7,8 @@ lists, dicts only, so it loads with ``torch.load(..., weights_only=True)``)::
 
 The hash covers the name, the configuration (a dataclass or a dict) and the profile, so changing a
 hyper-parameter trains a new model instead of loading a stale one. :func:`load_checkpoint` returns
-``None`` (and the caller retrains) for a missing, corrupt or mismatched entry; it never half-loads a model.
+``None`` (and the caller retrains) for a missing, corrupt or mismatched entry, e.g. one written by an older
+version of the model's code; it never half-loads a model, and warns in one line why it ignored an entry.
 """
 
 from __future__ import annotations
@@ -18,6 +19,7 @@ import json
 import os
 import tempfile
 import warnings
+from collections.abc import Iterable
 from pathlib import Path
 from typing import Any
 
@@ -83,12 +85,80 @@ def save_checkpoint(name: str, cfg: Any, model: nn.Module, extra: dict[str, Any]
     return path
 
 
+def _listing(names: Iterable[Any], limit: int = 4) -> str:
+    """Sorted names, quoted and comma-separated; past ``limit`` of them, a count of the rest."""
+    ordered = sorted(names, key=str)
+    shown = ", ".join(repr(name) for name in ordered[:limit])
+    return shown if len(ordered) <= limit else f"{shown} and {len(ordered) - limit} more"
+
+
+def state_dict_mismatch(saved: Any, current: dict[str, Any]) -> str | None:
+    """Why the tensors ``saved`` cannot go into a model whose state dict is ``current``; ``None`` when they fit.
+
+    They fit when they have the same names and each has the model's shape (``load_state_dict`` casts dtypes).
+    """
+    if not isinstance(saved, dict):
+        return f"the state dict is a {type(saved).__name__}, not a dict"
+    names: list[str] = []
+    if missing := current.keys() - saved.keys():
+        names.append(f"lacks {_listing(missing)}")
+    if unexpected := saved.keys() - current.keys():
+        names.append(f"has unexpected {_listing(unexpected)}")
+    problems = [f"the state dict {' and '.join(names)}"] if names else []
+    for key in sorted(current.keys() & saved.keys()):
+        old, new = saved[key], current[key]
+        if isinstance(new, torch.Tensor) and not isinstance(old, torch.Tensor):
+            problems.append(f"{key!r} is a {type(old).__name__}, not a tensor")
+        elif isinstance(new, torch.Tensor) and old.shape != new.shape:
+            problems.append(f"{key!r} has shape {tuple(old.shape)}, the model's {tuple(new.shape)}")
+    return "; ".join(problems) or None
+
+
+def _flat(value: Any, prefix: str = "") -> dict[str, Any]:
+    """A nested config as ``{"model.hidden": 16, ...}``: dictionaries are opened, anything else is a leaf."""
+    if not isinstance(value, dict) or not value:
+        return {prefix: value}
+    flat: dict[str, Any] = {}
+    for key, item in value.items():
+        flat.update(_flat(item, f"{prefix}.{key}" if prefix else str(key)))
+    return flat
+
+
+def _config_mismatch(saved: Any, current: dict[str, Any]) -> str | None:
+    """How a stored config differs from the current one (keys gone, keys new, values changed); ``None`` if equal."""
+    if saved == current:
+        return None
+    old, new = _flat(saved), _flat(current)
+    problems: list[str] = []
+    if gone := old.keys() - new.keys():
+        problems.append(f"has keys the code no longer has ({_listing(gone)})")
+    if added := new.keys() - old.keys():
+        problems.append(f"lacks {_listing(added)}")
+    if changed := {key for key in old.keys() & new.keys() if old[key] != new[key]}:
+        problems.append(f"differs at {_listing(changed)}")
+    return "its config " + ("; ".join(problems) or "differs")
+
+
+def _entry_mismatch(payload: Any, name: str, cfg: Any, model: nn.Module) -> str | None:
+    """Why a loaded cache entry does not fit (name, config, model); ``None`` when it does."""
+    if not isinstance(payload, dict):
+        return f"it holds a {type(payload).__name__}, not a checkpoint dictionary"
+    if payload.get("format") != FORMAT:
+        return f"its format is {payload.get('format')!r}, this code reads {FORMAT}"
+    if payload.get("name") != name:
+        return f"it was written for {payload.get('name')!r}"
+    if not isinstance(payload.get("extra") or {}, dict):
+        return f"its extra is a {type(payload['extra']).__name__}, not a dict"
+    return _config_mismatch(payload.get("config"), config_dict(cfg)) or state_dict_mismatch(
+        payload.get("state_dict"), model.state_dict())
+
+
 def load_checkpoint(name: str, cfg: Any, model: nn.Module) -> dict[str, Any] | None:
     """Load the cached weights for (name, config) into ``model``; return the entry's ``extra`` dict.
 
-    Returns ``None`` and leaves ``model`` untouched when there is no entry, when it cannot be read,
-    when its config differs, or when its tensors do not match the model's parameters (names or shapes),
-    i.e. when the code changed since the entry was written.
+    Returns ``None`` and leaves ``model`` untouched when there is no entry, and also (with a one-line
+    warning saying why) when the entry cannot be read, has another format, name or config, or its
+    tensors do not match the model's (names or shapes): when it was written by other code.
     """
     path = checkpoint_path(name, cfg)
     if not path.exists():
@@ -98,15 +168,9 @@ def load_checkpoint(name: str, cfg: Any, model: nn.Module) -> dict[str, Any] | N
     except Exception as exc:  # corrupt or foreign file: the caller retrains
         warnings.warn(f"ignoring unreadable checkpoint {path.name}: {exc}", stacklevel=2)
         return None
-    if not isinstance(payload, dict) or payload.get("format") != FORMAT:
+    problem = _entry_mismatch(payload, name, cfg, model)
+    if problem is not None:
+        warnings.warn(f"ignoring checkpoint {path.name}: {problem}", stacklevel=2)
         return None
-    if payload.get("config") != config_dict(cfg) or payload.get("name") != name:
-        return None
-    state = payload.get("state_dict")
-    current = model.state_dict()
-    if not isinstance(state, dict) or state.keys() != current.keys():
-        return None
-    if any(tuple(state[k].shape) != tuple(current[k].shape) for k in current):
-        return None
-    model.load_state_dict(state, strict=True)
+    model.load_state_dict(payload["state_dict"], strict=True)
     return dict(payload.get("extra") or {})

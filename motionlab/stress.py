@@ -15,7 +15,8 @@ kernel stack, executions, hangs, other failures, each hang's cell and diagnosis)
 The pattern notebook (:func:`pattern_notebook`) holds what the chapters do between their computations, many
 times over: short cells with text output, ipywidgets with their comm traffic (sliders moved from the kernel,
 ``interactive_output``), tqdm progress bars, matplotlib figures, stick-figure animations (outputs of several
-hundred kB), and calls into the shared worker pool.
+hundred kB), and calls into the shared worker pool, some of which write progress bars to the kernel's
+standard error while the cell waits for them (as training runs in workers do in the full profile).
 """
 
 from __future__ import annotations
@@ -33,10 +34,13 @@ from pathlib import Path
 from typing import Any
 
 import nbformat
+from nbclient import NotebookClient
+from nbclient.exceptions import CellTimeoutError
 from nbformat import NotebookNode
 
 from motionlab import config
-from motionlab.execution import CellLimits, execute_notebook, read_notebook
+from motionlab.cli import positive_int
+from motionlab.execution import CellLimits, Execution, execute_notebook, read_notebook
 
 #: Packages whose versions decide how a kernel talks to its client (recorded in every summary).
 KERNEL_STACK = ("ipykernel", "jupyter_client", "pyzmq", "tornado", "nbclient", "ipywidgets", "comm")
@@ -50,6 +54,7 @@ from IPython.display import display
 from tqdm.auto import tqdm
 from motionlab import config
 from motionlab.skeleton import average_skeleton
+from motionlab.stress import noisy_work
 from motionlab.train.parallel import run_in_workers
 from motionlab.viz.animation import animate
 config.setup(0)
@@ -68,8 +73,23 @@ _BLOCK = (
     "positions = np.cumsum(rng.normal(scale=0.01, size=(20, len(skeleton.parents), 3)), axis=0)\n"
     "animate(positions, skeleton.parents, fps=10, dpi=30, panel_size=2.0)",
     "run_in_workers(math.factorial, [({i} % 30,), ({i} % 30 + 1,)])[0] > 0",
+    "run_in_workers(noisy_work, [(1.5,), (1.5,)])",
     "{i} * 2",
 )
+
+
+def noisy_work(seconds: float) -> int:
+    """Worker side of a pattern cell: a plain-text tqdm bar on standard error, updated every 20 ms for
+    ``seconds``, and a line on standard output; returns the number of updates."""
+    from tqdm import tqdm
+
+    steps = max(1, int(seconds / 0.02))
+    with tqdm(total=steps, mininterval=0.05, file=sys.stderr) as bar:
+        for _ in range(steps):
+            time.sleep(0.02)
+            bar.update()
+    print(f"worker {os.getpid()}: {steps} updates", flush=True)
+    return steps
 
 
 def pattern_notebook(blocks: int) -> NotebookNode:
@@ -90,8 +110,11 @@ class StressSummary:
     what: str
     profile: str
     versions: dict[str, str]
+    client: str
     executions: int = 0
     cells: int = 0
+    #: Cells done long after the kernel said idle (stock client only; the watched client polls every second).
+    stalls: list[dict[str, Any]] = field(default_factory=list)
     hangs: list[dict[str, Any]] = field(default_factory=list)
     failures: list[dict[str, Any]] = field(default_factory=list)
     seconds: float = 0.0
@@ -108,22 +131,71 @@ def kernel_stack_versions() -> dict[str, str]:
     return versions
 
 
+#: A cell whose reply reaches the client this long after the kernel said it is idle counts as a stall.
+STALL_SECONDS = 2.0
+
+
+class TimedStockClient(NotebookClient):
+    """nbclient's own client, which waits for each reply in one poll of up to the cell limit (what the course
+    build did before :class:`~motionlab.execution.WatchedClient`), timed: for each cell, how long after the
+    kernel's ``idle`` status the client was done with it (``stalls``: the cells where that took longer than
+    :data:`STALL_SECONDS`)."""
+
+    def __init__(self, nb: NotebookNode, **kw: Any) -> None:
+        super().__init__(nb, **kw)
+        self._idle_at: dict[int, float] = {}
+        self.stalls: list[tuple[int, float]] = []
+
+    def process_message(self, msg: dict[str, Any], cell: NotebookNode, cell_index: int) -> Any:
+        if msg["msg_type"] == "status" and msg["content"].get("execution_state") == "idle":
+            self._idle_at.setdefault(cell_index, time.monotonic())
+        return super().process_message(msg, cell, cell_index)
+
+    async def async_execute_cell(self, cell: NotebookNode, cell_index: int, *args: Any, **kwargs: Any) -> Any:
+        result = await super().async_execute_cell(cell, cell_index, *args, **kwargs)
+        late = time.monotonic() - self._idle_at.get(cell_index, time.monotonic())
+        if late > STALL_SECONDS:
+            self.stalls.append((cell_index, round(late, 1)))
+        return result
+
+
+def execute_stock(notebook: NotebookNode, cwd: Path, limits: CellLimits) -> Execution:
+    """Execute ``notebook`` with :class:`TimedStockClient`; the stalls go to :attr:`Execution.notes`."""
+    client = TimedStockClient(notebook, timeout=int(limits.cell_seconds), kernel_name="python3",
+                              resources={"metadata": {"path": str(cwd)}}, store_widget_state=True)
+    start = time.perf_counter()
+    error: Exception | None = None
+    try:
+        client.execute()
+    except Exception as exc:  # counted by the caller
+        error = exc
+    notes = [f"cell {index}: done {late} s after the kernel's idle status" for index, late in client.stalls]
+    return Execution(notebook, time.perf_counter() - start, error, notes=notes)
+
+
 def run_stress(
-    targets: Sequence[tuple[str, NotebookNode, Path, CellLimits]], runs: int, what: str, out: Path
+    targets: Sequence[tuple[str, NotebookNode, Path, CellLimits]], runs: int, what: str, out: Path,
+    stock: bool = False,
 ) -> StressSummary:
     """Execute every target (name, notebook, working directory, limits) ``runs`` times, in order, and
-    write the summary to ``out`` after every execution (so a stopped session keeps its counts)."""
-    summary = StressSummary(what=what, profile=config.profile(), versions=kernel_stack_versions())
+    write the summary to ``out`` after every execution (so a stopped session keeps its counts).
+
+    With ``stock``, nbclient's own client executes (:func:`execute_stock`) and a cell past its limit counts
+    as a hang: no cell of the quick profile or of the pattern notebook comes near its limit when it runs.
+    """
+    summary = StressSummary(what=what, profile=config.profile(), versions=kernel_stack_versions(),
+                            client="nbclient (stock)" if stock else "WatchedClient")
     start = time.perf_counter()
     out.parent.mkdir(parents=True, exist_ok=True)
     for run in range(1, runs + 1):
         for name, notebook, cwd, limits in targets:
-            execution = execute_notebook(nbformat.from_dict(notebook), cwd, limits)
+            execute = execute_stock if stock else execute_notebook
+            execution = execute(nbformat.from_dict(notebook), cwd, limits)
             summary.executions += 1
             summary.cells += sum(1 for cell in execution.notebook.cells if cell.cell_type == "code")
             record = {"run": run, "notebook": name, "cell": execution.failed_cell,
                       "seconds": round(execution.seconds, 1), "error": str(execution.error)[:2000]}
-            if execution.hung:
+            if execution.hung or (stock and isinstance(execution.error, CellTimeoutError)):
                 summary.hangs.append(record)
                 verdict = f"HANG at cell {execution.failed_cell}: {execution.error}"
             elif execution.error is not None:
@@ -132,32 +204,27 @@ def run_stress(
                     execution.error).splitlines()[0][:300]
             else:
                 verdict = "ok"
+            if execution.notes:
+                summary.stalls.extend({"run": run, "notebook": name, "note": note} for note in execution.notes)
+                verdict += "; stalls: " + "; ".join(execution.notes)
             summary.seconds = round(time.perf_counter() - start, 1)
             print(f"[stress] run {run}/{runs} {name}: {execution.seconds:.1f} s {verdict}", flush=True)
             out.write_text(json.dumps(asdict(summary), indent=1), encoding="utf-8")
     return summary
 
 
-def _positive_int(text: str) -> int:
-    try:
-        value = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected a positive whole number, got {text!r}") from None
-    if value < 1:
-        raise argparse.ArgumentTypeError(f"expected a positive whole number, got {text!r}")
-    return value
-
-
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(
         prog="python -m motionlab.stress", description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter
     )
-    parser.add_argument("--runs", type=_positive_int, default=30, help="how many times to execute each notebook")
-    parser.add_argument("--patterns", type=_positive_int, metavar="BLOCKS", default=None,
+    parser.add_argument("--runs", type=positive_int, default=30, help="how many times to execute each notebook")
+    parser.add_argument("--patterns", type=positive_int, metavar="BLOCKS", default=None,
                         help="execute a generated notebook of BLOCKS repetitions of the chapters' cell patterns "
                              "instead of the chapters")
     parser.add_argument("--only", nargs="+", metavar="NN", help="chapter numbers to execute, e.g. 02 07")
     parser.add_argument("--notebooks", type=Path, default=config.REPO_ROOT / "notebooks")
+    parser.add_argument("--stock-client", action="store_true",
+                        help="execute with nbclient's own client instead of the course's WatchedClient")
     args = parser.parse_args(argv)
     os.environ.setdefault("MOTIONLAB_PROFILE", "quick")
 
@@ -180,10 +247,12 @@ def main(argv: list[str] | None = None) -> int:
                 parser.error(f"no chapter in {args.notebooks} matches --only {' '.join(args.only)}")
         targets = [(p.stem, read_notebook(p), p.parent, cell_limits(p.stem)) for p in paths]
         what = f"course chapters {', '.join(p.stem[:2] for p in paths)}"
-    print(f"[stress] {what}, {args.runs} runs, profile {config.profile()}; summary: {out}", flush=True)
-    summary = run_stress(targets, args.runs, what, out)
+    client = "nbclient's own client" if args.stock_client else "WatchedClient"
+    print(f"[stress] {what}, {args.runs} runs, profile {config.profile()}, {client}; summary: {out}", flush=True)
+    summary = run_stress(targets, args.runs, what, out, stock=args.stock_client)
     print(f"[stress] {summary.executions} executions ({summary.cells} cells) in {summary.seconds / 60:.1f} min: "
-          f"{len(summary.hangs)} hangs, {len(summary.failures)} other failures; versions {summary.versions}")
+          f"{len(summary.hangs)} hangs, {len(summary.stalls)} stalls, {len(summary.failures)} other failures; "
+          f"versions {summary.versions}")
     return 1 if summary.hangs or summary.failures else 0
 
 

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import os
+import re
 import shutil
 from dataclasses import replace
 import signal
@@ -293,6 +294,8 @@ def test_bookkeeping_intervals_do_not_invalidate_the_cache() -> None:
         {"train_config": replace(CFG, lr=5e-3)},
         {"train_config": replace(CFG, schedules={"beta": KLAnneal(1.0, 2, 5)})},
         {"model_config": {**MODEL_CONFIG, "hidden": 17}},
+        {"model_config": {**MODEL_CONFIG, "activation": "tanh"}},
+        {"model_config": {k: v for k, v in MODEL_CONFIG.items() if k != "hidden"}},
         {"data_config": {"clips": 64}},
     ],
 )
@@ -326,6 +329,47 @@ def test_a_cache_entry_without_history_is_retrained_from_the_fresh_model() -> No
         result = train_or_load("tiny", MODEL_CONFIG, model, loss_fn, TensorBatches(data()), CFG)
     assert not result.loaded_from_cache
     assert_bitwise_equal(weights(reference), weights(model))
+
+
+# How an entry written by an older version of the code differs, and the reason the warning gives.
+STALE_ENTRIES = {
+    "config key removed since": (lambda p: p["config"]["model"].update(activation="tanh"),
+                                 "its config has keys the code no longer has \\('model.activation'\\)"),
+    "config key added since": (lambda p: p["config"]["model"].pop("hidden"), "its config lacks 'model.hidden'"),
+    "config value changed": (lambda p: p["config"]["train"].update(lr=0.5), "its config differs at 'train.lr'"),
+    "tensor missing": (lambda p: p["state_dict"].pop("3.bias"), "the state dict lacks '3.bias'"),
+    "tensor unexpected": (lambda p: p["state_dict"].update({"4.weight": torch.zeros(2)}),
+                          "the state dict has unexpected '4.weight'"),
+    "tensor renamed": (lambda p: p["state_dict"].update({"3.b": p["state_dict"].pop("3.bias")}),
+                       "the state dict lacks '3.bias' and has unexpected '3.b'"),
+    "tensor reshaped": (lambda p: p["state_dict"].update({"0.weight": torch.zeros(16, 7)}),
+                        "'0.weight' has shape \\(16, 7\\), the model's \\(16, 6\\)"),
+    "not a tensor": (lambda p: p["state_dict"].update({"0.bias": [0.0] * 16}), "'0.bias' is a list, not a tensor"),
+    "older format": (lambda p: p.update(format=0), "its format is 0, this code reads 1"),
+    "other name": (lambda p: p.update(name="tiny_v0"), "it was written for 'tiny_v0'"),
+    "extra not a dict": (lambda p: p.update(extra=[1, 2]), "its extra is a list, not a dict"),
+}
+
+
+@pytest.mark.parametrize("stale", sorted(STALE_ENTRIES))
+def test_an_entry_written_by_older_code_is_retrained_saying_why(stale: str) -> None:
+    """An entry under the same key whose config or tensors no longer fit: one warning line, then a fresh
+    training from the untouched model (no half-load, no crash), whose result replaces the entry."""
+    edit, why = STALE_ENTRIES[stale]
+    reference = make_model()
+    first = train_or_load("tiny", MODEL_CONFIG, reference, loss_fn, TensorBatches(data()), CFG)
+    payload = torch.load(first.path, weights_only=True)
+    edit(payload)
+    torch.save(payload, first.path)
+    model = make_model()
+    with pytest.warns(UserWarning) as caught:
+        again = train_or_load("tiny", MODEL_CONFIG, model, loss_fn, TensorBatches(data()), CFG)
+    messages = [str(w.message) for w in caught]
+    assert len(messages) == 1 and "\n" not in messages[0]
+    assert re.fullmatch(f"ignoring checkpoint {re.escape(first.path.name)}: {why}", messages[0]), messages[0]
+    assert not again.loaded_from_cache and again.path == first.path and again.history == first.history
+    assert_bitwise_equal(weights(reference), weights(model))
+    assert train_or_load("tiny", MODEL_CONFIG, make_model(seed=3), loss_fn, TensorBatches(data()), CFG).loaded_from_cache
 
 
 # --- resuming ------------------------------------------------------------------------------------------

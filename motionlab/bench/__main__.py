@@ -1,20 +1,26 @@
-"""Run every benchmark module of :mod:`motionlab.bench` and write ``build/bench.json``.
+"""Run the benchmark modules of :mod:`motionlab.bench` and write ``build/bench.json``.
 
-Each module runs in its own process, with torch on one thread unless the module says otherwise,
-so that one area's peak memory (``ru_maxrss``) does not leak into another's.
+Usage: ``python -m motionlab.bench [ENTRY ...] [--out FILE]``: every entry (module) by default, or only the
+named ones; ``--out`` replaces ``build/bench.json``. Each module runs in its own process, with torch on one
+thread unless the module says otherwise, so that one area's peak memory (``ru_maxrss``) does not leak into
+another's.
 """
 
 from __future__ import annotations
 
+import argparse
 import json
 import pkgutil
 import platform
 import subprocess
 import sys
 import time
+from pathlib import Path
 
 import motionlab.bench
-from motionlab import config
+from motionlab import cli, config
+
+PROG = "python -m motionlab.bench"
 
 _CHILD = """
 import json, resource, sys, time
@@ -28,8 +34,16 @@ print("BENCH-JSON " + json.dumps(result))
 """
 
 
-def main() -> None:
-    names = sorted(m.name for m in pkgutil.iter_modules(motionlab.bench.__path__) if not m.name.startswith("_"))
+def entry_names() -> list[str]:
+    """The benchmark entries: the public modules of :mod:`motionlab.bench`, sorted."""
+    return sorted(m.name for m in pkgutil.iter_modules(motionlab.bench.__path__) if not m.name.startswith("_"))
+
+
+def _run_entries(names: list[str], out: Path | None) -> int:
+    """Run the entries ``names`` (each in a fresh process) and write the merged report to ``out``; returns 0."""
+    if out is None:
+        out = config.build_dir() / "bench.json"
+        out.parent.mkdir(parents=True, exist_ok=True)
     report: dict = {"python": platform.python_version(), "machine": platform.machine(), "results": {}}
     for name in names:
         print(f"bench: {name} ...", flush=True)
@@ -41,12 +55,27 @@ def main() -> None:
         line = next(line for line in proc.stdout.splitlines() if line.startswith("BENCH-JSON "))
         report["results"][name] = json.loads(line[len("BENCH-JSON "):])
         print(f"bench: {name} done in {time.perf_counter() - start:.1f} s", flush=True)
-    out = config.build_dir() / "bench.json"
-    out.parent.mkdir(parents=True, exist_ok=True)
     out.write_text(json.dumps(report, indent=2, sort_keys=True))
     print(json.dumps(report, indent=2, sort_keys=True))
     print(f"wrote {out}")
+    return 0
+
+
+def main(argv: list[str] | None = None) -> int:
+    """The command line; returns the exit status (2, with a one-line message, for a bad argument)."""
+    names = entry_names()
+    parser = argparse.ArgumentParser(prog=PROG, description="Measure speed and memory; write a JSON report.")
+    parser.add_argument("entries", nargs="*", metavar="ENTRY",
+                        help=f"entries to run (default: all): {', '.join(names)}")
+    parser.add_argument("--out", type=cli.output_file, metavar="FILE",
+                        help="report file (default build/bench.json); its directory must exist")
+    args = parser.parse_args(argv)
+    unknown = [entry for entry in args.entries if entry not in names]
+    if unknown:  # not choices=names: Python 3.11 checks an empty nargs="*" list against the choices too
+        parser.error(f"unknown entry {', '.join(map(repr, unknown))} (choose from {', '.join(names)})")
+    selected = list(dict.fromkeys(args.entries)) or names
+    return cli.run(PROG, lambda: _run_entries(selected, args.out))
 
 
 if __name__ == "__main__":
-    main()
+    sys.exit(main())

@@ -35,7 +35,7 @@ from pathlib import Path
 
 import numpy as np
 
-from motionlab import config, skeleton
+from motionlab import cli, config, skeleton
 from motionlab.data import actions, body, curves, events, gait, gestures, rig, store, styles
 from motionlab.data.actions import ACTION_NAMES, CATALOGUE, MODE_ACTION, MODE_NAMES, MODE_STYLE
 from motionlab.data.body import BodyBatch, pose
@@ -164,24 +164,10 @@ def load_splits(seed: int, n_per_mode: tuple[int, int, int], seconds: float = 4.
     return train, val, test
 
 
-def main(argv: list[str] | None = None) -> int:
-    """The command line; returns the exit status."""
-    parser = argparse.ArgumentParser(prog="python -m motionlab.data.synthetic",
-                                     description="Write a synthetic motion-capture data set (.npz).")
-    parser.add_argument("--out", required=True, type=Path, help="output file (.npz)")
-    parser.add_argument("--seed", required=True, type=int, help="non-negative integer seed")
-    parser.add_argument("--n-per-mode", type=int, default=10, help="clips per style mode (12 modes; default 10)")
-    parser.add_argument("--seconds", type=float, default=4.0, help="clip length in seconds (default 4)")
-    parser.add_argument("--fps", type=int, default=30, help="frames per second (default 30)")
-    parser.add_argument("--split", choices=SPLITS, default="train", help="family of random streams (default train)")
-    parser.add_argument("--compress", action="store_true", help="write a compressed archive (slower, ~10%% smaller)")
-    parser.add_argument("--checksums", type=Path, help="also write the SHA-256 of every array to this JSON file")
-    args = parser.parse_args(argv)
+def _write(args: argparse.Namespace) -> int:
+    """Generate the data set the parsed command line describes, write it (and its checksums); returns 0."""
     start = time.perf_counter()
-    try:
-        data = generate(args.seed, args.n_per_mode, args.seconds, args.fps, args.split)
-    except ValueError as exc:
-        parser.error(str(exc))
+    data = generate(args.seed, args.n_per_mode, args.seconds, args.fps, args.split)
     data.save(args.out, compress=args.compress)
     if args.checksums is not None:
         record = {"seed": args.seed, "n_per_mode": args.n_per_mode, "seconds": args.seconds, "fps": args.fps,
@@ -190,6 +176,27 @@ def main(argv: list[str] | None = None) -> int:
     print(f"wrote {data.n_clips} clips x {data.n_frames} frames ({len(MODE_NAMES)} modes x {args.n_per_mode}) "
           f"to {args.out} in {time.perf_counter() - start:.2f} s")
     return 0
+
+
+def main(argv: list[str] | None = None) -> int:
+    """The command line; returns the exit status (2, with a one-line message, for a bad argument)."""
+    prog = "python -m motionlab.data.synthetic"
+    parser = argparse.ArgumentParser(prog=prog, description="Write a synthetic motion-capture data set (.npz).")
+    parser.add_argument("--out", required=True, type=cli.output_file,
+                        help="output file (.npz); its directory must exist")
+    parser.add_argument("--seed", required=True, type=cli.non_negative_int, help="non-negative integer seed")
+    parser.add_argument("--n-per-mode", type=cli.positive_int, default=10,
+                        help="clips per style mode (12 modes; default 10)")
+    parser.add_argument("--seconds", type=cli.float_at_least(MIN_SECONDS), default=4.0,
+                        help=f"clip length in seconds, at least {MIN_SECONDS:g} (default 4)")
+    parser.add_argument("--fps", type=cli.int_at_least(MIN_FPS), default=30,
+                        help=f"frames per second, at least {MIN_FPS} (default 30)")
+    parser.add_argument("--split", choices=SPLITS, default="train", help="family of random streams (default train)")
+    parser.add_argument("--compress", action="store_true", help="write a compressed archive (slower, ~10%% smaller)")
+    parser.add_argument("--checksums", type=cli.output_file,
+                        help="also write the SHA-256 of every array to this JSON file")
+    args = parser.parse_args(argv)
+    return cli.run(prog, lambda: _write(args))
 
 
 if __name__ == "__main__":

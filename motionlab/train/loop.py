@@ -47,6 +47,7 @@ from torch.utils.data import DataLoader
 from tqdm.auto import tqdm
 
 from motionlab import config
+from motionlab.checkpoints import state_dict_mismatch
 from motionlab.train.batches import BatchSource, check_source, epoch_batches
 from motionlab.train.history import History
 from motionlab.train.state import DeferredInterrupt, ResumeFile, rng_isolated, rng_state, set_rng_state
@@ -174,10 +175,8 @@ class _Trainer:
             weights, current = state["model"], self.model.state_dict()
             if len(history) != position.step:
                 raise ValueError(f"history has {len(history)} steps, state says {position.step}")
-            if not isinstance(weights, dict) or weights.keys() != current.keys():
-                raise ValueError("model parameter names differ")
-            if any(tuple(weights[k].shape) != tuple(current[k].shape) for k in current):
-                raise ValueError("model parameter shapes differ")
+            if (problem := state_dict_mismatch(weights, current)) is not None:
+                raise ValueError(problem)
         except (KeyError, TypeError, ValueError, AttributeError) as exc:
             warnings.warn(f"ignoring {name}: {exc}", stacklevel=3)
             return False
