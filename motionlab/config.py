@@ -22,6 +22,8 @@ from typing import TypeVar
 import numpy as np
 import torch
 
+from motionlab import paths
+
 T = TypeVar("T")
 
 PROFILES = ("quick", "full")
@@ -33,7 +35,7 @@ PROFILES = ("quick", "full")
 #: thread and the chapters with several models train two at a time (:mod:`motionlab.train.parallel`).
 DEFAULT_THREADS = 1
 
-REPO_ROOT = Path(__file__).resolve().parents[1]
+REPO_ROOT = paths.REPO_ROOT
 
 
 def profile() -> str:
@@ -54,9 +56,7 @@ def choose(quick: T, full: T) -> T:
     return quick if is_quick() else full
 
 
-def build_dir() -> Path:
-    """Root of everything the course writes (``build/`` in the repository, or ``MOTIONLAB_BUILD``)."""
-    return Path(os.environ.get("MOTIONLAB_BUILD", REPO_ROOT / "build"))
+build_dir = paths.build_dir
 
 
 def checkpoint_dir() -> Path:

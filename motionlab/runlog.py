@@ -18,17 +18,17 @@ import sys
 import time
 from pathlib import Path
 
+from motionlab.paths import REPO_ROOT, build_dir
+
 #: How many logs of each name are kept.
 KEEP = 10
-
-REPO_ROOT = Path(__file__).resolve().parents[1]
 
 _NAME = re.compile(r"[A-Za-z0-9][A-Za-z0-9_.-]*")
 
 
 def log_dir() -> Path:
     """``build/logs`` (under ``MOTIONLAB_BUILD`` when it is set, like every other build output)."""
-    return Path(os.environ.get("MOTIONLAB_BUILD", REPO_ROOT / "build")) / "logs"
+    return build_dir() / "logs"
 
 
 def _git_commit() -> str:

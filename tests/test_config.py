@@ -64,3 +64,12 @@ def test_threads_sets_the_count_for_a_block_and_restores_it():
         with config.threads(0):
             pass
     assert torch.get_num_threads() == 1
+
+
+def test_a_relative_build_directory_is_taken_from_the_repository_root(monkeypatch, tmp_path) -> None:
+    """The course driver runs in the repository and the kernels in notebooks/: both must mean one directory."""
+    monkeypatch.setenv("MOTIONLAB_BUILD", "build-elsewhere")
+    monkeypatch.chdir(tmp_path)
+    assert config.build_dir() == config.REPO_ROOT / "build-elsewhere"
+    monkeypatch.setenv("MOTIONLAB_BUILD", str(tmp_path / "abs"))
+    assert config.build_dir() == tmp_path / "abs"
