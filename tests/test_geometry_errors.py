@@ -137,3 +137,69 @@ def test_dtype_and_batch_dims_are_preserved(name, call, valid, shape, dtype):
     assert out.dtype == dtype
     assert out.shape[:2] == (3, valid.shape[0])
     assert torch.equal(out[1], call(valid.to(dtype)))  # deterministic and batch-independent
+
+
+# Unit quaternions (general rotations and special ones), and scales whose squared norm underflows or overflows
+# the dtype or whose `2 / |q|^2` overflows (1e-20 in float32), plus scales just inside the range used as it is.
+SCALED_UNITS = torch.tensor([[0.5, 0.5, 0.5, 0.5], [0.1, -0.7, 0.3, 0.64], [0.0, 0.0, 0.0, 1.0], [-0.9, 0.2, 0.3, 0.2]])
+EXTREME_SCALES = {
+    torch.float32: [1e-20, 1e-25, 1e-30, 1e20, 1e30, 1e38, 1e-15, 1e15],
+    torch.float64: [1e-157, 1e-170, 1e-300, 1e155, 1e160, 1e300, 1e-145, 1e145],
+}
+ROTATION_CALLS = [
+    ("quat_to_matrix", g.quat_to_matrix),
+    ("quat_apply", lambda q: g.quat_apply(q, V[:1])),
+    ("quat_normalize", g.quat_normalize),
+    ("quat_to_euler", lambda q: g.quat_to_euler(q, "XYZ")),
+    ("quat_to_euler", lambda q: g.quat_to_euler(q, "zxz")),
+    ("quat_slerp", lambda q: g.quat_slerp(q, Q[1:], 0.3)),
+    ("quat_nlerp", lambda q: g.quat_nlerp(Q[1:], q, 0.3)),
+]
+
+
+@pytest.mark.parametrize("dtype", [torch.float32, torch.float64])
+@pytest.mark.parametrize(("name", "call"), ROTATION_CALLS, ids=[f"{n}-{i}" for i, (n, _) in enumerate(ROTATION_CALLS)])
+def test_tiny_and_huge_quaternions_give_the_rotation_of_their_unit_version(name, call, dtype):
+    unit = SCALED_UNITS.to(dtype)
+    unit = unit / unit.norm(dim=-1, keepdim=True)
+    expected = call(unit)
+    for scale in EXTREME_SCALES[dtype]:
+        result = call(unit * scale)
+        assert torch.isfinite(result).all(), (name, scale)
+        torch.testing.assert_close(result, expected, msg=f"{name} at scale {scale:g}")
+    mixed = unit * torch.tensor([EXTREME_SCALES[dtype][i] for i in (0, 1, 3, 4)], dtype=dtype)[:, None]
+    torch.testing.assert_close(call(mixed), expected)
+
+
+@pytest.mark.parametrize(
+    ("name", "call", "what"),
+    [
+        ("quat_to_matrix", g.quat_to_matrix, "the squared norm of q"),
+        ("quat_apply", lambda q: g.quat_apply(q, V), "the squared norm of q"),
+        ("quat_normalize", g.quat_normalize, "the norm of q"),
+        ("quat_to_euler", lambda q: g.quat_to_euler(q, "XYZ"), "the squared norm of q"),
+    ],
+)
+@pytest.mark.parametrize(
+    ("row", "shown"),
+    [
+        ([0.0, 0.0, 0.0, 0.0], "0.0"),
+        ([1e30, 1e30, math.inf, 1e30], "inf"),  # huge finite components alongside do not change the message
+        ([1e-30, -math.inf, 0.0, 0.0], "inf"),
+        ([1e30, 0.0, math.nan, 1e-30], "nan"),
+    ],
+)
+def test_zero_and_non_finite_quaternions_raise_as_before_next_to_tiny_and_huge_parts(name, call, what, row, shown):
+    corrupt = Q.clone()
+    corrupt[1] = torch.tensor(row)
+    with pytest.raises(ValueError, match=rf"^{name}: {what} is zero or not finite at index \(1,\) \(value {shown}\)$"):
+        call(corrupt)
+
+
+@pytest.mark.parametrize("dtype, scale", [(torch.float32, 1e-20), (torch.float32, 1e20), (torch.float64, 1e-157)])
+def test_axis_angle_and_geodesic_of_tiny_and_huge_quaternions_are_those_of_their_unit_versions(dtype, scale):
+    q = torch.tensor([[0.9, 0.1, -0.3, 0.2], [0.5, 0.5, 0.5, 0.5]], dtype=dtype)
+    r = torch.tensor([[0.2, 0.7, 0.1, -0.4], [1.0, 0.0, 0.0, 0.0]], dtype=dtype)
+    unit_q, unit_r = q / q.norm(dim=-1, keepdim=True), r / r.norm(dim=-1, keepdim=True)
+    torch.testing.assert_close(quat_to_axis_angle(q * scale), quat_to_axis_angle(unit_q))
+    torch.testing.assert_close(quat_geodesic(q * scale, r / scale), quat_geodesic(unit_q, unit_r))

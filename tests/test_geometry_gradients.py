@@ -158,3 +158,22 @@ def test_normalisation_gradient_is_orthogonal_to_q_and_the_penalty_gradient_is_p
     (grad_penalty,) = torch.autograd.grad(g.quat_norm_penalty(q).sum(), q)
     # 2 (|q| - 1) q / |q| with |q| = 1.7
     assert torch.allclose(grad_penalty, 2 * 0.7 * q.detach() / 1.7)
+
+
+@pytest.mark.parametrize("dtype", DTYPES)
+def test_rotation_gradients_of_tiny_and_huge_quaternions_are_those_of_the_unit_one(dtype):
+    """f(s q) = f(q) for every s > 0, so d/dq f(s q) = f'(q): exactly what the unit quaternion gets."""
+    q = random_quats(5, 21, dtype)
+    vectors = torch.randn(5, 3, dtype=dtype, generator=torch.Generator().manual_seed(22))
+    scales = [1e-20, 1e20] if dtype == torch.float32 else [1e-157, 1e-300, 1e160]
+    calls = [
+        g.quat_to_matrix,
+        lambda p: g.quat_apply(p, vectors),
+        g.quat_normalize,
+        lambda p: g.quat_to_euler(p, "YZX"),
+    ]
+    for call in calls:
+        expected = torch.autograd.functional.jacobian(call, q)
+        for scale in scales:
+            jacobian = torch.autograd.functional.jacobian(lambda p: call(p * scale), q)
+            torch.testing.assert_close(jacobian, expected, msg=f"scale {scale:g}")

@@ -165,6 +165,31 @@ def test_euler_gimbal_lock_gives_the_same_rotation(dtype, order):
     assert (extracted[exact, 2].abs() <= TOL[dtype]).all()
 
 
+@pytest.mark.parametrize("order", ORDERS)
+def test_euler_near_gimbal_lock_is_as_accurate_as_scipy_in_float32(order):
+    """Middle angle 1e-6 to 1e-4 rad from the lock: the outer angles are determined, so none may be zeroed.
+
+    Euler angles -> float32 quaternion (the input) -> Euler angles -> rotation, against the input rotation
+    (geodesic angle); scipy gets the same input (it computes in float64) and returns float32 angles here too.
+    """
+    proper = order[0].lower() == order[2].lower()
+    lock = [0.0, math.pi] if proper else [math.pi / 2, -math.pi / 2]
+    rng = np.random.default_rng(0)
+    rows = [
+        [a, mid + sign * offset, c]
+        for mid in lock
+        for offset in np.geomspace(1e-6, 1e-4, 9)
+        for sign in (1, -1)
+        for a, c in rng.uniform(-math.pi, math.pi, size=(8, 2))
+    ]
+    q = g.euler_to_quat(torch.tensor(rows, dtype=torch.float32), order)
+    given = to_scipy(q)
+    ours = Rotation.from_euler(order, g.quat_to_euler(q, order).double().numpy())
+    theirs = Rotation.from_euler(order, given.as_euler(order).astype(np.float32).astype(np.float64))
+    our_error, scipy_error = (ours.inv() * given).magnitude().max(), (theirs.inv() * given).magnitude().max()
+    assert our_error <= 3 * scipy_error, (our_error, scipy_error)
+
+
 @pytest.mark.parametrize("dtype", DTYPES)
 @SETTINGS
 @given(q=unit_quaternions)

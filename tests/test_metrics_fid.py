@@ -174,3 +174,49 @@ def test_frechet_distance_rejects_invalid_covariances():
         frechet_distance([0, 0], np.eye(2), [0, 0], [[1, 2], [2, 1]])
     with pytest.raises(ValueError, match=r"sigma2 must be \(2, 2\)"):
         frechet_distance([0, 0], np.eye(2), [0, 0], np.eye(3))
+
+
+def spread_spectrum_pair(seed: int, dim: int, n: int) -> tuple[np.ndarray, np.ndarray]:
+    """Two ``(n, dim)`` samples of one Gaussian whose variances run from 100 down to 1e-6 in a random basis."""
+    rng = np.random.default_rng(seed)
+    scales = np.sqrt(np.geomspace(100.0, 1e-6, dim))
+    basis = special_ortho_group.rvs(dim, random_state=rng)
+    return (rng.normal(size=(n, dim)) * scales) @ basis.T, (rng.normal(size=(n, dim)) * scales) @ basis.T
+
+
+def test_variances_over_eight_decades_keep_the_small_cross_terms():
+    """Eigenvalues of Σ1^½ Σ2 Σ1^½ are products of variances (down to 1e-12 here): all of them count.
+
+    Discarding those below round-off of the largest (1e4) biased this FID up by 6e-4; scipy's sqrtm formula
+    is accurate to ~1e-8 relative on it.
+    """
+    a, b = spread_spectrum_pair(0, dim=256, n=3000)
+    assert fid(a, b) == pytest.approx(scipy_fid(a, b), rel=1e-7)
+    assert frechet_distance(*feature_statistics(a), *feature_statistics(b)) == pytest.approx(fid(a, b), rel=1e-10)
+
+
+def test_commuting_covariances_over_eight_decades_closed_form():
+    """Σ1 = U diag(v1) Uᵀ and Σ2 = U diag(v2) Uᵀ: the cross term is Σ √(v1 v2), exactly."""
+    rng = np.random.default_rng(8)
+    dim = 64
+    basis = special_ortho_group.rvs(dim, random_state=rng)
+    var_a = np.geomspace(100.0, 1e-6, dim)
+    var_b = var_a * rng.uniform(0.25, 4.0, size=dim)
+    mean_a, mean_b = rng.normal(size=dim), rng.normal(size=dim)
+    expected = ((mean_a - mean_b) ** 2).sum() + ((np.sqrt(var_a) - np.sqrt(var_b)) ** 2).sum()
+    sigma_a, sigma_b = (basis * var_a) @ basis.T, (basis * var_b) @ basis.T
+    assert frechet_distance(basis @ mean_a, sigma_a, basis @ mean_b, sigma_b) == pytest.approx(expected, rel=1e-11)
+    a = with_exact_covariance(rng, 200, var_a, mean_a) @ basis.T
+    b = with_exact_covariance(rng, 300, var_b, mean_b) @ basis.T
+    assert fid(a, b) == pytest.approx(expected, rel=1e-11)
+
+
+@pytest.mark.parametrize("seed", range(3))
+def test_frechet_distance_of_a_low_rank_and_a_full_rank_covariance_matches_fid(seed):
+    """Σ1 of rank 4 in 50-D against a full-rank Σ2: Σ1's round-off eigenvalues must not pair with Σ2's variances."""
+    rng = np.random.default_rng(seed)
+    basis = np.linalg.qr(rng.normal(size=(50, 4)))[0]
+    a = rng.normal(size=(12, 4)) @ basis.T * 3.0
+    b = rng.normal(size=(200, 50)) @ rng.normal(size=(50, 50)) * 0.3
+    from_statistics = frechet_distance(*feature_statistics(a), *feature_statistics(b))
+    assert from_statistics == pytest.approx(fid(a, b), rel=1e-12)

@@ -1,8 +1,6 @@
-"""Elementary functions with finite gradients at their singular points, and angle wrapping."""
+"""Elementary functions with finite gradients at their singular points."""
 
 from __future__ import annotations
-
-import math
 
 import torch
 
@@ -13,8 +11,3 @@ def safe_hypot(x: torch.Tensor, y: torch.Tensor) -> torch.Tensor:
     one = torch.ones_like(x)
     value = torch.hypot(torch.where(origin, one, x), torch.where(origin, one, y))
     return torch.where(origin, torch.zeros_like(value), value)
-
-
-def wrap_angle(angle: torch.Tensor) -> torch.Tensor:
-    """Wrap angles (radians) into ``[-pi, pi]``; the gradient passes through unchanged."""
-    return angle - (2 * math.pi) * torch.round(angle / (2 * math.pi))

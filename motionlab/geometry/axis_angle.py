@@ -11,7 +11,8 @@ import math
 
 import torch
 
-from motionlab.geometry._checks import check_finite, check_positive_finite, check_shape
+from motionlab.geometry._checks import check_finite, check_shape
+from motionlab.geometry.quaternion import safely_scaled
 
 
 def axis_angle_to_quat(rotvec: torch.Tensor) -> torch.Tensor:
@@ -34,10 +35,10 @@ def quat_to_axis_angle(q: torch.Tensor) -> torch.Tensor:
     gradient too.
     """
     check_shape(q, (4,), "quat_to_axis_angle", "q")
+    q, _ = safely_scaled(q, "quat_to_axis_angle", "the squared norm of q")
     q = torch.where(q[..., :1] < 0, -q, q)
     w, vec = q[..., :1], q[..., 1:]
     sin_part = torch.linalg.vector_norm(vec, dim=-1, keepdim=True)
-    check_positive_finite((w * w + sin_part * sin_part)[..., 0], "quat_to_axis_angle", "the squared norm of q")
     identity = sin_part == 0
     safe_sin = torch.where(identity, torch.ones_like(sin_part), sin_part)
     safe_w = torch.where(identity, w, torch.ones_like(w))

@@ -22,6 +22,7 @@ from __future__ import annotations
 import torch
 
 from motionlab.geometry._checks import check_finite, check_positive_finite, check_shape, promote_and_broadcast
+from motionlab.geometry.quaternion import safely_scaled
 
 
 def _check_pair(q: torch.Tensor, r: torch.Tensor, where: str) -> torch.Tensor:
@@ -37,9 +38,14 @@ def quat_geodesic(q: torch.Tensor, r: torch.Tensor) -> torch.Tensor:
     """d1: the angle (radians, ``[0, π]``) of the rotation taking ``q`` to ``r``; any non-zero quaternions.
 
     With the relative rotation ``q* ⊗ r = (<q, r>, w_q vec(r) - w_r vec(q) - vec(q) × vec(r))``,
-    ``d1 = 2 atan2(|vec|, |<q, r>|)``. Raises ``ValueError`` for zero or non-finite inputs.
+    ``d1 = 2 atan2(|vec|, |<q, r>|)``. Raises ``ValueError`` for zero or non-finite inputs; tiny or huge
+    ones are rescaled first (:func:`~motionlab.geometry.quaternion.safely_scaled`), so that the products
+    neither underflow nor overflow.
     """
-    dot = _check_pair(q, r, "quat_geodesic")
+    _check_pair(q, r, "quat_geodesic")
+    q, _ = safely_scaled(q, "quat_geodesic", "|q|")
+    r, _ = safely_scaled(r, "quat_geodesic", "|r|")
+    dot = (q * r).sum(-1)
     q, r = promote_and_broadcast(q, r)
     vec = q[..., :1] * r[..., 1:] - r[..., :1] * q[..., 1:] - torch.linalg.cross(q[..., 1:], r[..., 1:], dim=-1)
     sin_part = torch.linalg.vector_norm(vec, dim=-1)

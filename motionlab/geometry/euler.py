@@ -13,12 +13,21 @@ Extracting angles (:func:`quat_to_euler`) works on the quaternion directly. For 
 ``w = cos(b/2) cos((a+c)/2)``, ``q_i = cos(b/2) sin((a+c)/2)``,
 ``q_j = sin(b/2) cos((a-c)/2)``, ``ε q_k = sin(b/2) sin((a-c)/2)``,
 
-so two ``atan2`` give the half sum and half difference of the outer angles, and a third gives ``b``.
+that is ``w + i q_i = cos(b/2) e^{i(a+c)/2}`` and ``q_j + i ε q_k = sin(b/2) e^{i(a-c)/2}``. So
+``b = 2 atan2(|q_j + i ε q_k|, |w + i q_i|)``, and the outer angles are the arguments of the products
+``(w + i q_i)(q_j ± i ε q_k)``: one ``atan2`` each, already in ``[-pi, pi]`` (adding two half-angle
+``atan2`` and wrapping the sum back into range with a rounded ``2π`` doubles the float32 error).
 A Tait–Bryan order ``(i, j, k)`` becomes the proper order ``(i, j, i)`` after rotating by a quarter
 turn about ``j`` (``R_k(c) = P R_i(c) Pᵀ`` with ``P = R_j(-ε π/2)``), which is a fixed linear map of the
-quaternion's components. In gimbal lock (middle angle ``0`` or ``π`` for proper orders, ``±π/2`` for
-Tait–Bryan ones) only the sum or the difference of the outer angles is defined; like scipy we then
-set the third angle to zero.
+quaternion's components.
+
+In gimbal lock (middle angle ``0`` or ``π`` for proper orders, ``±π/2`` for Tait–Bryan ones) only the sum
+or the difference of the outer angles is defined; like scipy we then set the third angle to zero. The lock
+is declared where ``sin(b/2)`` (or ``cos(b/2)``) is at most ``2 eps`` of the quaternion's norm, with ``eps``
+the dtype's machine epsilon: there the rounding errors of the components (1 to 2 ``eps`` for quaternions
+computed from angles or matrices) leave the other combination of the outer angles undetermined, and zeroing
+the third angle moves the rotation by at most about ``8 eps`` (1e-6 rad in float32). A middle angle further
+from the lock keeps both outer angles, which are then determined to rounding level.
 """
 
 from __future__ import annotations
@@ -27,9 +36,9 @@ import math
 
 import torch
 
-from motionlab.geometry._checks import check_finite, check_positive_finite, check_shape
-from motionlab.geometry._numerics import safe_hypot, wrap_angle
-from motionlab.geometry.quaternion import hamilton_product
+from motionlab.geometry._checks import check_finite, check_shape
+from motionlab.geometry._numerics import safe_hypot
+from motionlab.geometry.quaternion import hamilton_product, safely_scaled
 
 _AXES = {"x": 0, "y": 1, "z": 2}
 _EVEN_PERMUTATIONS = ((0, 1, 2), (1, 2, 0), (2, 0, 1))
@@ -89,28 +98,28 @@ def quat_to_euler(q: torch.Tensor, order: str) -> torch.Tensor:
         k = 3 - i - j
     parity = 1 if (i, j, k) in _EVEN_PERMUTATIONS else -1
 
+    q, norm_sq = safely_scaled(q, "quat_to_euler", "the squared norm of q")
     w, q_i, q_j, q_k = q[..., 0], q[..., 1 + i], q[..., 1 + j], q[..., 1 + k]
     if proper:
         p0, p1, p2, p3 = w, q_i, q_j, parity * q_k
     else:  # components of q ⊗ q_j(-ε π/2), up to a factor 1/√2 and signs that fold the angle range
         p0, p1, p2, p3 = w + parity * q_j, q_i + q_k, w - parity * q_j, q_i - q_k
-    norm_sq = p0 * p0 + p1 * p1 + p2 * p2 + p3 * p3
-    check_positive_finite(norm_sq, "quat_to_euler", "the squared norm of q")
 
-    half_sum = torch.atan2(p1, p0)
-    half_diff = torch.atan2(p3, p2)
     outer, inner = safe_hypot(p0, p1), safe_hypot(p2, p3)
     half_middle = torch.atan2(inner, outer)  # in [0, pi/2]
     middle = 2 * half_middle if proper else parity * (math.pi / 2 - 2 * half_middle)
 
-    tolerance = 8 * torch.finfo(q.dtype).eps * torch.sqrt(norm_sq)
+    p_norm = torch.sqrt(norm_sq if proper else 2 * norm_sq)  # |(p0, p1, p2, p3)|
+    tolerance = 2 * torch.finfo(q.dtype).eps * p_norm
     sum_only = inner <= tolerance  # sin(half middle) = 0: only a + c is defined
     diff_only = (outer <= tolerance) & ~sum_only  # cos(half middle) = 0: only a - c is defined
-    locked_angle = torch.where(sum_only, 2 * half_sum, 2 * half_diff)
+    twice_sum = torch.atan2(2 * p0 * p1, p0 * p0 - p1 * p1)  # arg((p0 + i p1)^2) = a + c
+    twice_diff = torch.atan2(2 * p2 * p3, p2 * p2 - p3 * p3)  # arg((p2 + i p3)^2) = a - c
+    locked_angle = torch.where(sum_only, twice_sum, twice_diff)
     locked = sum_only | diff_only
-    zero = torch.zeros_like(half_sum)
-    first = half_sum + half_diff
-    last = half_sum - half_diff
+    zero = torch.zeros_like(twice_sum)
+    first = torch.atan2(p0 * p3 + p1 * p2, p0 * p2 - p1 * p3)  # arg((p0 + i p1)(p2 + i p3))
+    last = torch.atan2(p1 * p2 - p0 * p3, p0 * p2 + p1 * p3)  # arg((p0 + i p1)(p2 - i p3))
     if intrinsic:  # the third angle of the order is `last`
         first = torch.where(locked, locked_angle, first)
         last = torch.where(locked, zero, last)
@@ -119,4 +128,4 @@ def quat_to_euler(q: torch.Tensor, order: str) -> torch.Tensor:
         last = torch.where(sum_only, locked_angle, torch.where(diff_only, -locked_angle, last))
         first = torch.where(locked, zero, first)
         angles = (last, middle, first)
-    return wrap_angle(torch.stack(angles, dim=-1))
+    return torch.stack(angles, dim=-1)

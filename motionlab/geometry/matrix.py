@@ -7,7 +7,8 @@ from __future__ import annotations
 
 import torch
 
-from motionlab.geometry._checks import check_finite, check_positive_finite, check_shape
+from motionlab.geometry._checks import check_finite, check_shape
+from motionlab.geometry.quaternion import safely_scaled
 
 
 def quat_to_matrix(q: torch.Tensor) -> torch.Tensor:
@@ -19,12 +20,13 @@ def quat_to_matrix(q: torch.Tensor) -> torch.Tensor:
     `` [s(xy + wz),   1 - s(x²+z²), s(yz - wx)],``
     `` [s(xz - wy),   s(yz + wx),   1 - s(x²+y²)]]``.
 
-    Raises ``ValueError`` for a zero or non-finite quaternion (checked on ``|q|^2``, which is needed anyway).
+    A tiny or huge ``q``, whose ``|q|^2`` would underflow or overflow, is rescaled first
+    (:func:`~motionlab.geometry.quaternion.safely_scaled`). Raises ``ValueError`` for a zero or non-finite
+    quaternion (checked on ``|q|^2``, which is needed anyway).
     """
     check_shape(q, (4,), "quat_to_matrix", "q")
+    q, norm_sq = safely_scaled(q, "quat_to_matrix", "the squared norm of q")
     w, x, y, z = q.unbind(-1)
-    norm_sq = w * w + x * x + y * y + z * z
-    check_positive_finite(norm_sq, "quat_to_matrix", "the squared norm of q")
     s = 2.0 / norm_sq
     xs, ys, zs = x * s, y * s, z * s
     wx, wy, wz = w * xs, w * ys, w * zs

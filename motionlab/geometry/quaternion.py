@@ -5,8 +5,11 @@ are the same rotation. The product follows Hamilton's convention, so ``quat_mul(
 rotation "first ``q2``, then ``q1``", matching ``quat_to_matrix(q1) @ quat_to_matrix(q2)``.
 
 Functions that turn a quaternion into a rotation (:func:`quat_apply`, and the conversions and
-distances in the sibling modules) accept any non-zero quaternion and use the rotation of ``q / |q|``.
-The algebra here (:func:`quat_mul`, :func:`quat_conjugate`) takes quaternions as they are.
+distances in the sibling modules) accept any non-zero quaternion and use the rotation of ``q / |q|``;
+those that need ``|q|`` divide a tiny or huge but finite ``q`` (float32 ``1e-20`` or ``1e20``) by its
+largest ``|component|`` first (:func:`safely_scaled`), so that it gives the rotation of its unit version
+instead of an underflowed or overflowed ``|q|^2``. The algebra here (:func:`quat_mul`,
+:func:`quat_conjugate`) takes quaternions as they are.
 """
 
 from __future__ import annotations
@@ -69,11 +72,41 @@ def quat_normalize(q: torch.Tensor) -> torch.Tensor:
     return normalized(q, "quat_normalize", "q")
 
 
+def safely_scaled(q: torch.Tensor, where: str, what: str) -> tuple[torch.Tensor, torch.Tensor]:
+    """``(p, |p|^2)``: ``p`` ``(..., 4)`` a positive multiple of ``q`` whose squared norm ``(...)`` is safe to use.
+
+    Squares of the components of a tiny or huge ``q`` underflow or overflow (in float32 ``|q|^2`` is 0 below
+    ``|q| ≈ 5e-23`` and inf above ``≈ 2e19``, and ``2 / |q|^2`` is inf below ``≈ 8e-20``). When every
+    ``|q|^2`` lies in ``[tiny / eps, eps / tiny]`` of the dtype (``|q|`` from about ``3e-16`` to ``3e15`` in
+    float32, ``1e-146`` to ``1e146`` in float64), squaring the components and dividing by ``|q|^2`` lose
+    nothing, and ``p = q``: the common case costs one reduction of ``|q|^2``, which the caller needs anyway.
+    Otherwise ``p = q / max_i |q_i|``, with ``1 <= |p|^2 <= 4``.
+
+    Raises ``ValueError`` ``"{where}: {what} is zero or not finite ..."`` for a zero ``q`` or one with a NaN
+    or an infinity: exactly then the largest ``|component|`` is 0, inf or NaN, and so are ``|q|`` and
+    ``|q|^2``, so the value the message shows is theirs too.
+
+    Autograd treats the scale ``max_i |q_i|`` as a constant. That leaves the gradient of any function of
+    the direction of ``q`` alone (``f(q / m) = f(q)`` for every ``m > 0``), and only such functions may use
+    ``p``.
+    """
+    norm_sq = (q * q).sum(-1)
+    if norm_sq.numel() == 0:
+        return q, norm_sq
+    info = torch.finfo(q.dtype)
+    smallest, largest = torch.aminmax(norm_sq.detach())
+    if bool(smallest >= info.tiny / info.eps) and bool(largest <= info.eps / info.tiny):  # NaN fails both
+        return q, norm_sq
+    largest_component = q.detach().abs().amax(dim=-1, keepdim=True)
+    check_positive_finite(largest_component[..., 0], where, what)
+    q = q / largest_component
+    return q, (q * q).sum(-1)
+
+
 def normalized(q: torch.Tensor, where: str, name: str) -> torch.Tensor:
     """``q / |q|`` along the last dimension, raising (as ``where``) for a zero or non-finite ``q``."""
-    norm = torch.linalg.vector_norm(q, dim=-1, keepdim=True)
-    check_positive_finite(norm[..., 0], where, f"the norm of {name}")
-    return q / norm
+    q, norm_sq = safely_scaled(q, where, f"the norm of {name}")
+    return q / torch.sqrt(norm_sq).unsqueeze(-1)
 
 
 def quat_standardize(q: torch.Tensor) -> torch.Tensor:
@@ -87,17 +120,17 @@ def quat_apply(q: torch.Tensor, v: torch.Tensor) -> torch.Tensor:
     """Rotate vectors ``v`` of shape ``(..., 3)`` by quaternions ``q`` of shape ``(..., 4)``.
 
     Leading dimensions broadcast. Equivalent to ``quat_to_matrix(q) @ v`` but cheaper: with
-    ``s = 2 / |q|^2``, ``u = vec(q)`` and ``t = u × v``, the result is ``v + s (w t + u × t)``.
+    ``s = 2 / |q|^2``, ``u = vec(q)`` and ``t = u × v``, the result is ``v + s (w t + u × t)`` (for a tiny
+    or huge ``q``, of ``q`` rescaled by :func:`safely_scaled`).
     """
     check_shape(q, (4,), "quat_apply", "q")
     check_shape(v, (3,), "quat_apply", "v")
     check_finite(v, "quat_apply", "v")
-    norm_sq = (q * q).sum(-1, keepdim=True)
-    check_positive_finite(norm_sq[..., 0], "quat_apply", "the squared norm of q")
+    q, norm_sq = safely_scaled(q, "quat_apply", "the squared norm of q")
     w, u = q[..., :1], q[..., 1:]
     u, v = promote_and_broadcast(u, v)
     t = torch.linalg.cross(u, v, dim=-1)
-    return v + (2.0 / norm_sq) * (w * t + torch.linalg.cross(u, t, dim=-1))
+    return v + (2.0 / norm_sq.unsqueeze(-1)) * (w * t + torch.linalg.cross(u, t, dim=-1))
 
 
 def quat_from_two_vectors(a: torch.Tensor, b: torch.Tensor) -> torch.Tensor:
