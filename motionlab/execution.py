@@ -13,6 +13,10 @@ and the stress harness (:mod:`motionlab.stress`) do. Two things can keep a cell 
   alive, did it use CPU, does it still answer on its control channel).
 
 In both cases the kernel is killed, not asked to shut down, and the executed part of the notebook is kept.
+
+The client also polls its sockets in steps of :data:`POLL_SECONDS` rather than waiting once for a whole cell's
+limit, so a wake-up that the client's event loop misses cannot stall it (see
+:meth:`WatchedClient._async_poll_for_reply`).
 """
 
 from __future__ import annotations
@@ -27,12 +31,15 @@ from typing import Any
 
 import nbformat
 from nbclient import NotebookClient
-from nbclient.exceptions import CellTimeoutError, DeadKernelError
+from nbclient.exceptions import CellExecutionComplete, CellTimeoutError, DeadKernelError
 from nbclient.util import ensure_async
 from nbformat import NotebookNode
 
 #: How often the reply channel is polled while a cell runs (seconds).
 POLL_SECONDS = 1.0
+
+#: A cell whose reply reaches the client this long after the kernel said it is idle has stalled (seconds).
+STALL_SECONDS = 2.0
 
 
 @dataclass(frozen=True)
@@ -94,17 +101,17 @@ def _process_cpu_seconds(pid: int) -> float | None:
     return (int(fields[11]) + int(fields[12])) / os.sysconf("SC_CLK_TCK")
 
 
-class WatchedClient(NotebookClient):
-    """nbclient's client with :class:`CellLimits`: polls the reply in short steps and, between them, checks
-    that the kernel started the request and, once it finished the cell, that the reply arrives."""
+class TimedClient(NotebookClient):
+    """nbclient's own client, timed: when each request's first IOPub message and its ``idle`` status reached
+    the client, and which cells the client was done with only :data:`STALL_SECONDS` or more after that
+    ``idle`` (:attr:`stalls`, ``(cell index, seconds)``): their replies came late."""
 
-    def __init__(self, nb: NotebookNode, limits: CellLimits, **kw: Any) -> None:
-        super().__init__(nb, timeout=int(limits.cell_seconds), **kw)
-        self.limits = limits
-        #: For each request: when its first IOPub message came, and when IOPub said it is idle.
+    def __init__(self, nb: NotebookNode, **kw: Any) -> None:
+        super().__init__(nb, **kw)
         self._first_seen: dict[str, float] = {}
         self._idle_seen: dict[str, float] = {}
         self._current_cell = -1
+        self.stalls: list[tuple[int, float]] = []
 
     def process_message(self, msg: dict[str, Any], cell: NotebookNode, cell_index: int) -> Any:
         parent = msg.get("parent_header", {}).get("msg_id")
@@ -116,9 +123,37 @@ class WatchedClient(NotebookClient):
 
     async def async_execute_cell(self, cell: NotebookNode, cell_index: int, *args: Any, **kwargs: Any) -> Any:
         self._current_cell = cell_index
-        return await super().async_execute_cell(cell, cell_index, *args, **kwargs)
+        idle_before = set(self._idle_seen)
+        result = await super().async_execute_cell(cell, cell_index, *args, **kwargs)
+        idle = [self._idle_seen[msg_id] for msg_id in self._idle_seen.keys() - idle_before]
+        if idle and (late := time.monotonic() - max(idle)) >= STALL_SECONDS:
+            self.stalls.append((cell_index, round(late, 1)))
+        return result
 
-    async def _async_poll_for_reply(  # nbclient 0.11's reply loop, polled in steps of POLL_SECONDS
+
+class WatchedClient(TimedClient):
+    """nbclient's client with :class:`CellLimits`: polls the reply in short steps and, between them, checks
+    that the kernel started the request and, once it finished the cell, that the reply arrives."""
+
+    def __init__(self, nb: NotebookNode, limits: CellLimits, **kw: Any) -> None:
+        super().__init__(nb, timeout=int(limits.cell_seconds), **kw)
+        self.limits = limits
+
+    async def _async_poll_output_msg(self, parent_msg_id: str, cell: NotebookNode, cell_index: int) -> None:
+        """nbclient's IOPub loop, polled in steps of :data:`POLL_SECONDS` (see :meth:`_async_poll_for_reply`)."""
+        assert self.kc is not None
+        while True:
+            try:
+                msg = await ensure_async(self.kc.iopub_channel.get_msg(timeout=POLL_SECONDS))
+            except Empty:
+                continue
+            if msg["parent_header"].get("msg_id") == parent_msg_id:
+                try:
+                    self.process_message(msg, cell, cell_index)
+                except CellExecutionComplete:
+                    return
+
+    async def _async_poll_for_reply(
         self,
         msg_id: str,
         cell: NotebookNode,
@@ -126,6 +161,10 @@ class WatchedClient(NotebookClient):
         task_poll_output_msg: asyncio.Future[Any],
         task_poll_kernel_alive: asyncio.Future[Any],
     ) -> dict[str, Any]:
+        """nbclient's reply loop, polled in steps of :data:`POLL_SECONDS` instead of one wait for the whole
+        cell limit. Every new poll first asks the socket whether a message is waiting, so a wake-up that the
+        event loop missed (ZeroMQ signals readiness by edges) costs a second, not the rest of the limit;
+        between the steps the request's progress is checked (:meth:`_missing`)."""
         assert self.kc is not None
         sent = time.monotonic()
         while True:
@@ -137,7 +176,7 @@ class WatchedClient(NotebookClient):
                 missing, since = self._missing(msg_id, sent, now)
                 if missing is not None:
                     task_poll_kernel_alive.cancel()
-                    diagnosis = await self._diagnose()
+                    diagnosis = await self._diagnose(msg_id)
                     self.shutdown_kernel = "immediate"
                     raise KernelNotAnswering(self._current_cell, missing, now - since, diagnosis) from None
                 if timeout is not None and now - sent > timeout:
@@ -166,9 +205,29 @@ class WatchedClient(NotebookClient):
             return "the cell finished (IOPub idle) but its reply never came", idle
         return None, sent
 
-    async def _diagnose(self) -> dict[str, Any]:
-        """A short diagnosis of a kernel that stopped answering: its CPU use over one second and whether it
-        still answers a ``kernel_info_request`` on its control channel."""
+    async def _ask(self, channel: Any, seconds: float) -> tuple[bool, list[dict[str, Any]]]:
+        """Send a ``kernel_info_request`` on ``channel``; whether it was answered within ``seconds``, and the
+        other messages that came meanwhile."""
+        assert self.kc is not None
+        request = self.kc.session.msg("kernel_info_request")
+        channel.send(request)
+        deadline = time.monotonic() + seconds
+        others = []
+        while time.monotonic() < deadline:
+            try:
+                reply = await ensure_async(channel.get_msg(timeout=POLL_SECONDS))
+            except Empty:
+                continue
+            if reply["parent_header"].get("msg_id") == request["header"]["msg_id"]:
+                return True, others
+            others.append(reply)
+        return False, others
+
+    async def _diagnose(self, msg_id: str) -> dict[str, Any]:
+        """A short diagnosis of a kernel that stopped answering request ``msg_id``: its CPU use over one second,
+        whether it still answers on its control channel, and whether a second request on the shell channel
+        is answered and brings the missing reply along (a request stranded in the kernel's socket until the
+        next message woke it)."""
         assert self.km is not None and self.kc is not None
         diagnosis: dict[str, Any] = {}
         pid = getattr(getattr(self.km, "provisioner", None), "pid", None)
@@ -178,17 +237,9 @@ class WatchedClient(NotebookClient):
             after = _process_cpu_seconds(pid)
             if before is not None and after is not None:
                 diagnosis["cpu_seconds_in_1s"] = round(after - before, 3)
-        try:
-            request = self.kc.session.msg("kernel_info_request")
-            self.kc.control_channel.send(request)
-            deadline = time.monotonic() + 5.0
-            answered = False
-            while time.monotonic() < deadline and not answered:
-                reply = await ensure_async(self.kc.control_channel.get_msg(timeout=1.0))
-                answered = reply["parent_header"].get("msg_id") == request["header"]["msg_id"]
-        except Empty:
-            answered = False
-        diagnosis["control_answers"] = answered
+        diagnosis["control_answers"], _ = await self._ask(self.kc.control_channel, 5.0)
+        diagnosis["shell_answers"], others = await self._ask(self.kc.shell_channel, 5.0)
+        diagnosis["late_reply_came"] = any(m["parent_header"].get("msg_id") == msg_id for m in others)
         return diagnosis
 
 
@@ -215,7 +266,12 @@ def execute_notebook(
         error = exc
     seconds = time.perf_counter() - start
     failed = client._current_cell if error is not None and client._current_cell >= 0 else None
-    return Execution(notebook, seconds, error, failed)
+    return Execution(notebook, seconds, error, failed, stall_notes(client))
+
+
+def stall_notes(client: TimedClient) -> list[str]:
+    """One line per stalled cell of ``client``."""
+    return [f"cell {index}: reply {late} s after the kernel's idle status" for index, late in client.stalls]
 
 
 def read_notebook(path: Path) -> NotebookNode:

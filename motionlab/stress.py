@@ -34,13 +34,12 @@ from pathlib import Path
 from typing import Any
 
 import nbformat
-from nbclient import NotebookClient
 from nbclient.exceptions import CellTimeoutError
 from nbformat import NotebookNode
 
 from motionlab import config
 from motionlab.cli import positive_int
-from motionlab.execution import CellLimits, Execution, execute_notebook, read_notebook
+from motionlab.execution import CellLimits, Execution, TimedClient, execute_notebook, read_notebook, stall_notes
 
 #: Packages whose versions decide how a kernel talks to its client (recorded in every summary).
 KERNEL_STACK = ("ipykernel", "jupyter_client", "pyzmq", "tornado", "nbclient", "ipywidgets", "comm")
@@ -113,7 +112,7 @@ class StressSummary:
     client: str
     executions: int = 0
     cells: int = 0
-    #: Cells done long after the kernel said idle (stock client only; the watched client polls every second).
+    #: Cells whose reply came long after the kernel said idle (see :class:`~motionlab.execution.TimedClient`).
     stalls: list[dict[str, Any]] = field(default_factory=list)
     hangs: list[dict[str, Any]] = field(default_factory=list)
     failures: list[dict[str, Any]] = field(default_factory=list)
@@ -131,37 +130,11 @@ def kernel_stack_versions() -> dict[str, str]:
     return versions
 
 
-#: A cell whose reply reaches the client this long after the kernel said it is idle counts as a stall.
-STALL_SECONDS = 2.0
-
-
-class TimedStockClient(NotebookClient):
-    """nbclient's own client, which waits for each reply in one poll of up to the cell limit (what the course
-    build did before :class:`~motionlab.execution.WatchedClient`), timed: for each cell, how long after the
-    kernel's ``idle`` status the client was done with it (``stalls``: the cells where that took longer than
-    :data:`STALL_SECONDS`)."""
-
-    def __init__(self, nb: NotebookNode, **kw: Any) -> None:
-        super().__init__(nb, **kw)
-        self._idle_at: dict[int, float] = {}
-        self.stalls: list[tuple[int, float]] = []
-
-    def process_message(self, msg: dict[str, Any], cell: NotebookNode, cell_index: int) -> Any:
-        if msg["msg_type"] == "status" and msg["content"].get("execution_state") == "idle":
-            self._idle_at.setdefault(cell_index, time.monotonic())
-        return super().process_message(msg, cell, cell_index)
-
-    async def async_execute_cell(self, cell: NotebookNode, cell_index: int, *args: Any, **kwargs: Any) -> Any:
-        result = await super().async_execute_cell(cell, cell_index, *args, **kwargs)
-        late = time.monotonic() - self._idle_at.get(cell_index, time.monotonic())
-        if late > STALL_SECONDS:
-            self.stalls.append((cell_index, round(late, 1)))
-        return result
-
-
 def execute_stock(notebook: NotebookNode, cwd: Path, limits: CellLimits) -> Execution:
-    """Execute ``notebook`` with :class:`TimedStockClient`; the stalls go to :attr:`Execution.notes`."""
-    client = TimedStockClient(notebook, timeout=int(limits.cell_seconds), kernel_name="python3",
+    """Execute ``notebook`` with nbclient's own client, which waits for each reply in one poll of up to the
+    cell limit (what the course build did before :class:`~motionlab.execution.WatchedClient`), timed
+    (:class:`~motionlab.execution.TimedClient`); the stalls go to :attr:`Execution.notes`."""
+    client = TimedClient(notebook, timeout=int(limits.cell_seconds), kernel_name="python3",
                               resources={"metadata": {"path": str(cwd)}}, store_widget_state=True)
     start = time.perf_counter()
     error: Exception | None = None
@@ -169,8 +142,7 @@ def execute_stock(notebook: NotebookNode, cwd: Path, limits: CellLimits) -> Exec
         client.execute()
     except Exception as exc:  # counted by the caller
         error = exc
-    notes = [f"cell {index}: done {late} s after the kernel's idle status" for index, late in client.stalls]
-    return Execution(notebook, time.perf_counter() - start, error, notes=notes)
+    return Execution(notebook, time.perf_counter() - start, error, notes=stall_notes(client))
 
 
 def run_stress(
