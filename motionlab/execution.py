@@ -9,14 +9,16 @@ and the stress harness (:mod:`motionlab.stress`) do. Two things can keep a cell 
 * **The kernel stopped answering**: it is alive and idle, but the request never started (no message on
   IOPub carries the request as its parent), or the cell finished (IOPub said ``idle``) but its reply never
   came. Waiting longer cannot help: after :class:`CellLimits.answer_seconds` this raises
-  :class:`KernelNotAnswering`, naming the cell and what was missing, with a short diagnosis (is the process
-  alive, did it use CPU, does it still answer on its control channel).
+  :class:`KernelNotAnswering`, naming the cell and what was missing, with a short diagnosis (its CPU use over
+  a second, whether it still answers on its control and on its shell channel).
 
 In both cases the kernel is killed, not asked to shut down, and the executed part of the notebook is kept.
 
 The client also polls its sockets in steps of :data:`POLL_SECONDS` rather than waiting once for a whole cell's
-limit, so a wake-up that the client's event loop misses cannot stall it (see
-:meth:`WatchedClient._async_poll_for_reply`).
+limit. nbclient's own client waits in one poll, and in widget cells (where it also sends on the shell socket
+while it waits) its event loop sometimes misses ZeroMQ's edge-triggered wake-up: the reply then sits unread
+until the poll times out (measured with :mod:`motionlab.stress`; README, "Reliability"). Polling in steps turns
+that into a delay of at most a second (see :meth:`WatchedClient._async_poll_for_reply`).
 """
 
 from __future__ import annotations
@@ -104,14 +106,14 @@ def _process_cpu_seconds(pid: int) -> float | None:
 class TimedClient(NotebookClient):
     """nbclient's own client, timed: when each request's first IOPub message and its ``idle`` status reached
     the client, and which cells the client was done with only :data:`STALL_SECONDS` or more after that
-    ``idle`` (:attr:`stalls`, ``(cell index, seconds)``): their replies came late."""
+    ``idle`` (:attr:`stalls`, ``(cell index, seconds after idle, seconds in all)``): their replies came late."""
 
     def __init__(self, nb: NotebookNode, **kw: Any) -> None:
         super().__init__(nb, **kw)
         self._first_seen: dict[str, float] = {}
         self._idle_seen: dict[str, float] = {}
         self._current_cell = -1
-        self.stalls: list[tuple[int, float]] = []
+        self.stalls: list[tuple[int, float, float]] = []
 
     def process_message(self, msg: dict[str, Any], cell: NotebookNode, cell_index: int) -> Any:
         parent = msg.get("parent_header", {}).get("msg_id")
@@ -124,10 +126,12 @@ class TimedClient(NotebookClient):
     async def async_execute_cell(self, cell: NotebookNode, cell_index: int, *args: Any, **kwargs: Any) -> Any:
         self._current_cell = cell_index
         idle_before = set(self._idle_seen)
+        start = time.monotonic()
         result = await super().async_execute_cell(cell, cell_index, *args, **kwargs)
+        now = time.monotonic()
         idle = [self._idle_seen[msg_id] for msg_id in self._idle_seen.keys() - idle_before]
-        if idle and (late := time.monotonic() - max(idle)) >= STALL_SECONDS:
-            self.stalls.append((cell_index, round(late, 1)))
+        if idle and (late := now - max(idle)) >= STALL_SECONDS:
+            self.stalls.append((cell_index, round(late, 1), round(now - start, 1)))
         return result
 
 
@@ -271,7 +275,8 @@ def execute_notebook(
 
 def stall_notes(client: TimedClient) -> list[str]:
     """One line per stalled cell of ``client``."""
-    return [f"cell {index}: reply {late} s after the kernel's idle status" for index, late in client.stalls]
+    return [f"cell {index}: reply {late} s after the kernel's idle status ({total} s in all, limit {client.timeout} s)"
+            for index, late, total in client.stalls]
 
 
 def read_notebook(path: Path) -> NotebookNode:
