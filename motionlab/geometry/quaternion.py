@@ -104,9 +104,13 @@ def safely_scaled(q: torch.Tensor, where: str, what: str) -> tuple[torch.Tensor,
 
 
 def normalized(q: torch.Tensor, where: str, name: str) -> torch.Tensor:
-    """``q / |q|`` along the last dimension, raising (as ``where``) for a zero or non-finite ``q``."""
-    q, norm_sq = safely_scaled(q, where, f"the norm of {name}")
-    return q / torch.sqrt(norm_sq).unsqueeze(-1)
+    """``q / |q|`` along the last dimension, raising (as ``where``) for a zero or non-finite ``q``.
+
+    ``|q|`` is ``torch.linalg.vector_norm``; a tiny or huge ``q`` is rescaled first (:func:`safely_scaled`),
+    an ordinary one is left exactly as it is (so the result is bitwise that of ``q / vector_norm(q)``).
+    """
+    q, _ = safely_scaled(q, where, f"the norm of {name}")
+    return q / torch.linalg.vector_norm(q, dim=-1, keepdim=True)
 
 
 def quat_standardize(q: torch.Tensor) -> torch.Tensor:
