@@ -11,9 +11,10 @@ config.set_threads()
 
 
 def pytest_runtest_setup(item) -> None:
-    """A notebook cell under nbval may run as long as the course build would let it (1.5 times its chapter's
-    quick budget), not nbval's default of 2,000 s: a kernel that stops answering fails the cell within a
-    minute, naming it (nbval then stops the kernel, and the chapter's later cells fail at once)."""
+    """A notebook cell under nbval may run as long as the course build would let it (three times its
+    chapter's quick budget, 60-120 s), not nbval's default of 2,000 s: a kernel that stops answering fails
+    the cell within two minutes, naming it (nbval then stops the kernel, and the chapter's later cells fail
+    at once)."""
     if type(item).__name__ == "IPyNbCell":
         from motionlab.course import cell_limits
 
