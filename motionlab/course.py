@@ -22,6 +22,7 @@ from __future__ import annotations
 
 import argparse
 import html
+import re
 import sys
 from dataclasses import dataclass
 from pathlib import Path
@@ -62,6 +63,8 @@ ANSWER_SECONDS = 30.0
 #: How many times a chapter whose kernel stopped answering is executed again in a fresh kernel.
 HANG_RETRIES = 1
 
+_ANSI_CODES = re.compile(r"\x1b\[[0-9;]*m")
+
 
 @dataclass(frozen=True)
 class ChapterRun:
@@ -99,8 +102,10 @@ def cell_limits(name: str) -> CellLimits:
 
 
 def _describe(error: BaseException, cell: int | None) -> str:
+    """One line for the report: the cell, the error's type and the last line of its message (the executed
+    chapter keeps the whole traceback), without terminal colour codes."""
     where = "" if cell is None else f"cell {cell}: "
-    text = str(error).strip()
+    text = _ANSI_CODES.sub("", str(error)).strip()
     return where + f"{type(error).__name__}: {text.splitlines()[-1] if text else ''}"[:2000]
 
 
