@@ -248,20 +248,18 @@ class WatchedClient(TimedClient):
 
 
 def execute_notebook(
-    notebook: NotebookNode, cwd: Path, limits: CellLimits, *, store_widget_state: bool = True
+    notebook: NotebookNode, cwd: Path, limits: CellLimits, *, store_widget_state: bool = True, stock: bool = False
 ) -> Execution:
     """Execute ``notebook`` (in place) in a fresh ``python3`` kernel started in ``cwd``.
 
     Never raises for what happens inside the notebook: an error, a cell over its limit, a dead kernel or one
-    that stopped answering are returned as :attr:`Execution.error` with the index of the cell.
+    that stopped answering are returned as :attr:`Execution.error` with the index of the cell. With ``stock``,
+    nbclient's own client executes (timed, :class:`TimedClient`; for comparison in :mod:`motionlab.stress`).
     """
-    client = WatchedClient(
-        notebook,
-        limits,
-        kernel_name="python3",
-        resources={"metadata": {"path": str(cwd)}},
-        store_widget_state=store_widget_state,
-    )
+    options = dict(kernel_name="python3", resources={"metadata": {"path": str(cwd)}},
+                   store_widget_state=store_widget_state)
+    client = (TimedClient(notebook, timeout=int(limits.cell_seconds), **options) if stock
+              else WatchedClient(notebook, limits, **options))
     start = time.perf_counter()
     error: BaseException | None = None
     try:

@@ -39,7 +39,7 @@ from nbformat import NotebookNode
 
 from motionlab import config
 from motionlab.cli import positive_int
-from motionlab.execution import CellLimits, Execution, TimedClient, execute_notebook, read_notebook, stall_notes
+from motionlab.execution import CellLimits, execute_notebook, read_notebook
 
 #: Packages whose versions decide how a kernel talks to its client (recorded in every summary).
 KERNEL_STACK = ("ipykernel", "jupyter_client", "pyzmq", "tornado", "nbclient", "ipywidgets", "comm")
@@ -130,21 +130,6 @@ def kernel_stack_versions() -> dict[str, str]:
     return versions
 
 
-def execute_stock(notebook: NotebookNode, cwd: Path, limits: CellLimits) -> Execution:
-    """Execute ``notebook`` with nbclient's own client, which waits for each reply in one poll of up to the
-    cell limit (what the course build did before :class:`~motionlab.execution.WatchedClient`), timed
-    (:class:`~motionlab.execution.TimedClient`); the stalls go to :attr:`Execution.notes`."""
-    client = TimedClient(notebook, timeout=int(limits.cell_seconds), kernel_name="python3",
-                              resources={"metadata": {"path": str(cwd)}}, store_widget_state=True)
-    start = time.perf_counter()
-    error: Exception | None = None
-    try:
-        client.execute()
-    except Exception as exc:  # counted by the caller
-        error = exc
-    return Execution(notebook, time.perf_counter() - start, error, notes=stall_notes(client))
-
-
 def run_stress(
     targets: Sequence[tuple[str, NotebookNode, Path, CellLimits]], runs: int, what: str, out: Path,
     stock: bool = False,
@@ -152,7 +137,7 @@ def run_stress(
     """Execute every target (name, notebook, working directory, limits) ``runs`` times, in order, and
     write the summary to ``out`` after every execution (so a stopped session keeps its counts).
 
-    With ``stock``, nbclient's own client executes (:func:`execute_stock`) and a cell past its limit counts
+    With ``stock``, nbclient's own client executes (``execute_notebook(..., stock=True)``) and a cell past its limit counts
     as a hang: no cell of the quick profile or of the pattern notebook comes near its limit when it runs.
     """
     summary = StressSummary(what=what, profile=config.profile(), versions=kernel_stack_versions(),
@@ -161,8 +146,7 @@ def run_stress(
     out.parent.mkdir(parents=True, exist_ok=True)
     for run in range(1, runs + 1):
         for name, notebook, cwd, limits in targets:
-            execute = execute_stock if stock else execute_notebook
-            execution = execute(nbformat.from_dict(notebook), cwd, limits)
+            execution = execute_notebook(nbformat.from_dict(notebook), cwd, limits, stock=stock)
             summary.executions += 1
             summary.cells += sum(1 for cell in execution.notebook.cells if cell.cell_type == "code")
             record = {"run": run, "notebook": name, "cell": execution.failed_cell,
