@@ -56,7 +56,9 @@ def _jsonable(value: Any) -> Any:
 
 def config_hash(name: str, cfg: Any) -> str:
     """Twelve hex digits identifying (name, config, profile)."""
-    payload = json.dumps({"name": name, "config": config_dict(cfg), "profile": config.profile()}, sort_keys=True)
+    payload = json.dumps(
+        {"name": name, "config": config_dict(cfg), "profile": config.profile()}, sort_keys=True
+    )
     return hashlib.sha256(payload.encode()).hexdigest()[:12]
 
 
@@ -93,7 +95,8 @@ def _listing(names: Iterable[Any], limit: int = 4) -> str:
 
 
 def state_dict_mismatch(saved: Any, current: dict[str, Any]) -> str | None:
-    """Why the tensors ``saved`` cannot go into a model whose state dict is ``current``; ``None`` when they fit.
+    """Why the tensors ``saved`` cannot go into a model whose state dict is ``current``; ``None`` when they
+    fit.
 
     They fit when they have the same names and each has the model's shape (``load_state_dict`` casts dtypes).
     """
@@ -125,7 +128,8 @@ def _flat(value: Any, prefix: str = "") -> dict[str, Any]:
 
 
 def _config_mismatch(saved: Any, current: dict[str, Any]) -> str | None:
-    """How a stored config differs from the current one (keys gone, keys new, values changed); ``None`` if equal."""
+    """How a stored config differs from the current one (keys gone, keys new, values changed); ``None`` if
+    equal."""
     if saved == current:
         return None
     old, new = _flat(saved), _flat(current)
@@ -150,7 +154,8 @@ def _entry_mismatch(payload: Any, name: str, cfg: Any, model: nn.Module) -> str 
     if not isinstance(payload.get("extra") or {}, dict):
         return f"its extra is a {type(payload['extra']).__name__}, not a dict"
     return _config_mismatch(payload.get("config"), config_dict(cfg)) or state_dict_mismatch(
-        payload.get("state_dict"), model.state_dict())
+        payload.get("state_dict"), model.state_dict()
+    )
 
 
 def load_checkpoint(name: str, cfg: Any, model: nn.Module) -> dict[str, Any] | None:

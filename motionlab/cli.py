@@ -1,4 +1,5 @@
-"""Argument checks shared by the command lines (``python -m motionlab.data.synthetic``, ``python -m motionlab.bench``).
+"""Argument checks shared by the command lines (``python -m motionlab.data.synthetic``, ``python -m
+motionlab.bench``).
 
 A bad argument ends a command with a one-line message on stderr and exit status 2, never a traceback:
 the ``type=`` functions here make argparse reject bad values while parsing (argparse prints its usage and
@@ -24,7 +25,8 @@ USER_ERRORS = (ValueError, OSError, MemoryError)
 
 
 def _at_least(parse: Callable[[str], N], what: str, minimum: N) -> Callable[[str], N]:
-    """An argparse ``type=``: ``parse(text)``, finite and at least ``minimum``, else a message naming ``what``."""
+    """An argparse ``type=``: ``parse(text)``, finite and at least ``minimum``, else a message naming
+    ``what``."""
 
     def check(text: str) -> N:
         try:
@@ -39,12 +41,14 @@ def _at_least(parse: Callable[[str], N], what: str, minimum: N) -> Callable[[str
 
 
 def int_at_least(minimum: int) -> Callable[[str], int]:
-    """An argparse ``type=`` accepting a whole number of at least ``minimum`` (``"1.5"`` and ``"x"`` are refused)."""
+    """An argparse ``type=`` accepting a whole number of at least ``minimum`` (``"1.5"`` and ``"x"`` are
+    refused)."""
     return _at_least(int, "an integer", minimum)
 
 
 def float_at_least(minimum: float) -> Callable[[str], float]:
-    """An argparse ``type=`` accepting a finite number of at least ``minimum`` (``nan`` and ``inf`` are refused)."""
+    """An argparse ``type=`` accepting a finite number of at least ``minimum`` (``nan`` and ``inf`` are
+    refused)."""
     return _at_least(float, "a finite number", minimum)
 
 
@@ -53,8 +57,8 @@ non_negative_int = int_at_least(0)
 
 
 def output_file(text: str) -> Path:
-    """An argparse ``type=`` for a file to write: its directory must exist and be writable, and it must not be a
-    directory itself. (Checked before the work starts, so a typo in the path does not cost a long run.)"""
+    """An argparse ``type=`` for a file to write: its directory must exist and be writable, and it must not be
+    a directory itself. (Checked before the work starts, so a typo in the path does not cost a long run.)"""
     path = Path(text)
     if path.is_dir():
         raise argparse.ArgumentTypeError(f"{text!r} is a directory, expected a file name")
@@ -69,7 +73,8 @@ def output_file(text: str) -> Path:
 
 
 def run(prog: str, command: Callable[[], int]) -> int:
-    """``command()``'s exit status; a :data:`USER_ERRORS` exception is printed as one line and gives status 2."""
+    """``command()``'s exit status; a :data:`USER_ERRORS` exception is printed as one line and gives status
+    2."""
     try:
         return command()
     except USER_ERRORS as exc:

@@ -121,9 +121,14 @@ def execute_chapter(path: Path, out_dir: Path) -> ChapterRun:
         execution = execute_notebook(read_notebook(path), path.parent, cell_limits(name))
         if not execution.hung or len(retries) >= HANG_RETRIES:
             break
-        retries.append(f"{_describe(execution.error, execution.failed_cell)} (after {execution.seconds:.0f} s)")
-        print(f"[course] {name}: the kernel stopped answering; executing the chapter again in a fresh kernel "
-              f"({retries[-1]})", flush=True)
+        retries.append(
+            f"{_describe(execution.error, execution.failed_cell)} (after {execution.seconds:.0f} s)"
+        )
+        print(
+            f"[course] {name}: the kernel stopped answering; executing the chapter again in a fresh kernel "
+            f"({retries[-1]})",
+            flush=True,
+        )
     error = None if execution.error is None else _describe(execution.error, execution.failed_cell)
     seconds = execution.seconds
     update_notebook(name, lambda entry: entry.update(seconds=round(seconds, 2), retries=retries))
@@ -144,8 +149,10 @@ def _claim_rows(results: dict[str, Any]) -> str:
             else:
                 verdict, css = "FAILS", "bad"
             rows.append(
-                f"<tr class='{css}'><td>{html.escape(chapter)}</td><td><code>{html.escape(claim_id)}</code></td>"
-                f"<td>{html.escape(str(claim.get('text', '')))}</td><td>{claim.get('value', float('nan')):.4g}</td>"
+                f"<tr class='{css}'><td>{html.escape(chapter)}</td><td><code>{html.escape(claim_id)}"
+                "</code></td>"
+                f"<td>{html.escape(str(claim.get('text', '')))}</td>"
+                f"<td>{claim.get('value', float('nan')):.4g}</td>"
                 f"<td>{html.escape(str(claim.get('op', '')))} {claim.get('threshold', float('nan')):.4g}</td>"
                 f"<td>{html.escape(verdict)}</td></tr>"
             )
@@ -159,7 +166,9 @@ def _metric_rows(results: dict[str, Any]) -> str:
         for key in sorted(k for k in metrics if not k.endswith(".ci95")):
             ci = metrics.get(f"{key}.ci95")
             shown = f"{metrics[key]:.4g}" + (f" ± {ci:.2g}" if ci is not None else "")
-            rows.append(f"<tr><td>{html.escape(chapter)}</td><td><code>{html.escape(key)}</code></td><td>{shown}</td></tr>")
+            rows.append(
+                f"<tr><td>{html.escape(chapter)}</td><td><code>{html.escape(key)}</code></td><td>{shown}</td></tr>"
+            )
     return "\n".join(rows)
 
 
@@ -176,7 +185,8 @@ def write_index(out_dir: Path, runs: list[ChapterRun]) -> Path:
         css = "bad" if run.error or over else "ok"
         chapter_rows.append(
             f"<tr class='{css}'><td><a href='{run.name}.html'>{html.escape(run.name)}</a></td>"
-            f"<td>{run.seconds:.1f} s</td><td>{'' if budget is None else f'{budget:.0f} s'}</td><td>{status}</td></tr>"
+            f"<td>{run.seconds:.1f} s</td><td>{'' if budget is None else f'{budget:.0f} s'}</td>"
+            f"<td>{status}</td></tr>"
         )
     total = sum(run.seconds for run in runs)
     page = f"""<!DOCTYPE html>
@@ -189,12 +199,12 @@ tr.ok td:last-child {{ color: #176117; }} tr.bad td:last-child {{ color: #a11; f
 tr.gap td:last-child {{ color: #8a5a00; }}
 </style></head><body>
 <h1>motionlab: probabilistic human-motion synthesis</h1>
-<p>Profile <b>{html.escape(results['profile'])}</b>, Python {html.escape(results['python'])},
-torch {html.escape(results['torch'])}. Total chapter time {total / 60:.1f} min.
+<p>Profile <b>{html.escape(results["profile"])}</b>, Python {html.escape(results["python"])},
+torch {html.escape(results["torch"])}. Total chapter time {total / 60:.1f} min.
 Raw numbers: <a href="results.json">results.json</a>.</p>
 <h2>Chapters</h2>
 <table><tr><th>chapter</th><th>time</th><th>budget</th><th>status</th></tr>
-{''.join(chapter_rows)}
+{"".join(chapter_rows)}
 </table>
 <h2>Claims</h2>
 <p>Statements from the papers (and a few of ours) checked on our data. A known gap is a claim that
@@ -228,7 +238,10 @@ def select_chapters(notebook_dir: Path, only: list[str] | None = None) -> list[P
         if len(number) != 2 or not number.isdigit():
             raise ValueError(f"--only takes two-digit chapter numbers such as 01 or 07, got {number!r}")
         if number not in numbers:
-            raise ValueError(f"--only {number}: no chapter {number} in {notebook_dir} (there are {', '.join(sorted(numbers))})")
+            raise ValueError(
+                f"--only {number}: no chapter {number} in {notebook_dir} (there are "
+                f"{', '.join(sorted(numbers))})"
+            )
     return [path for path in chapters if path.stem[:2] in only]
 
 
@@ -244,7 +257,11 @@ def build(notebook_dir: Path, only: list[str] | None = None) -> list[ChapterRun]
         run = execute_chapter(path, out_dir)
         budget = budget_seconds(run.name)
         note = f" (budget {budget:.0f} s)" if budget else ""
-        print(f"[course] {run.name}: {run.seconds:.1f} s{note}" + (f" FAILED: {run.error}" if run.error else ""), flush=True)
+        print(
+            f"[course] {run.name}: {run.seconds:.1f} s{note}"
+            + (f" FAILED: {run.error}" if run.error else ""),
+            flush=True,
+        )
         runs.append(run)
     index = write_index(out_dir, runs)
     print(f"[course] report: {index}\n[course] results: {results_path()}")
@@ -252,10 +269,17 @@ def build(notebook_dir: Path, only: list[str] | None = None) -> list[ChapterRun]
 
 
 def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(prog="python -m motionlab.course", description=__doc__,
-                                     formatter_class=argparse.RawDescriptionHelpFormatter)
-    parser.add_argument("--notebooks", type=Path, default=config.REPO_ROOT / "notebooks",
-                        help="directory of the chapters NN_name.ipynb (default: the course's)")
+    parser = argparse.ArgumentParser(
+        prog="python -m motionlab.course",
+        description=__doc__,
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+    )
+    parser.add_argument(
+        "--notebooks",
+        type=Path,
+        default=config.REPO_ROOT / "notebooks",
+        help="directory of the chapters NN_name.ipynb (default: the course's)",
+    )
     parser.add_argument("--only", nargs="+", metavar="NN", help="chapter numbers to run, e.g. 01 03")
     args = parser.parse_args(argv)
     try:

@@ -17,8 +17,8 @@ In both cases the kernel is killed, not asked to shut down, and the executed par
 The client also polls its sockets in steps of :data:`POLL_SECONDS` rather than waiting once for a whole cell's
 limit. nbclient's own client waits in one poll, and in widget cells (where it also sends on the shell socket
 while it waits) its event loop sometimes misses ZeroMQ's edge-triggered wake-up: the reply then sits unread
-until the poll times out (measured with :mod:`motionlab.stress`; README, "Reliability"). Polling in steps turns
-that into a delay of at most a second (see :meth:`WatchedClient._async_poll_for_reply`).
+until the poll times out (measured with :mod:`motionlab.stress`; README, "Reliability"). Polling in steps
+turns that into a delay of at most a second (see :meth:`WatchedClient._async_poll_for_reply`).
 """
 
 from __future__ import annotations
@@ -60,7 +60,9 @@ class CellLimits:
         for name in ("cell_seconds", "answer_seconds"):
             value = getattr(self, name)
             if isinstance(value, bool) or not isinstance(value, (int, float)) or not 0 < value < float("inf"):
-                raise ValueError(f"CellLimits.{name} must be a positive finite number of seconds, got {value!r}")
+                raise ValueError(
+                    f"CellLimits.{name} must be a positive finite number of seconds, got {value!r}"
+                )
 
 
 class KernelNotAnswering(RuntimeError):
@@ -73,7 +75,8 @@ class KernelNotAnswering(RuntimeError):
         self.diagnosis = diagnosis
         super().__init__(
             f"cell {cell_index}: the kernel stopped answering ({missing} after {waited:.0f} s; "
-            + ", ".join(f"{key} {value}" for key, value in diagnosis.items()) + ")"
+            + ", ".join(f"{key} {value}" for key, value in diagnosis.items())
+            + ")"
         )
 
 
@@ -106,7 +109,8 @@ def _process_cpu_seconds(pid: int) -> float | None:
 class TimedClient(NotebookClient):
     """nbclient's own client, timed: when each request's first IOPub message and its ``idle`` status reached
     the client, and which cells the client was done with only :data:`STALL_SECONDS` or more after that
-    ``idle`` (:attr:`stalls`, ``(cell index, seconds after idle, seconds in all)``): their replies came late."""
+    ``idle`` (:attr:`stalls`, ``(cell index, seconds after idle, seconds in all)``): their replies came
+    late."""
 
     def __init__(self, nb: NotebookNode, **kw: Any) -> None:
         super().__init__(nb, **kw)
@@ -144,7 +148,8 @@ class WatchedClient(TimedClient):
         self.limits = limits
 
     async def _async_poll_output_msg(self, parent_msg_id: str, cell: NotebookNode, cell_index: int) -> None:
-        """nbclient's IOPub loop, polled in steps of :data:`POLL_SECONDS` (see :meth:`_async_poll_for_reply`)."""
+        """nbclient's IOPub loop, polled in steps of :data:`POLL_SECONDS` (see
+        :meth:`_async_poll_for_reply`)."""
         assert self.kc is not None
         while True:
             try:
@@ -194,13 +199,14 @@ class WatchedClient(TimedClient):
                 continue
             try:
                 await asyncio.wait_for(task_poll_output_msg, self.iopub_timeout)
-            except (asyncio.TimeoutError, Empty):
+            except (TimeoutError, Empty):
                 self.log.warning("Timeout waiting for IOPub output")
             task_poll_kernel_alive.cancel()
             return msg
 
     def _missing(self, msg_id: str, sent: float, now: float) -> tuple[str | None, float]:
-        """What the kernel owes for request ``msg_id`` past :attr:`CellLimits.answer_seconds`, and since when."""
+        """What the kernel owes for request ``msg_id`` past :attr:`CellLimits.answer_seconds`, and since
+        when."""
         answer = self.limits.answer_seconds
         if msg_id not in self._first_seen:
             return ("the request never started: no IOPub message" if now - sent > answer else None), sent
@@ -228,10 +234,10 @@ class WatchedClient(TimedClient):
         return False, others
 
     async def _diagnose(self, msg_id: str) -> dict[str, Any]:
-        """A short diagnosis of a kernel that stopped answering request ``msg_id``: its CPU use over one second,
-        whether it still answers on its control channel, and whether a second request on the shell channel
-        is answered and brings the missing reply along (a request stranded in the kernel's socket until the
-        next message woke it)."""
+        """A short diagnosis of a kernel that stopped answering request ``msg_id``: its CPU use over one
+        second, whether it still answers on its control channel, and whether a second request on the shell
+        channel is answered and brings the missing reply along (a request stranded in the kernel's socket
+        until the next message woke it)."""
         assert self.km is not None and self.kc is not None
         diagnosis: dict[str, Any] = {}
         pid = getattr(getattr(self.km, "provisioner", None), "pid", None)
@@ -248,7 +254,12 @@ class WatchedClient(TimedClient):
 
 
 def execute_notebook(
-    notebook: NotebookNode, cwd: Path, limits: CellLimits, *, store_widget_state: bool = True, stock: bool = False
+    notebook: NotebookNode,
+    cwd: Path,
+    limits: CellLimits,
+    *,
+    store_widget_state: bool = True,
+    stock: bool = False,
 ) -> Execution:
     """Execute ``notebook`` (in place) in a fresh ``python3`` kernel started in ``cwd``.
 
@@ -256,10 +267,16 @@ def execute_notebook(
     that stopped answering are returned as :attr:`Execution.error` with the index of the cell. With ``stock``,
     nbclient's own client executes (timed, :class:`TimedClient`; for comparison in :mod:`motionlab.stress`).
     """
-    options = dict(kernel_name="python3", resources={"metadata": {"path": str(cwd)}},
-                   store_widget_state=store_widget_state)
-    client = (TimedClient(notebook, timeout=int(limits.cell_seconds), **options) if stock
-              else WatchedClient(notebook, limits, **options))
+    options = dict(
+        kernel_name="python3",
+        resources={"metadata": {"path": str(cwd)}},
+        store_widget_state=store_widget_state,
+    )
+    client = (
+        TimedClient(notebook, timeout=int(limits.cell_seconds), **options)
+        if stock
+        else WatchedClient(notebook, limits, **options)
+    )
     start = time.perf_counter()
     error: BaseException | None = None
     try:
@@ -273,8 +290,11 @@ def execute_notebook(
 
 def stall_notes(client: TimedClient) -> list[str]:
     """One line per stalled cell of ``client``."""
-    return [f"cell {index}: reply {late} s after the kernel's idle status ({total} s in all, limit {client.timeout} s)"
-            for index, late, total in client.stalls]
+    return [
+        f"cell {index}: reply {late} s after the kernel's idle status ({total} s in all, limit "
+        f"{client.timeout} s)"
+        for index, late, total in client.stalls
+    ]
 
 
 def read_notebook(path: Path) -> NotebookNode:

@@ -30,9 +30,10 @@ import operator
 import os
 import platform
 import tempfile
+from collections.abc import Callable
 from dataclasses import asdict, dataclass
 from pathlib import Path
-from typing import Any, Callable
+from typing import Any
 
 import torch
 
@@ -123,7 +124,9 @@ class Chapter:
 
     def __init__(self, name: str) -> None:
         if not name or "/" in name:
-            raise ValueError(f"chapter name must be a notebook stem like '01_rotation_geometry', got {name!r}")
+            raise ValueError(
+                f"chapter name must be a notebook stem like '01_rotation_geometry', got {name!r}"
+            )
         self.name = name
         self.metrics: dict[str, float] = {}
         self.claims: dict[str, Claim] = {}
@@ -154,7 +157,8 @@ class Chapter:
         expected: bool = True,
         why: str | None = None,
     ) -> Claim:
-        """Check ``value op threshold``, record it, and in the full profile fail when it should hold but does not.
+        """Check ``value op threshold``, record it, and in the full profile fail when it should hold but does
+        not.
 
         ``expected=False`` marks a known gap: a claim that still does not hold after investigation. It is
         recorded and shown, never asserted, and needs a ``why``.
@@ -170,7 +174,9 @@ class Chapter:
         self.claims[claim_id] = claim
         update_notebook(self.name, lambda entry: entry["claims"].update({claim_id: asdict(claim)}))
         if expected and not holds and not config.is_quick():
-            raise ClaimFailed(f"claim {claim_id} does not hold: {text} (value {number:.6g} {op} {limit:.6g} is false)")
+            raise ClaimFailed(
+                f"claim {claim_id} does not hold: {text} (value {number:.6g} {op} {limit:.6g} is false)"
+            )
         return claim
 
     def table(self) -> str:

@@ -33,8 +33,12 @@ def log_dir() -> Path:
 
 def _git_commit() -> str:
     try:
-        out = subprocess.run(["git", "-C", str(REPO_ROOT), "rev-parse", "--short", "HEAD"],
-                             capture_output=True, text=True, timeout=10)
+        out = subprocess.run(
+            ["git", "-C", str(REPO_ROOT), "rev-parse", "--short", "HEAD"],
+            capture_output=True,
+            text=True,
+            timeout=10,
+        )
     except (OSError, subprocess.SubprocessError):
         return "unknown"
     return out.stdout.strip() or "unknown"
@@ -65,8 +69,10 @@ def run_logged(name: str, command: list[str], directory: Path | None = None, kee
         suffix += 1
     start = time.monotonic()
     with path.open("w", encoding="utf-8", errors="replace") as log:
-        log.write(f"# {' '.join(command)}\n# started {time.strftime('%Y-%m-%d %H:%M:%S %Z')}, "
-                  f"commit {_git_commit()}, profile {os.environ.get('MOTIONLAB_PROFILE', 'full')}\n")
+        log.write(
+            f"# {' '.join(command)}\n# started {time.strftime('%Y-%m-%d %H:%M:%S %Z')}, "
+            f"commit {_git_commit()}, profile {os.environ.get('MOTIONLAB_PROFILE', 'full')}\n"
+        )
         log.flush()
         try:
             process = subprocess.Popen(command, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, bufsize=0)

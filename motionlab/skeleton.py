@@ -25,9 +25,28 @@ from motionlab.geometry import quat_apply, quat_mul, quat_normalize
 
 #: The 22 joints, named and ordered like the SMPL body.
 JOINT_NAMES: tuple[str, ...] = (
-    "pelvis", "left_hip", "right_hip", "spine1", "left_knee", "right_knee", "spine2", "left_ankle",
-    "right_ankle", "spine3", "left_foot", "right_foot", "neck", "left_collar", "right_collar", "head",
-    "left_shoulder", "right_shoulder", "left_elbow", "right_elbow", "left_wrist", "right_wrist",
+    "pelvis",
+    "left_hip",
+    "right_hip",
+    "spine1",
+    "left_knee",
+    "right_knee",
+    "spine2",
+    "left_ankle",
+    "right_ankle",
+    "spine3",
+    "left_foot",
+    "right_foot",
+    "neck",
+    "left_collar",
+    "right_collar",
+    "head",
+    "left_shoulder",
+    "right_shoulder",
+    "left_elbow",
+    "right_elbow",
+    "left_wrist",
+    "right_wrist",
 )
 
 #: Parent of each joint (-1 for the root); every parent comes before its children.
@@ -126,16 +145,48 @@ class BodyMeasurements:
 #: pelvis, relatively long legs (leg / stature 0.546 against 0.533).
 BODY_MEASUREMENTS: tuple[BodyMeasurements, ...] = (
     BodyMeasurements(
-        ball_height=0.025, foot_drop=0.06, foot_length=0.14, heel_back=0.05, shank=0.42, thigh=0.43,
-        hip_drop=0.075, hip_width=0.095, spine1=0.115, spine2=0.14, spine3=0.065, neck=0.20, head=0.10,
-        head_top=0.125, collar_out=0.075, collar_up=0.12, shoulder_out=0.125, shoulder_drop=0.02,
-        upper_arm=0.30, forearm=0.26,
+        ball_height=0.025,
+        foot_drop=0.06,
+        foot_length=0.14,
+        heel_back=0.05,
+        shank=0.42,
+        thigh=0.43,
+        hip_drop=0.075,
+        hip_width=0.095,
+        spine1=0.115,
+        spine2=0.14,
+        spine3=0.065,
+        neck=0.20,
+        head=0.10,
+        head_top=0.125,
+        collar_out=0.075,
+        collar_up=0.12,
+        shoulder_out=0.125,
+        shoulder_drop=0.02,
+        upper_arm=0.30,
+        forearm=0.26,
     ),
     BodyMeasurements(
-        ball_height=0.022, foot_drop=0.052, foot_length=0.125, heel_back=0.045, shank=0.40, thigh=0.41,
-        hip_drop=0.065, hip_width=0.088, spine1=0.10, spine2=0.13, spine3=0.055, neck=0.175, head=0.09,
-        head_top=0.12, collar_out=0.062, collar_up=0.11, shoulder_out=0.105, shoulder_drop=0.02,
-        upper_arm=0.27, forearm=0.235,
+        ball_height=0.022,
+        foot_drop=0.052,
+        foot_length=0.125,
+        heel_back=0.045,
+        shank=0.40,
+        thigh=0.41,
+        hip_drop=0.065,
+        hip_width=0.088,
+        spine1=0.10,
+        spine2=0.13,
+        spine3=0.055,
+        neck=0.175,
+        head=0.09,
+        head_top=0.12,
+        collar_out=0.062,
+        collar_up=0.11,
+        shoulder_out=0.105,
+        shoulder_drop=0.02,
+        upper_arm=0.27,
+        forearm=0.235,
     ),
 )
 
@@ -148,15 +199,19 @@ def _check_parent_order(parents: Sequence[int], n_joints: int, where: str) -> tu
         raise ValueError(f"{where}: joint 0 must be the root (parent -1), got parents {list(values)}")
     for j, p in enumerate(values[1:], start=1):
         if not 0 <= p < j:
-            raise ValueError(f"{where}: parents[{j}] = {p}; every joint's parent must be an earlier joint (0..{j - 1})")
+            raise ValueError(
+                f"{where}: parents[{j}] = {p}; every joint's parent must be an earlier joint (0..{j - 1})"
+            )
     return values
 
 
 @dataclass(frozen=True, eq=False)
 class Skeleton:
-    """A kinematic tree: joint ``names``, ``parents`` (-1 for the root, ``parents[j] < j``) and rest ``offsets``.
+    """A kinematic tree: joint ``names``, ``parents`` (-1 for the root, ``parents[j] < j``) and rest
+    ``offsets``.
 
-    ``offsets`` is ``(J, 3)`` float64 (a private copy): each joint's rest position relative to its parent, metres.
+    ``offsets`` is ``(J, 3)`` float64 (a private copy): each joint's rest position relative to its parent,
+    metres.
     """
 
     names: tuple[str, ...]
@@ -205,7 +260,9 @@ def body_skeleton(body: int | str) -> Skeleton:
             raise ValueError(f"body_skeleton: unknown body type {body!r}; expected one of {BODY_TYPES}")
         body = BODY_TYPES.index(body)
     if isinstance(body, bool) or not isinstance(body, (int, np.integer)) or not 0 <= body < len(BODY_TYPES):
-        raise ValueError(f"body_skeleton: body must be an index in [0, {len(BODY_TYPES)}) or a name, got {body!r}")
+        raise ValueError(
+            f"body_skeleton: body must be an index in [0, {len(BODY_TYPES)}) or a name, got {body!r}"
+        )
     return Skeleton(JOINT_NAMES, PARENTS, BODY_MEASUREMENTS[int(body)].offsets())
 
 
@@ -280,17 +337,22 @@ def forward_kinematics(
     )
     root_positions = torch.as_tensor(root_positions, dtype=rotations.dtype, device=rotations.device)
     if root_positions.shape != batch + (3,):
-        raise ValueError(f"{where}: root_positions must have shape {tuple(batch) + (3,)}, "
-                         f"got {tuple(root_positions.shape)}")
+        raise ValueError(
+            f"{where}: root_positions must have shape {tuple(batch) + (3,)}, "
+            f"got {tuple(root_positions.shape)}"
+        )
     offsets = torch.as_tensor(offsets, dtype=rotations.dtype, device=rotations.device)
     if offsets.dim() < 2 or offsets.shape[-2:] != (n_joints, 3):
-        raise ValueError(f"{where}: offsets must have shape ({n_joints}, 3) or (..., {n_joints}, 3), "
-                         f"got {tuple(offsets.shape)}")
+        raise ValueError(
+            f"{where}: offsets must have shape ({n_joints}, 3) or (..., {n_joints}, 3), "
+            f"got {tuple(offsets.shape)}"
+        )
     try:
         offsets = offsets.expand(batch + (n_joints, 3))
     except RuntimeError as exc:
-        raise ValueError(f"{where}: offsets {tuple(offsets.shape)} do not broadcast to the batch "
-                         f"{tuple(batch)}") from exc
+        raise ValueError(
+            f"{where}: offsets {tuple(offsets.shape)} do not broadcast to the batch {tuple(batch)}"
+        ) from exc
     for name, value in (("rotations", rotations), ("root_positions", root_positions), ("offsets", offsets)):
         if not torch.isfinite(value).all():
             raise ValueError(f"{where}: {name} contains NaN or infinite values")

@@ -7,10 +7,11 @@ strikes. This harness makes it measurable::
     python -m motionlab.stress --runs 200 --patterns     # a generated notebook of the chapters' cell patterns
 
 Every execution goes through :func:`motionlab.execution.execute_notebook` with the limits the course build
-uses, so a kernel that stops answering is detected within :attr:`~motionlab.execution.CellLimits.answer_seconds`
-and counted, with its diagnosis. One line per execution goes to the terminal; a JSON summary (versions of the
-kernel stack, executions, hangs, other failures, each hang's cell and diagnosis) goes to
-``build/stress/<time>.json``. The exit code is 1 when any execution hung or failed.
+uses, so a kernel that stops answering is detected within
+:attr:`~motionlab.execution.CellLimits.answer_seconds` and counted, with its diagnosis. One line per execution
+goes to the terminal; a JSON summary (versions of the kernel stack, executions, hangs, other failures, each
+hang's cell and diagnosis) goes to ``build/stress/<time>.json``. The exit code is 1 when any execution hung or
+failed.
 
 The pattern notebook (:func:`pattern_notebook`) holds what the chapters do between their computations, many
 times over: short cells with text output, ipywidgets with their comm traffic (sliders moved from the kernel,
@@ -131,17 +132,25 @@ def kernel_stack_versions() -> dict[str, str]:
 
 
 def run_stress(
-    targets: Sequence[tuple[str, NotebookNode, Path, CellLimits]], runs: int, what: str, out: Path,
+    targets: Sequence[tuple[str, NotebookNode, Path, CellLimits]],
+    runs: int,
+    what: str,
+    out: Path,
     stock: bool = False,
 ) -> StressSummary:
     """Execute every target (name, notebook, working directory, limits) ``runs`` times, in order, and
     write the summary to ``out`` after every execution (so a stopped session keeps its counts).
 
-    With ``stock``, nbclient's own client executes (``execute_notebook(..., stock=True)``) and a cell past its limit counts
-    as a hang: no cell of the quick profile or of the pattern notebook comes near its limit when it runs.
+    With ``stock``, nbclient's own client executes (``execute_notebook(..., stock=True)``) and a cell past its
+    limit counts as a hang: no cell of the quick profile or of the pattern notebook comes near its limit when
+    it runs.
     """
-    summary = StressSummary(what=what, profile=config.profile(), versions=kernel_stack_versions(),
-                            client="nbclient (stock)" if stock else "WatchedClient")
+    summary = StressSummary(
+        what=what,
+        profile=config.profile(),
+        versions=kernel_stack_versions(),
+        client="nbclient (stock)" if stock else "WatchedClient",
+    )
     start = time.perf_counter()
     out.parent.mkdir(parents=True, exist_ok=True)
     for run in range(1, runs + 1):
@@ -149,19 +158,28 @@ def run_stress(
             execution = execute_notebook(nbformat.from_dict(notebook), cwd, limits, stock=stock)
             summary.executions += 1
             summary.cells += sum(1 for cell in execution.notebook.cells if cell.cell_type == "code")
-            record = {"run": run, "notebook": name, "cell": execution.failed_cell,
-                      "seconds": round(execution.seconds, 1), "error": str(execution.error)[:2000]}
+            record = {
+                "run": run,
+                "notebook": name,
+                "cell": execution.failed_cell,
+                "seconds": round(execution.seconds, 1),
+                "error": str(execution.error)[:2000],
+            }
             if execution.hung or (stock and isinstance(execution.error, CellTimeoutError)):
                 summary.hangs.append(record)
                 verdict = f"HANG at cell {execution.failed_cell}: {execution.error}"
             elif execution.error is not None:
                 summary.failures.append(record)
-                verdict = f"FAILED at cell {execution.failed_cell}: {type(execution.error).__name__}: " + str(
-                    execution.error).splitlines()[0][:300]
+                verdict = (
+                    f"FAILED at cell {execution.failed_cell}: {type(execution.error).__name__}: "
+                    + str(execution.error).splitlines()[0][:300]
+                )
             else:
                 verdict = "ok"
             if execution.notes:
-                summary.stalls.extend({"run": run, "notebook": name, "note": note} for note in execution.notes)
+                summary.stalls.extend(
+                    {"run": run, "notebook": name, "note": note} for note in execution.notes
+                )
                 verdict += "; stalls: " + "; ".join(execution.notes)
             summary.seconds = round(time.perf_counter() - start, 1)
             print(f"[stress] run {run}/{runs} {name}: {execution.seconds:.1f} s {verdict}", flush=True)
@@ -171,16 +189,28 @@ def run_stress(
 
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(
-        prog="python -m motionlab.stress", description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter
+        prog="python -m motionlab.stress",
+        description=__doc__,
+        formatter_class=argparse.RawDescriptionHelpFormatter,
     )
-    parser.add_argument("--runs", type=positive_int, default=30, help="how many times to execute each notebook")
-    parser.add_argument("--patterns", type=positive_int, metavar="BLOCKS", default=None,
-                        help="execute a generated notebook of BLOCKS repetitions of the chapters' cell patterns "
-                             "instead of the chapters")
+    parser.add_argument(
+        "--runs", type=positive_int, default=30, help="how many times to execute each notebook"
+    )
+    parser.add_argument(
+        "--patterns",
+        type=positive_int,
+        metavar="BLOCKS",
+        default=None,
+        help="execute a generated notebook of BLOCKS repetitions of the chapters' cell patterns "
+        "instead of the chapters",
+    )
     parser.add_argument("--only", nargs="+", metavar="NN", help="chapter numbers to execute, e.g. 02 07")
     parser.add_argument("--notebooks", type=Path, default=config.REPO_ROOT / "notebooks")
-    parser.add_argument("--stock-client", action="store_true",
-                        help="execute with nbclient's own client instead of the course's WatchedClient")
+    parser.add_argument(
+        "--stock-client",
+        action="store_true",
+        help="execute with nbclient's own client instead of the course's WatchedClient",
+    )
     args = parser.parse_args(argv)
     os.environ.setdefault("MOTIONLAB_PROFILE", "quick")
 
@@ -204,11 +234,16 @@ def main(argv: list[str] | None = None) -> int:
         targets = [(p.stem, read_notebook(p), p.parent, cell_limits(p.stem)) for p in paths]
         what = f"course chapters {', '.join(p.stem[:2] for p in paths)}"
     client = "nbclient's own client" if args.stock_client else "WatchedClient"
-    print(f"[stress] {what}, {args.runs} runs, profile {config.profile()}, {client}; summary: {out}", flush=True)
+    print(
+        f"[stress] {what}, {args.runs} runs, profile {config.profile()}, {client}; summary: {out}", flush=True
+    )
     summary = run_stress(targets, args.runs, what, out, stock=args.stock_client)
-    print(f"[stress] {summary.executions} executions ({summary.cells} cells) in {summary.seconds / 60:.1f} min: "
-          f"{len(summary.hangs)} hangs, {len(summary.stalls)} stalls, {len(summary.failures)} other failures; "
-          f"versions {summary.versions}")
+    print(
+        f"[stress] {summary.executions} executions ({summary.cells} cells) in {summary.seconds / 60:.1f} "
+        "min: "
+        f"{len(summary.hangs)} hangs, {len(summary.stalls)} stalls, {len(summary.failures)} other failures; "
+        f"versions {summary.versions}"
+    )
     return 1 if summary.hangs or summary.failures else 0
 
 

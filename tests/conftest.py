@@ -3,6 +3,9 @@
 import os
 from pathlib import Path
 
+import pytest
+import torch
+
 os.environ.setdefault("MOTIONLAB_PROFILE", "quick")
 
 from motionlab import config  # noqa: E402
@@ -19,3 +22,19 @@ def pytest_runtest_setup(item) -> None:
         from motionlab.course import cell_limits
 
         item.config.option.nbval_cell_timeout = cell_limits(Path(str(item.fspath)).stem).cell_seconds
+
+
+@pytest.fixture
+def tiny_model() -> torch.nn.Module:
+    """A Motion Cell of the smallest size, built from ``test_motion_cell_common.TINY`` with seed 0."""
+    from test_motion_cell_common import motion_cell
+
+    return motion_cell()
+
+
+@pytest.fixture
+def tiny_batch():
+    """A two-clip :class:`WindowBatch` of the tiny Motion Cell's codec."""
+    from test_motion_cell_common import batch
+
+    return batch()

@@ -25,7 +25,13 @@ from motionlab.data.augment import (
     random_yaw,
     rotate_yaw,
 )
-from motionlab.data.representations import ROOT_FEATURES, heading_yaw, representation, to_moglow, to_motion_cell
+from motionlab.data.representations import (
+    ROOT_FEATURES,
+    heading_yaw,
+    representation,
+    to_moglow,
+    to_motion_cell,
+)
 from motionlab.skeleton import JOINT, JOINT_NAMES, PARENTS, body_skeleton, forward_kinematics
 
 REFLECT = np.diag([1.0, -1.0, 1.0])
@@ -74,8 +80,9 @@ def test_forward_kinematics_of_mirrored_rotations_gives_mirrored_positions(clips
     mirrored_rotations = mirror_rotations(clips.rotations)
     mirrored_root = clips.root_positions * clips.root_positions.new_tensor([1.0, -1.0, 1.0])
     mirrored_offsets = mirror_positions(clips.offsets)  # equal to the offsets (symmetric bodies), used anyway
-    positions = forward_kinematics(mirrored_rotations, mirrored_root, mirrored_offsets[clips.body][:, None],
-                                   PARENTS)[0]
+    positions = forward_kinematics(
+        mirrored_rotations, mirrored_root, mirrored_offsets[clips.body][:, None], PARENTS
+    )[0]
     torch.testing.assert_close(positions, mirror_positions(clips.positions), rtol=0, atol=1e-12)
     # an asymmetric skeleton needs its offsets mirrored too
     lopsided = clips.offsets[0].clone()
@@ -88,14 +95,24 @@ def test_forward_kinematics_of_mirrored_rotations_gives_mirrored_positions(clips
 def test_mirroring_flips_sideways_motion_yaw_rate_and_roll(clips):
     mirrored_rotations = mirror_rotations(clips.rotations)
     mirrored_root = mirror_positions(clips.positions)[..., 0, :]
-    original = dict(zip(ROOT_FEATURES, to_motion_cell(clips.rotations, clips.root_positions)[..., 84:].unbind(-1)))
+    original = dict(
+        zip(ROOT_FEATURES, to_motion_cell(clips.rotations, clips.root_positions)[..., 84:].unbind(-1))
+    )
     flipped = dict(zip(ROOT_FEATURES, to_motion_cell(mirrored_rotations, mirrored_root)[..., 84:].unbind(-1)))
-    for name, sign in [("forward_velocity", 1), ("sideways_velocity", -1), ("root_height", 1), ("yaw_rate", -1),
-                       ("pitch", 1), ("roll", -1)]:
+    for name, sign in [
+        ("forward_velocity", 1),
+        ("sideways_velocity", -1),
+        ("root_height", 1),
+        ("yaw_rate", -1),
+        ("pitch", 1),
+        ("roll", -1),
+    ]:
         torch.testing.assert_close(flipped[name], sign * original[name], rtol=0, atol=1e-12)
     control = to_moglow(clips.positions, clips.rotations[..., 0, :])[..., 64:]
     mirrored_control = to_moglow(mirror_positions(clips.positions), mirrored_rotations[..., 0, :])[..., 64:]
-    torch.testing.assert_close(mirrored_control, control * control.new_tensor([1.0, -1.0, -1.0]), rtol=0, atol=1e-12)
+    torch.testing.assert_close(
+        mirrored_control, control * control.new_tensor([1.0, -1.0, -1.0]), rtol=0, atol=1e-12
+    )
 
 
 def test_random_mirror_is_seeded_and_follows_its_draws(clips):
@@ -127,8 +144,12 @@ def test_rotate_yaw_matches_scipy_and_forward_kinematics(clips):
     posed = forward_kinematics(rotations, root, clips.offsets[clips.body][:, None], PARENTS)[0]
     torch.testing.assert_close(posed, positions, rtol=0, atol=1e-12)
     turned = heading_yaw(rotations[..., 0, :]) - heading_yaw(clips.rotations[..., 0, :])
-    torch.testing.assert_close(torch.remainder(turned - angle[:, None] + math.pi, 2 * math.pi) - math.pi,
-                               torch.zeros_like(turned), rtol=0, atol=1e-12)
+    torch.testing.assert_close(
+        torch.remainder(turned - angle[:, None] + math.pi, 2 * math.pi) - math.pi,
+        torch.zeros_like(turned),
+        rtol=0,
+        atol=1e-12,
+    )
 
 
 @settings(max_examples=20, deadline=None)
@@ -142,20 +163,26 @@ def test_random_yaw_preserves_bones_heights_and_heading_frame_features(seed):
     torch.testing.assert_close(positions[..., 2], clips.positions[..., 2], rtol=0, atol=0)
     for name in ("motion_cell", "moglow"):
         rep = representation(name)
-        torch.testing.assert_close(rep.encode(positions, rotations), rep.encode(clips.positions, clips.rotations),
-                                   rtol=0, atol=1e-12)
+        torch.testing.assert_close(
+            rep.encode(positions, rotations), rep.encode(clips.positions, clips.rotations), rtol=0, atol=1e-12
+        )
 
 
 def test_random_yaw_is_seeded_and_uniform(clips):
     first = random_yaw(clips.positions, clips.rotations, torch.Generator().manual_seed(11))
     second = random_yaw(clips.positions, clips.rotations, torch.Generator().manual_seed(11))
     assert all(torch.equal(a, b) for a, b in zip(first, second))
-    angle = (2 * torch.rand(4, generator=torch.Generator().manual_seed(11), dtype=torch.float64) - 1) * math.pi
+    angle = (
+        2 * torch.rand(4, generator=torch.Generator().manual_seed(11), dtype=torch.float64) - 1
+    ) * math.pi
     expected = rotate_yaw(clips.positions, clips.rotations, angle)
     assert all(torch.equal(a, b) for a, b in zip(first, expected))
     many = torch.zeros(4000, 1, 1, 3)
-    turned, _ = random_yaw(many + torch.tensor([1.0, 0.0, 0.0]), torch.ones(4000, 1, 1, 4) * 0.5,
-                           torch.Generator().manual_seed(0))
+    turned, _ = random_yaw(
+        many + torch.tensor([1.0, 0.0, 0.0]),
+        torch.ones(4000, 1, 1, 4) * 0.5,
+        torch.Generator().manual_seed(0),
+    )
     angles = torch.atan2(turned[:, 0, 0, 1], turned[:, 0, 0, 0])
     counts = torch.histc(angles, bins=8, min=-math.pi, max=math.pi)
     assert counts.min() > 400 and counts.max() < 600  # 500 expected per bin

@@ -34,7 +34,7 @@ def oracle_positions(text: str) -> tuple[list[str], np.ndarray]:
     stack: list[int | None] = []
     pending: int | None = None
     row = 0
-    for row, words in enumerate(lines):
+    for row, words in enumerate(lines):  # noqa: B007 (row is read after the loop)
         if not words:
             continue
         key = words[0]
@@ -53,8 +53,14 @@ def oracle_positions(text: str) -> tuple[list[str], np.ndarray]:
             joints[stack[-1]]["channels"] = words[2:]
         elif key == "MOTION":
             break
-    frames_start = next(i for i in range(row, len(lines)) if lines[i] and lines[i][0].lower().startswith("frame")
-                        and "time" in " ".join(lines[i]).lower()) + 1
+    frames_start = (
+        next(
+            i
+            for i in range(row, len(lines))
+            if lines[i] and lines[i][0].lower().startswith("frame") and "time" in " ".join(lines[i]).lower()
+        )
+        + 1
+    )
     data = np.array([[float(v) for v in words] for words in lines[frames_start:] if words])
 
     num_frames = len(data)
@@ -71,8 +77,11 @@ def oracle_positions(text: str) -> tuple[list[str], np.ndarray]:
                 axes += channel[0]
                 angles.append(data[:, column])
             column += 1
-        local = (Rotation.from_euler(axes, np.stack(angles, axis=1), degrees=True) if axes
-                 else Rotation.identity(num_frames))
+        local = (
+            Rotation.from_euler(axes, np.stack(angles, axis=1), degrees=True)
+            if axes
+            else Rotation.identity(num_frames)
+        )
         if joint["parent"] < 0:
             rot_global.append(local)
             pos_global.append(translation)
@@ -149,8 +158,14 @@ MIXED_CHANNELS = 6 + 3 + 6 + 3 + 2 + 1 + 0 + 3
 MIXED_NAMES = ["Hips", "Spine", "Head", "LeftArm", "LeftLeg", "LeftFoot", "RightLeg", "RightFoot"]
 
 
-def mixed_file(seed: int = 0, frames: int = 12, newline: str = "\n", frame_time: str = "Frame Time: 0.0333333",
-               sci: bool = False, trailing: str = "") -> str:
+def mixed_file(
+    seed: int = 0,
+    frames: int = 12,
+    newline: str = "\n",
+    frame_time: str = "Frame Time: 0.0333333",
+    sci: bool = False,
+    trailing: str = "",
+) -> str:
     """The mixed hierarchy with random frames (angles up to ±175°, including 2-channel X beyond 90°)."""
     rng = np.random.default_rng(seed)
     data = rng.uniform(-175, 175, size=(frames, MIXED_CHANNELS))
@@ -197,7 +212,7 @@ def test_cmu_local_rotations_match_scipy_euler(cmu: Motion) -> None:
     perm[[0, 1, 2], [2, 0, 1]] = 1  # world = perm @ file
     for j in (0, 2, 3, 17):
         column = 3 + 3 * j
-        file_rot = Rotation.from_euler("ZYX", data[:, column:column + 3], degrees=True).as_matrix()
+        file_rot = Rotation.from_euler("ZYX", data[:, column : column + 3], degrees=True).as_matrix()
         expected = perm @ file_rot @ perm.T
         got = Rotation.from_quat(cmu.rotations[:, j].numpy(), scalar_first=True).as_matrix()
         np.testing.assert_allclose(got, expected, atol=1e-12)
@@ -234,7 +249,9 @@ def test_cmu_round_trip(cmu: Motion, tmp_path: Path) -> None:
         assert again.joint_names == motion.joint_names and again.channels == motion.channels
         assert again.fps == motion.fps
         expected = motion.global_positions()
-        torch.testing.assert_close(again.global_positions(), expected, rtol=0, atol=1e-4 * expected.abs().max())
+        torch.testing.assert_close(
+            again.global_positions(), expected, rtol=0, atol=1e-4 * expected.abs().max()
+        )
         # Another reader (the oracle) sees the same motion in the written file.
         _, oracle = oracle_positions((tmp_path / "out.bvh").read_text())
         np.testing.assert_allclose(oracle, expected.numpy(), atol=1e-4 * expected.abs().max().item())
@@ -261,8 +278,10 @@ def test_every_rotation_order_is_intrinsic_euler(order: str) -> None:
     angles = rng.uniform(-180, 180, size=(5, 3))
     channels = " ".join(f"{a}rotation" for a in order)
     rows = "\n".join(" ".join(f"{v:.10f}" for v in row) for row in angles)
-    text = (f"HIERARCHY\nROOT A\n{{\nOFFSET 0 0 0\nCHANNELS 3 {channels}\nEnd Site\n{{\nOFFSET 0 1 0\n}}\n}}\n"
-            f"MOTION\nFrames: 5\nFrame Time: 0.1\n{rows}\n")
+    text = (
+        f"HIERARCHY\nROOT A\n{{\nOFFSET 0 0 0\nCHANNELS 3 {channels}\nEnd Site\n{{\nOFFSET 0 1 0\n}}\n}}\n"
+        f"MOTION\nFrames: 5\nFrame Time: 0.1\n{rows}\n"
+    )
     motion = parse_bvh(text.encode())
     file_quat = motion.rotations[:, 0].numpy()[:, [0, 2, 3, 1]]  # world -> file axes, w first
     expected = Rotation.from_euler(order, angles, degrees=True)
@@ -277,19 +296,29 @@ def test_byte_order_mark_and_latin1_names() -> None:
 
 
 def test_indentation_and_keyword_variants() -> None:
-    text = ("  HIERARCHY  \nROOT   My Root {\n OFFSET\t1 2 3\nCHANNELS 3 xposition YPOSITION Zposition\n"
-            "JOINT Child\n{ OFFSET 0 1 0 CHANNELS 1 Zrotation\nend site { OFFSET 0 1 0 } }\n}\n\n"
-            "MOTION\n\nFrames:\t2\n\nFrame Time :  .04\n1 2 3 10\n4 5 6 20\n\n\n")
+    text = (
+        "  HIERARCHY  \nROOT   My Root {\n OFFSET\t1 2 3\nCHANNELS 3 xposition YPOSITION Zposition\n"
+        "JOINT Child\n{ OFFSET 0 1 0 CHANNELS 1 Zrotation\nend site { OFFSET 0 1 0 } }\n}\n\n"
+        "MOTION\n\nFrames:\t2\n\nFrame Time :  .04\n1 2 3 10\n4 5 6 20\n\n\n"
+    )
     motion = parse_bvh(text.encode())
     assert motion.joint_names == ("My_Root", "Child") and motion.fps == 25.0
     np.testing.assert_allclose(motion.root_positions.numpy(), [[3, 1, 2], [6, 4, 5]])
 
 
-@pytest.mark.parametrize("line, fps", [
-    ("Frame Time: 0.0333333", 30.0), ("Frame Time:0.0333333", 30.0), ("Frame Time :\t0.0333333", 30.0),
-    ("Frame  Time: 3.33333e-2", 30.0), ("FRAME TIME: .0083333", 120.0), ("FrameTime: 0.0333", 30.0),
-    ("Frame Time: 0.04", 25.0), ("Frame Time: 0.021345", 1 / 0.021345),
-])
+@pytest.mark.parametrize(
+    "line, fps",
+    [
+        ("Frame Time: 0.0333333", 30.0),
+        ("Frame Time:0.0333333", 30.0),
+        ("Frame Time :\t0.0333333", 30.0),
+        ("Frame  Time: 3.33333e-2", 30.0),
+        ("FRAME TIME: .0083333", 120.0),
+        ("FrameTime: 0.0333", 30.0),
+        ("Frame Time: 0.04", 25.0),
+        ("Frame Time: 0.021345", 1 / 0.021345),
+    ],
+)
 def test_frame_time_variants(line: str, fps: float) -> None:
     motion = parse_bvh(mixed_file(frame_time=line).encode())
     assert motion.fps == pytest.approx(fps, rel=1e-12)
@@ -315,10 +344,17 @@ def smpl_motion(seed: int = 0, frames: int = 20, dtype: torch.dtype = torch.floa
     rng = np.random.default_rng(seed)
     body = skeleton.body_skeleton(0)
     rotations = Rotation.random(frames * 22, rng=rng).as_quat(scalar_first=True).reshape(frames, 22, 4)
-    root = np.stack([np.linspace(0, 2, frames), 0.1 * np.sin(np.linspace(0, 3, frames)),
-                     np.full(frames, 0.95)], axis=1)
-    return Motion(joint_names=skeleton.JOINT_NAMES, parents=skeleton.PARENTS, offsets=body.offsets,
-                  rotations=torch.from_numpy(rotations).to(dtype), root_positions=torch.from_numpy(root), fps=30)
+    root = np.stack(
+        [np.linspace(0, 2, frames), 0.1 * np.sin(np.linspace(0, 3, frames)), np.full(frames, 0.95)], axis=1
+    )
+    return Motion(
+        joint_names=skeleton.JOINT_NAMES,
+        parents=skeleton.PARENTS,
+        offsets=body.offsets,
+        rotations=torch.from_numpy(rotations).to(dtype),
+        root_positions=torch.from_numpy(root),
+        fps=30,
+    )
 
 
 @pytest.mark.parametrize("dtype", [torch.float32, torch.float64])
@@ -331,11 +367,19 @@ def test_synthetic_smpl_motion_round_trip(dtype: torch.dtype, tmp_path: Path) ->
     assert text.count("CHANNELS 3 Zrotation Yrotation Xrotation") == 21
     again = load_bvh(tmp_path / "smpl.bvh")
     assert again.fps == 30.0 and set(again.joint_names) == set(motion.joint_names)
-    assert again.joint_names[:5] == ("pelvis", "left_hip", "left_knee", "left_ankle", "left_foot")  # depth-first
+    assert again.joint_names[:5] == (
+        "pelvis",
+        "left_hip",
+        "left_knee",
+        "left_ankle",
+        "left_foot",
+    )  # depth-first
     restored = again.reorder(motion.joint_names)
     assert restored.parents == motion.parents
     expected = motion.global_positions().to(torch.float64)
-    torch.testing.assert_close(restored.global_positions(), expected, rtol=0, atol=1e-4 * expected.abs().max())
+    torch.testing.assert_close(
+        restored.global_positions(), expected, rtol=0, atol=1e-4 * expected.abs().max()
+    )
     _, oracle = oracle_positions(text)
     names = [again.joint_names.index(n) for n in motion.joint_names]
     np.testing.assert_allclose(oracle[:, names], expected.numpy(), atol=1e-5)
@@ -343,9 +387,14 @@ def test_synthetic_smpl_motion_round_trip(dtype: torch.dtype, tmp_path: Path) ->
 
 def test_written_file_is_y_up_and_faces_z(tmp_path: Path) -> None:
     rest = smpl_motion(frames=1)
-    rest = Motion(joint_names=rest.joint_names, parents=rest.parents, offsets=rest.offsets,
-                  rotations=torch.tensor([[[1.0, 0, 0, 0]] * 22], dtype=torch.float64),
-                  root_positions=torch.tensor([[0, 0, 0.95]], dtype=torch.float64), fps=30)
+    rest = Motion(
+        joint_names=rest.joint_names,
+        parents=rest.parents,
+        offsets=rest.offsets,
+        rotations=torch.tensor([[[1.0, 0, 0, 0]] * 22], dtype=torch.float64),
+        root_positions=torch.tensor([[0, 0, 0.95]], dtype=torch.float64),
+        fps=30,
+    )
     save_bvh(rest, tmp_path / "rest.bvh")
     names, world = oracle_positions((tmp_path / "rest.bvh").read_text())
     file_positions = dict(zip(names, world[0][:, [1, 2, 0]]))  # back to file axes
@@ -359,8 +408,9 @@ def test_rotation_order_argument_and_validation(tmp_path: Path) -> None:
     save_bvh(motion, tmp_path / "xyz.bvh", rotation_order="XYZ")
     again = load_bvh(tmp_path / "xyz.bvh")
     assert again.channels[1] == ("Xrotation", "Yrotation", "Zrotation")
-    torch.testing.assert_close(again.reorder(motion.joint_names).global_positions(), motion.global_positions(),
-                               rtol=0, atol=1e-5)
+    torch.testing.assert_close(
+        again.reorder(motion.joint_names).global_positions(), motion.global_positions(), rtol=0, atol=1e-5
+    )
     with pytest.raises(ValueError, match="rotation_order"):
         save_bvh(motion, tmp_path / "bad.bvh", rotation_order="XYX")
 

@@ -74,13 +74,31 @@ CASES = [
     ("infinite value", with_line(19, "0 1 inf 3 4 5 6 7 8"), "not a number", 19),
     ("overflowing value", with_line(19, "0 1 1e999 3 4 5 6 7 8"), "out of range", 19),
     ("underscore digits", with_line(19, "0 1 1_0 3 4 5 6 7 8"), "not a number", 19),
-    ("unknown channel", with_line(9, "CHANNELS 3 Zrotation Wrotation Yrotation"), "unknown channel 'Wrotation'", 9),
+    (
+        "unknown channel",
+        with_line(9, "CHANNELS 3 Zrotation Wrotation Yrotation"),
+        "unknown channel 'Wrotation'",
+        9,
+    ),
     ("repeated channel", with_line(9, "CHANNELS 3 Zrotation Zrotation Yrotation"), "listed twice", 9),
-    ("channel count too small", with_line(5, "CHANNELS 6 Xposition Yposition Zposition Zrotation Xrotation"),
-     "declares 6 channels but names only 5", 5),
-    ("channel count not a number", with_line(9, "CHANNELS three Zrotation Xrotation Yrotation"),
-     "CHANNELS count", 9),
-    ("channel count too large", with_line(9, "CHANNELS 7 Zrotation Xrotation Yrotation"), "CHANNELS count", 9),
+    (
+        "channel count too small",
+        with_line(5, "CHANNELS 6 Xposition Yposition Zposition Zrotation Xrotation"),
+        "declares 6 channels but names only 5",
+        5,
+    ),
+    (
+        "channel count not a number",
+        with_line(9, "CHANNELS three Zrotation Xrotation Yrotation"),
+        "CHANNELS count",
+        9,
+    ),
+    (
+        "channel count too large",
+        with_line(9, "CHANNELS 7 Zrotation Xrotation Yrotation"),
+        "CHANNELS count",
+        9,
+    ),
     ("short OFFSET", with_line(8, "OFFSET 0 5"), "OFFSET z", 8),
     ("non-numeric OFFSET", with_line(8, "OFFSET 0 five 0"), "OFFSET y", 8),
     ("missing OFFSET", with_line(8, None), "has no OFFSET", 6),
@@ -92,8 +110,12 @@ CASES = [
     ("missing ROOT", with_line(2, "JOINT Hips"), "expected 'ROOT'", 2),
     ("nameless joint", with_line(6, "JOINT"), "needs a joint name", 6),
     ("duplicate joint name", with_line(6, "JOINT Hips"), "used twice", 6),
-    ("second root", VALID.replace("MOTION", "ROOT Other\n{\nOFFSET 0 0 0\nCHANNELS 0\n}\nMOTION"),
-     "second ROOT", 16),
+    (
+        "second root",
+        VALID.replace("MOTION", "ROOT Other\n{\nOFFSET 0 0 0\nCHANNELS 0\n}\nMOTION"),
+        "second ROOT",
+        16,
+    ),
     ("missing MOTION", with_line(16, None), "expected 'MOTION'", 16),
     ("text after MOTION", with_line(16, "MOTION now"), "after 'MOTION'", 16),
     ("missing Frames", with_line(17, None), "expected the 'Frames:' line", 17),
@@ -127,7 +149,8 @@ def test_load_bvh_names_the_file(tmp_path: Path) -> None:
 
 def test_deep_nesting_does_not_overflow() -> None:
     deep = "HIERARCHY\nROOT R\n{\nOFFSET 0 0 0\nCHANNELS 1 Xrotation\n" + "".join(
-        f"JOINT J{i}\n{{\nOFFSET 0 1 0\nCHANNELS 1 Zrotation\n" for i in range(3000))
+        f"JOINT J{i}\n{{\nOFFSET 0 1 0\nCHANNELS 1 Zrotation\n" for i in range(3000)
+    )
     with pytest.raises(BVHError, match="unexpected end of file"):
         parse_bvh(deep.encode())
     closed = deep + "}\n" * 3001 + "MOTION\nFrames: 1\nFrame Time: 0.1\n" + " ".join(["1"] * 3001) + "\n"
@@ -155,28 +178,63 @@ def mutated_files(draw: st.DrawFn) -> bytes:
     rng = draw(st.randoms(use_true_random=False))
     data = VALID_BYTES
     for _ in range(draw(st.integers(1, 3))):
-        kind = draw(st.sampled_from(["truncate", "delete", "insert", "replace", "digit", "whitespace",
-                                     "duplicate_line", "swap_lines"]))
+        kind = draw(
+            st.sampled_from(
+                [
+                    "truncate",
+                    "delete",
+                    "insert",
+                    "replace",
+                    "digit",
+                    "whitespace",
+                    "duplicate_line",
+                    "swap_lines",
+                ]
+            )
+        )
         i = rng.randint(0, len(data))
         if kind == "truncate":
             data = data[:i]
         elif kind == "delete":
-            data = data[:i] + data[i + draw(st.integers(1, 40)):]
+            data = data[:i] + data[i + draw(st.integers(1, 40)) :]
         elif kind == "insert":
-            chunk = draw(st.one_of(
-                st.binary(min_size=1, max_size=8),
-                st.sampled_from([b"{", b"}", b" ", b"\n", b"\r\n", b"\t", b"-", b".", b"e", b"1", b"JOINT X\n",
-                                 b"End Site", b"CHANNELS 1 Xposition", b"OFFSET 1 2 3", b"nan", b"9" * 30]),
-            ))
+            chunk = draw(
+                st.one_of(
+                    st.binary(min_size=1, max_size=8),
+                    st.sampled_from(
+                        [
+                            b"{",
+                            b"}",
+                            b" ",
+                            b"\n",
+                            b"\r\n",
+                            b"\t",
+                            b"-",
+                            b".",
+                            b"e",
+                            b"1",
+                            b"JOINT X\n",
+                            b"End Site",
+                            b"CHANNELS 1 Xposition",
+                            b"OFFSET 1 2 3",
+                            b"nan",
+                            b"9" * 30,
+                        ]
+                    ),
+                )
+            )
             data = data[:i] + chunk + data[i:]
         elif kind in ("replace", "digit", "whitespace"):
             alphabet = {"replace": None, "digit": b"0123456789", "whitespace": b" \t"}[kind]
             spots = [k for k, c in enumerate(data) if alphabet is None or c in alphabet]
             if spots:
                 k = rng.choice(spots)
-                new = {"replace": bytes([draw(st.integers(0, 255))]), "digit": str(rng.randint(0, 9)).encode(),
-                       "whitespace": rng.choice([b"\t", b"  ", b" \t ", b"\r\n"])}[kind]
-                data = data[:k] + new + data[k + 1:]
+                new = {
+                    "replace": bytes([draw(st.integers(0, 255))]),
+                    "digit": str(rng.randint(0, 9)).encode(),
+                    "whitespace": rng.choice([b"\t", b"  ", b" \t ", b"\r\n"]),
+                }[kind]
+                data = data[:k] + new + data[k + 1 :]
         else:
             lines = data.split(b"\n")
             a, b = rng.randrange(len(lines)), rng.randrange(len(lines))

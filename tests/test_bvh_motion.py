@@ -20,9 +20,14 @@ def chain(frames: int = 3, dtype: torch.dtype = torch.float64) -> Motion:
     """Root -> a -> b, each 1 unit along +x of its parent, identity rotations, root at (0, 0, 1)."""
     rotations = torch.zeros(frames, 3, 4, dtype=dtype)
     rotations[..., 0] = 1
-    return Motion(joint_names=("root", "a", "b"), parents=(-1, 0, 1),
-                  offsets=[[0, 0, 0], [1, 0, 0], [1, 0, 0]], rotations=rotations,
-                  root_positions=torch.tensor([[0, 0, 1.0]] * frames, dtype=dtype), fps=30)
+    return Motion(
+        joint_names=("root", "a", "b"),
+        parents=(-1, 0, 1),
+        offsets=[[0, 0, 0], [1, 0, 0], [1, 0, 0]],
+        rotations=rotations,
+        root_positions=torch.tensor([[0, 0, 1.0]] * frames, dtype=dtype),
+        fps=30,
+    )
 
 
 def test_forward_kinematics_by_hand() -> None:
@@ -41,33 +46,46 @@ def test_moving_joints_use_their_translations() -> None:
     moving = motion.local_translations().clone()
     moving[1, 2] = torch.tensor([0.0, 0.0, 2.0], dtype=torch.float64)  # b lifts 2 up in frame 1
     lifted = replace(motion, joint_translations=moving)
-    torch.testing.assert_close(lifted.global_positions()[1, 2], torch.tensor([1.0, 0, 3], dtype=torch.float64))
-    torch.testing.assert_close(lifted.global_positions()[0, 2], torch.tensor([2.0, 0, 1], dtype=torch.float64))
+    torch.testing.assert_close(
+        lifted.global_positions()[1, 2], torch.tensor([1.0, 0, 3], dtype=torch.float64)
+    )
+    torch.testing.assert_close(
+        lifted.global_positions()[0, 2], torch.tensor([2.0, 0, 1], dtype=torch.float64)
+    )
 
 
-@pytest.mark.parametrize("change, message", [
-    ({"joint_names": ("root", "a")}, r"parents: expected 2 entries"),
-    ({"joint_names": ("root", "a", "a")}, "appears more than once"),
-    ({"joint_names": ("root", "left arm", "b")}, r"joint_names\[1\]"),
-    ({"parents": (0, 0, 1)}, r"parents\[0\]: joint 0 must be the root"),
-    ({"parents": (-1, 2, 0)}, r"parents\[1\]: must be the index of an earlier joint"),
-    ({"offsets": np.zeros((3, 2))}, r"offsets: expected shape \(3, 3\)"),
-    ({"offsets": [[0, 0, 0], [1, 0, np.nan], [1, 0, 0]]}, "offsets: contains NaN"),
-    ({"rotations": torch.ones(3, 3, 4)}, "frame 0, joint 0 .* is not a unit quaternion"),
-    ({"rotations": torch.zeros(0, 3, 4)}, "at least one frame"),
-    ({"rotations": torch.ones(3, 4)}, r"rotations: expected shape \(T, 3, 4\)"),
-    ({"root_positions": torch.zeros(2, 3)}, r"root_positions: expected shape \(3, 3\)"),
-    ({"root_positions": [["a", "b", "c"]] * 3}, "not a numeric array"),
-    ({"fps": 0}, "fps: must be a positive number"),
-    ({"fps": float("nan")}, "fps: must be a positive number"),
-    ({"channels": [("Xrotation",), ("Xrotation", "Xrotation"), ()]}, "listed twice"),
-    ({"channels": [("Wrotation",), (), ()]}, "unknown channel"),
-    ({"channels": [()]}, "expected 3 entries"),
-    ({"end_sites": [(5, (0, 1, 0))]}, r"end_sites\[0\]"),
-    ({"end_sites": [(0, (0, 1))]}, r"end_sites\[0\]"),
-    ({"joint_translations": torch.zeros(3, 3, 3, dtype=torch.float64)}, "row 0 .* must equal root_positions"),
-    ({"joint_translations": torch.zeros(3, 3, dtype=torch.float64)}, r"joint_translations: expected shape"),
-])
+@pytest.mark.parametrize(
+    "change, message",
+    [
+        ({"joint_names": ("root", "a")}, r"parents: expected 2 entries"),
+        ({"joint_names": ("root", "a", "a")}, "appears more than once"),
+        ({"joint_names": ("root", "left arm", "b")}, r"joint_names\[1\]"),
+        ({"parents": (0, 0, 1)}, r"parents\[0\]: joint 0 must be the root"),
+        ({"parents": (-1, 2, 0)}, r"parents\[1\]: must be the index of an earlier joint"),
+        ({"offsets": np.zeros((3, 2))}, r"offsets: expected shape \(3, 3\)"),
+        ({"offsets": [[0, 0, 0], [1, 0, np.nan], [1, 0, 0]]}, "offsets: contains NaN"),
+        ({"rotations": torch.ones(3, 3, 4)}, "frame 0, joint 0 .* is not a unit quaternion"),
+        ({"rotations": torch.zeros(0, 3, 4)}, "at least one frame"),
+        ({"rotations": torch.ones(3, 4)}, r"rotations: expected shape \(T, 3, 4\)"),
+        ({"root_positions": torch.zeros(2, 3)}, r"root_positions: expected shape \(3, 3\)"),
+        ({"root_positions": [["a", "b", "c"]] * 3}, "not a numeric array"),
+        ({"fps": 0}, "fps: must be a positive number"),
+        ({"fps": float("nan")}, "fps: must be a positive number"),
+        ({"channels": [("Xrotation",), ("Xrotation", "Xrotation"), ()]}, "listed twice"),
+        ({"channels": [("Wrotation",), (), ()]}, "unknown channel"),
+        ({"channels": [()]}, "expected 3 entries"),
+        ({"end_sites": [(5, (0, 1, 0))]}, r"end_sites\[0\]"),
+        ({"end_sites": [(0, (0, 1))]}, r"end_sites\[0\]"),
+        (
+            {"joint_translations": torch.zeros(3, 3, 3, dtype=torch.float64)},
+            "row 0 .* must equal root_positions",
+        ),
+        (
+            {"joint_translations": torch.zeros(3, 3, dtype=torch.float64)},
+            r"joint_translations: expected shape",
+        ),
+    ],
+)
 def test_validation_names_the_problem(change: dict, message: str) -> None:
     with pytest.raises(ValueError, match=message):
         replace(chain(), **change)
@@ -112,7 +130,9 @@ def test_resample_interpolates_between_frames() -> None:
     two = replace(motion, rotations=rotations, root_positions=roots, fps=1)
     fine = two.resample(4)
     assert fine.num_frames == 5
-    torch.testing.assert_close(fine.root_positions[:, 0], torch.tensor([0, 0.5, 1, 1.5, 2], dtype=torch.float64))
+    torch.testing.assert_close(
+        fine.root_positions[:, 0], torch.tensor([0, 0.5, 1, 1.5, 2], dtype=torch.float64)
+    )
     slerp = Slerp([0, 1], Rotation.from_quat(rotations[:, 1].numpy(), scalar_first=True))
     expected = slerp([0, 0.25, 0.5, 0.75, 1])
     got = Rotation.from_quat(fine.rotations[:, 1].numpy(), scalar_first=True)
@@ -120,8 +140,9 @@ def test_resample_interpolates_between_frames() -> None:
     assert errors[[0, 2, 4]].max() < 1e-9 and errors.max() < 0.2  # nlerp: exact at the ends and middle
     flipped = rotations.clone()
     flipped[1] = -flipped[1]  # the same rotations with the other sign
-    torch.testing.assert_close(replace(two, rotations=flipped).resample(4).global_positions(),
-                               fine.global_positions())
+    torch.testing.assert_close(
+        replace(two, rotations=flipped).resample(4).global_positions(), fine.global_positions()
+    )
     up = replace(motion, fps=10).resample(30)
     assert up.num_frames == 4  # (2 - 1) frames of 0.1 s = 3 frames of 1/30 s, plus the first
     with pytest.raises(ValueError, match="fps must be a positive number"):

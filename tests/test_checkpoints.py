@@ -55,15 +55,20 @@ def test_shape_mismatch_is_not_half_loaded():
 def test_different_parameter_names_are_rejected():
     cfg = TinyConfig()
     save_checkpoint("tiny", cfg, nn.Sequential(nn.Linear(4, 2)))
-    with pytest.warns(UserWarning, match="the state dict lacks 'bias', 'weight' and has unexpected '0.bias', '0.weight'"):
+    with pytest.warns(
+        UserWarning, match="the state dict lacks 'bias', 'weight' and has unexpected '0.bias', '0.weight'"
+    ):
         assert load_checkpoint("tiny", cfg, nn.Linear(4, 2)) is None
 
 
 def test_a_long_list_of_names_is_cut_short():
     cfg = TinyConfig()
     save_checkpoint("tiny", cfg, nn.Sequential(*(nn.Linear(4, 4) for _ in range(3))))
-    with pytest.warns(UserWarning, match=r"lacks 'bias', 'weight' and has unexpected "
-                                         r"'0.bias', '0.weight', '1.bias', '1.weight' and 2 more$"):
+    with pytest.warns(
+        UserWarning,
+        match=r"lacks 'bias', 'weight' and has unexpected "
+        r"'0.bias', '0.weight', '1.bias', '1.weight' and 2 more$",
+    ):
         assert load_checkpoint("tiny", cfg, nn.Linear(4, 4)) is None
 
 

@@ -52,18 +52,31 @@ def folder(tmp_path: Path) -> Path:
         (["--seed", "-1"], "argument --seed: must be an integer of at least 0, got '-1'"),
         (["--seed", "1.5"], "argument --seed: must be an integer of at least 0, got '1.5'"),
         (["--seed", "zero"], "argument --seed: must be an integer of at least 0, got 'zero'"),
-        (["--seed", "0", "--n-per-mode", "0"], "argument --n-per-mode: must be an integer of at least 1, got '0'"),
-        (["--seed", "0", "--n-per-mode", "-2"], "argument --n-per-mode: must be an integer of at least 1, got '-2'"),
+        (
+            ["--seed", "0", "--n-per-mode", "0"],
+            "argument --n-per-mode: must be an integer of at least 1, got '0'",
+        ),
+        (
+            ["--seed", "0", "--n-per-mode", "-2"],
+            "argument --n-per-mode: must be an integer of at least 1, got '-2'",
+        ),
         (["--seed", "0", "--n-per-mode", "ten"], "argument --n-per-mode: must be an integer of at least 1"),
-        (["--seed", "0", "--seconds", "0"], "argument --seconds: must be a finite number of at least 1, got '0'"),
-        (["--seed", "0", "--seconds", "nan"], "argument --seconds: must be a finite number of at least 1, got 'nan'"),
+        (
+            ["--seed", "0", "--seconds", "0"],
+            "argument --seconds: must be a finite number of at least 1, got '0'",
+        ),
+        (
+            ["--seed", "0", "--seconds", "nan"],
+            "argument --seconds: must be a finite number of at least 1, got 'nan'",
+        ),
         (["--seed", "0", "--fps", "5"], "argument --fps: must be an integer of at least 10, got '5'"),
         (["--seed", "0", "--split", "dev"], "argument --split: invalid choice: 'dev'"),
         (["--seed", "0", "--checksums", "{folder}/missing/sums.json"], "argument --checksums: directory"),
     ],
 )
-def test_synthetic_refuses_bad_values(folder: Path, capsys: pytest.CaptureFixture[str], argv: list[str],
-                                      message: str) -> None:
+def test_synthetic_refuses_bad_values(
+    folder: Path, capsys: pytest.CaptureFixture[str], argv: list[str], message: str
+) -> None:
     out = folder / "x.npz"
     line = refusal(synthetic.main, ["--out", str(out), *(a.format(folder=folder) for a in argv)], capsys)
     assert line.startswith(f"{SYNTHETIC}: error: ") and message in line
@@ -73,28 +86,35 @@ def test_synthetic_refuses_bad_values(folder: Path, capsys: pytest.CaptureFixtur
 @pytest.mark.parametrize(
     ("out", "message"),
     [
-        ("missing/x.npz", "argument --out: directory '{folder}/missing' of '{folder}/missing/x.npz' does not exist"),
+        (
+            "missing/x.npz",
+            "argument --out: directory '{folder}/missing' of '{folder}/missing/x.npz' does not exist",
+        ),
         ("", "argument --out: '{folder}/' is a directory, expected a file name"),
         ("afile/x.npz", "argument --out: '{folder}/afile' in '{folder}/afile/x.npz' is not a directory"),
     ],
 )
-def test_synthetic_refuses_bad_output_paths(folder: Path, capsys: pytest.CaptureFixture[str], out: str,
-                                            message: str) -> None:
+def test_synthetic_refuses_bad_output_paths(
+    folder: Path, capsys: pytest.CaptureFixture[str], out: str, message: str
+) -> None:
     line = refusal(synthetic.main, ["--out", f"{folder}/{out}", "--seed", "0"], capsys)
     assert message.format(folder=folder) in line
     assert not (folder / "missing").exists()
 
 
 @pytest.mark.skipif(os.geteuid() == 0, reason="root may write into a read-only directory")
-def test_synthetic_refuses_an_unwritable_directory(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+def test_synthetic_refuses_an_unwritable_directory(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
     locked = tmp_path / "locked"
     locked.mkdir(mode=0o500)
     line = refusal(synthetic.main, ["--out", str(locked / "x.npz"), "--seed", "0"], capsys)
     assert f"argument --out: directory '{locked}' of '{locked}/x.npz' is not writable" in line
 
 
-def test_a_failed_write_is_one_line(tmp_path: Path, capsys: pytest.CaptureFixture[str],
-                                    monkeypatch: pytest.MonkeyPatch) -> None:
+def test_a_failed_write_is_one_line(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
+) -> None:
     """An error that only shows while writing (e.g. a full disk) still ends in one line, not a traceback."""
     out = tmp_path / "x.npz"
 
@@ -109,8 +129,20 @@ def test_a_failed_write_is_one_line(tmp_path: Path, capsys: pytest.CaptureFixtur
 
 def test_the_synthetic_command_line_still_writes(tmp_path: Path) -> None:
     sums = tmp_path / "sums.json"
-    argv = ["--out", str(tmp_path / "x.npz"), "--seed", "2", "--n-per-mode", "1", "--seconds", "1", "--fps", "10",
-            "--checksums", str(sums)]
+    argv = [
+        "--out",
+        str(tmp_path / "x.npz"),
+        "--seed",
+        "2",
+        "--n-per-mode",
+        "1",
+        "--seconds",
+        "1",
+        "--fps",
+        "10",
+        "--checksums",
+        str(sums),
+    ]
     assert synthetic.main(argv) == 0
     assert MotionSet.load(tmp_path / "x.npz").n_clips == 12 and json.loads(sums.read_text())["seed"] == 2
 
@@ -126,8 +158,13 @@ def test_the_synthetic_command_line_still_writes(tmp_path: Path) -> None:
         (["geometry", "--out", "{folder}/afile/bench.json"], "argument --out: '{folder}/afile' in"),
     ],
 )
-def test_bench_refuses_bad_arguments(folder: Path, capsys: pytest.CaptureFixture[str],
-                                     monkeypatch: pytest.MonkeyPatch, argv: list[str], message: str) -> None:
+def test_bench_refuses_bad_arguments(
+    folder: Path,
+    capsys: pytest.CaptureFixture[str],
+    monkeypatch: pytest.MonkeyPatch,
+    argv: list[str],
+    message: str,
+) -> None:
     monkeypatch.setattr(bench.subprocess, "run", pytest.fail)  # nothing may run
     line = refusal(bench.main, [a.format(folder=folder) for a in argv], capsys)
     assert line.startswith(f"{BENCH}: error: ") and message.format(folder=folder) in line
@@ -150,22 +187,33 @@ def test_bench_runs_only_the_named_entries_into_out(tmp_path: Path, monkeypatch:
 @pytest.mark.parametrize(
     ("module", "argv", "message"),
     [
-        ("motionlab.data.synthetic", ["--out", "x.npz", "--seed", "0", "--n-per-mode", "-2"], "argument --n-per-mode"),
+        (
+            "motionlab.data.synthetic",
+            ["--out", "x.npz", "--seed", "0", "--n-per-mode", "-2"],
+            "argument --n-per-mode",
+        ),
         ("motionlab.data.synthetic", ["--out", "missing/x.npz", "--seed", "0"], "argument --out"),
         ("motionlab.bench", ["nosuch"], "unknown entry 'nosuch'"),
     ],
 )
 def test_the_real_commands_print_one_line(tmp_path: Path, module: str, argv: list[str], message: str) -> None:
     """As a user runs them: ``python -m ...`` in some directory, the error on the last line of stderr."""
-    completed = subprocess.run([sys.executable, "-m", module, *argv], cwd=tmp_path, capture_output=True, text=True,
-                               timeout=120)
+    completed = subprocess.run(
+        [sys.executable, "-m", module, *argv], cwd=tmp_path, capture_output=True, text=True, timeout=120
+    )
     assert completed.returncode == 2 and "Traceback" not in completed.stderr
     assert message in completed.stderr.splitlines()[-1]
     assert not list(tmp_path.iterdir())
 
 
-@pytest.mark.parametrize("error", [ValueError("bad\nvalue"), FileNotFoundError(2, "No such file", "f.npz"),
-                                   MemoryError("Unable to allocate 8 TiB")])
+@pytest.mark.parametrize(
+    "error",
+    [
+        ValueError("bad\nvalue"),
+        FileNotFoundError(2, "No such file", "f.npz"),
+        MemoryError("Unable to allocate 8 TiB"),
+    ],
+)
 def test_run_reports_user_errors_on_one_line(capsys: pytest.CaptureFixture[str], error: Exception) -> None:
     def command() -> int:
         raise error

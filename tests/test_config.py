@@ -67,7 +67,8 @@ def test_threads_sets_the_count_for_a_block_and_restores_it():
 
 
 def test_a_relative_build_directory_is_taken_from_the_repository_root(monkeypatch, tmp_path) -> None:
-    """The course driver runs in the repository and the kernels in notebooks/: both must mean one directory."""
+    """The course driver runs in the repository and the kernels in notebooks/: both must mean one
+    directory."""
     monkeypatch.setenv("MOTIONLAB_BUILD", "build-elsewhere")
     monkeypatch.chdir(tmp_path)
     assert config.build_dir() == config.REPO_ROOT / "build-elsewhere"

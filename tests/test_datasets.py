@@ -30,8 +30,10 @@ def clips():
     return make_clips(n_clips=30, n_frames=24, seed=4, dtype=torch.float32)
 
 
-@pytest.mark.parametrize("n_frames, length, stride, count", [(24, 24, 1, 1), (24, 8, 4, 5), (24, 10, 7, 3),
-                                                             (24, 1, 1, 24), (25, 8, 4, 5)])
+@pytest.mark.parametrize(
+    "n_frames, length, stride, count",
+    [(24, 24, 1, 1), (24, 8, 4, 5), (24, 10, 7, 3), (24, 1, 1, 24), (25, 8, 4, 5)],
+)
 def test_window_counts(n_frames, length, stride, count):
     starts = window_starts(n_frames, length, stride)
     assert starts.numel() == count == (n_frames - length) // stride + 1
@@ -118,7 +120,9 @@ def test_standardizer_round_trip_floor_and_state_dict():
     assert standardizer.std[3] == pytest.approx(1e-3)  # the constant channel sits on the floor
     z = standardizer.transform(features)
     torch.testing.assert_close(z[..., :3].reshape(-1, 3).mean(0), torch.zeros(3), rtol=0, atol=1e-5)
-    torch.testing.assert_close(z[..., :3].reshape(-1, 3).std(0, correction=0), torch.ones(3), rtol=0, atol=1e-5)
+    torch.testing.assert_close(
+        z[..., :3].reshape(-1, 3).std(0, correction=0), torch.ones(3), rtol=0, atol=1e-5
+    )
     torch.testing.assert_close(standardizer.inverse(z), features, rtol=1e-6, atol=1e-6)
     restored = Standardizer(4)
     restored.load_state_dict(standardizer.state_dict())
@@ -161,8 +165,12 @@ def test_build_splits_augments_train_windows_only(clips):
     augment = partial(random_yaw, generator=torch.Generator().manual_seed(0))
     turned = build_splits(clips, rep, length=12, stride=6, seed=1, fractions=(0.6, 0.2, 0.2), augment=augment)
     assert not torch.allclose(turned.standardizer.mean, plain.standardizer.mean)
-    torch.testing.assert_close(turned.standardizer.inverse(turned.val.features),
-                               plain.standardizer.inverse(plain.val.features), rtol=1e-5, atol=1e-5)
+    torch.testing.assert_close(
+        turned.standardizer.inverse(turned.val.features),
+        plain.standardizer.inverse(plain.val.features),
+        rtol=1e-5,
+        atol=1e-5,
+    )
 
 
 def test_motion_windows_input_errors(clips):

@@ -8,8 +8,8 @@ from motionlab.data.representations import rotate_xy
 from motionlab.data.synthetic import generate
 from motionlab.evaluation import EVAL_FEATURES, body_frame_features, hip_heading
 from motionlab.evaluation.benchmark import Benchmark, labels_of, real_reference, sample_metrics
-from motionlab.metrics import mean_ci
 from motionlab.evaluation.evaluator import EvaluatorConfig, load_evaluator
+from motionlab.metrics import mean_ci
 from motionlab.models.classifiers import ClassifierConfig, MotionClassifier
 
 
@@ -32,7 +32,9 @@ def test_hip_heading_of_a_character_facing_x_is_zero(clips):
     pos = torch.as_tensor(clips.positions[:1, :1])
     yaw = hip_heading(pos)
     turned = hip_heading(_turn(pos, 0.7))
-    assert torch.allclose(torch.remainder(turned - yaw - 0.7 + math.pi, 2 * math.pi) - math.pi, torch.zeros(1), atol=1e-5)
+    assert torch.allclose(
+        torch.remainder(turned - yaw - 0.7 + math.pi, 2 * math.pi) - math.pi, torch.zeros(1), atol=1e-5
+    )
 
 
 def test_features_ignore_where_and_which_way_the_clip_happens(clips):
@@ -56,7 +58,9 @@ def test_features_reject_bad_input():
 @pytest.mark.parametrize("kind", ["conv", "gru"])
 def test_classifier_shapes_and_deterministic_features(kind):
     torch.manual_seed(0)
-    model = MotionClassifier(ClassifierConfig(kind, 7, {"action": 3, "body": 2}, hidden=16, feature_dim=5)).eval()
+    model = MotionClassifier(
+        ClassifierConfig(kind, 7, {"action": 3, "body": 2}, hidden=16, feature_dim=5)
+    ).eval()
     x = torch.randn(4, 9, 7)
     logits = model(x)
     assert logits["action"].shape == (4, 3) and logits["body"].shape == (4, 2)
@@ -86,13 +90,26 @@ def test_evaluator_learns_actions_and_is_cached(clips):
     assert torch.equal(again.features(held_out.positions), evaluator.features(held_out.positions))
     probs = evaluator.probs(held_out.positions)
     assert torch.allclose(probs.sum(-1), torch.ones(len(probs), dtype=probs.dtype))
-    row = sample_metrics(evaluator, held_out.positions, held_out.action, evaluator.features(clips.positions),
-                         np.random.default_rng(0))
+    row = sample_metrics(
+        evaluator,
+        held_out.positions,
+        held_out.action,
+        evaluator.features(clips.positions),
+        np.random.default_rng(0),
+    )
     assert set(row) == {"accuracy", "fid", "diversity", "multimodality", "is"}
     assert all(np.isfinite(v) for v in row.values())
     real = real_reference(evaluator, Benchmark(clips, held_out, held_out), n_repeats=3, seed=5)
-    by_hand = [sample_metrics(evaluator, held_out.positions, held_out.action, evaluator.features(clips.positions),
-                              np.random.default_rng([5, r])) for r in range(3)]
+    by_hand = [
+        sample_metrics(
+            evaluator,
+            held_out.positions,
+            held_out.action,
+            evaluator.features(clips.positions),
+            np.random.default_rng([5, r]),
+        )
+        for r in range(3)
+    ]
     assert real == {key: mean_ci([row[key] for row in by_hand]) for key in row}
     with pytest.raises(KeyError, match="heads"):
         evaluator.logits(held_out.positions, "style")
@@ -100,13 +117,17 @@ def test_evaluator_learns_actions_and_is_cached(clips):
     many = np.concatenate([held_out.positions] * 30)
     for head in ("action", "body"):
         features, head_probs = evaluator.features_and_probs(many, head)
-        assert torch.equal(features, evaluator.features(many)) and torch.equal(head_probs, evaluator.probs(many, head))
+        assert torch.equal(features, evaluator.features(many)) and torch.equal(
+            head_probs, evaluator.probs(many, head)
+        )
     with pytest.raises(KeyError, match="heads"):
         evaluator.features_and_probs(held_out.positions, "style")
 
 
 def test_evaluator_rejects_mismatched_labels(clips):
     with pytest.raises(ValueError, match="labels"):
-        load_evaluator(clips.positions, {"action": clips.action[:-1]}, EvaluatorConfig(steps=1), progress=False)
+        load_evaluator(
+            clips.positions, {"action": clips.action[:-1]}, EvaluatorConfig(steps=1), progress=False
+        )
     with pytest.raises(ValueError, match="unknown label heads"):
         load_evaluator(clips.positions, {"style": clips.action}, EvaluatorConfig(steps=1), progress=False)

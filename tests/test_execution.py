@@ -38,12 +38,17 @@ def _notebook(*sources: str) -> nbformat.NotebookNode:
     return notebook
 
 
-@pytest.mark.parametrize(("breaker", "missing", "cell"), [(DROP_REPLIES, "reply never came", 1),
-                                                          (IGNORE_REQUESTS, "never started", 2)])
-def test_a_kernel_that_stops_answering_is_named_diagnosed_and_killed(tmp_path: Path, breaker: str, missing: str,
-                                                                     cell: int):
+@pytest.mark.parametrize(
+    ("breaker", "missing", "cell"),
+    [(DROP_REPLIES, "reply never came", 1), (IGNORE_REQUESTS, "never started", 2)],
+)
+def test_a_kernel_that_stops_answering_is_named_diagnosed_and_killed(
+    tmp_path: Path, breaker: str, missing: str, cell: int
+):
     limits = CellLimits(cell_seconds=120, answer_seconds=4)
-    execution = execute_notebook(_notebook("print('fine')", breaker, "print('never answered')"), tmp_path, limits)
+    execution = execute_notebook(
+        _notebook("print('fine')", breaker, "print('never answered')"), tmp_path, limits
+    )
     assert execution.hung and execution.failed_cell == cell
     error = execution.error
     assert isinstance(error, KernelNotAnswering) and missing in error.missing
@@ -54,7 +59,9 @@ def test_a_kernel_that_stops_answering_is_named_diagnosed_and_killed(tmp_path: P
 
 
 def test_a_cell_past_its_limit_fails_with_the_limit_in_the_message(tmp_path: Path):
-    execution = execute_notebook(_notebook("1", "import time\ntime.sleep(60)"), tmp_path, CellLimits(cell_seconds=2))
+    execution = execute_notebook(
+        _notebook("1", "import time\ntime.sleep(60)"), tmp_path, CellLimits(cell_seconds=2)
+    )
     assert not execution.hung and execution.failed_cell == 1
     assert "timed out (limit 2 s)" in str(execution.error)
     assert execution.seconds < 30
@@ -87,7 +94,9 @@ def build(monkeypatch, tmp_path: Path) -> Path:
 def test_a_chapter_whose_kernel_hangs_once_is_executed_again_and_the_retry_is_reported(tmp_path: Path, build):
     marker = tmp_path / "hung-once"
     hang_first_time = f"import pathlib\nif not pathlib.Path({str(marker)!r}).exists():\n" + "".join(
-        "    " + line + "\n" for line in [f"pathlib.Path({str(marker)!r}).touch()", *DROP_REPLIES.splitlines()])
+        "    " + line + "\n"
+        for line in [f"pathlib.Path({str(marker)!r}).touch()", *DROP_REPLIES.splitlines()]
+    )
     _chapter(tmp_path, "01_flaky", hang_first_time, "print('done')")
     [run] = course.build(tmp_path / "notebooks")
     assert run.error is None and len(run.retries) == 1 and "cell 0" in run.retries[0]
@@ -102,12 +111,15 @@ def test_a_chapter_whose_kernel_hangs_twice_fails_naming_the_cell(tmp_path: Path
     assert run.error.startswith("cell 0: KernelNotAnswering") and len(run.retries) == 1
 
 
-@pytest.mark.parametrize(("argv", "message"), [
-    (["--only", "7"], "two-digit"),
-    (["--only", "42"], "no chapter 42"),
-    (["--notebooks", "/no/such/dir"], "no such directory"),
-    (["--bogus"], "unrecognized arguments"),
-])
+@pytest.mark.parametrize(
+    ("argv", "message"),
+    [
+        (["--only", "7"], "two-digit"),
+        (["--only", "42"], "no chapter 42"),
+        (["--notebooks", "/no/such/dir"], "no such directory"),
+        (["--bogus"], "unrecognized arguments"),
+    ],
+)
 def test_the_command_refuses_bad_arguments_in_one_line(tmp_path: Path, build, capsys, argv, message):
     _chapter(tmp_path, "01_ok", "1")
     with pytest.raises(SystemExit) as exit_info:

@@ -73,7 +73,10 @@ def test_autograd_logdet_of_a_known_linear_map():
 
 
 def test_actnorm_data_dependent_initialisation():
-    x = torch.randn(16, 3, 20) * torch.tensor([2.0, 0.5, 7.0])[:, None] + torch.tensor([1.0, -3.0, 0.0])[:, None]
+    x = (
+        torch.randn(16, 3, 20) * torch.tensor([2.0, 0.5, 7.0])[:, None]
+        + torch.tensor([1.0, -3.0, 0.0])[:, None]
+    )
     layer = ActNorm(3)
     layer.eval()
     y, _ = layer(x)
@@ -106,7 +109,9 @@ def test_invconv_starts_orthogonal_and_caches_its_inverse():
         conv.log_s.add_(0.1)  # an in-place update (like an optimiser step) invalidates the cache
         second = conv.matrices()[1]
     assert second is not first
-    np.testing.assert_allclose((second.double() @ conv.weight().detach().double()).numpy(), np.eye(6), atol=1e-5)
+    np.testing.assert_allclose(
+        (second.double() @ conv.weight().detach().double()).numpy(), np.eye(6), atol=1e-5
+    )
 
 
 def test_coupling_starts_as_a_fixed_contraction_and_keeps_first_half():
@@ -131,12 +136,15 @@ def test_affine_transform_is_invertible_and_its_logdet_is_log_scale(raw, shift, 
     assert abs(float(affine_inverse(yb, params)) - x) < 1e-6 * (1 + abs(x) + abs(shift)) / scale
 
 
-@pytest.mark.parametrize("bad, message", [
-    (torch.randn(2, 5), "shape"),
-    (torch.randn(2, 4, 3), "5 channels"),
-    (torch.full((2, 5, 3), float("nan")), "NaN"),
-    (torch.ones(2, 5, 3, dtype=torch.int64), "floating"),
-])
+@pytest.mark.parametrize(
+    "bad, message",
+    [
+        (torch.randn(2, 5), "shape"),
+        (torch.randn(2, 4, 3), "5 channels"),
+        (torch.full((2, 5, 3), float("nan")), "NaN"),
+        (torch.ones(2, 5, 3, dtype=torch.int64), "floating"),
+    ],
+)
 def test_bad_inputs_raise_clear_errors(bad, message):
     for layer in (ActNorm(5), InvertibleConv1x1(5), AffineCoupling(5)):
         with pytest.raises(ValueError, match=message):

@@ -32,7 +32,9 @@ def test_squeeze_time_layout_and_inverse():
 
 def _small_glow(dtype=torch.float64) -> Glow:
     torch.manual_seed(0)
-    glow = Glow(GlowConfig(channels=4, length=8, cond_channels=2, levels=2, steps_per_level=2, hidden=8)).to(dtype)
+    glow = Glow(GlowConfig(channels=4, length=8, cond_channels=2, levels=2, steps_per_level=2, hidden=8)).to(
+        dtype
+    )
     return perturb_parameters_(glow, 0.2, torch.Generator().manual_seed(1)).eval()
 
 
@@ -95,14 +97,18 @@ def test_standard_normal_matches_torch_distributions():
 
 def test_diagonal_gaussian_matches_scipy():
     generator = torch.Generator().manual_seed(0)
-    x = torch.randn(40, 3, 7, generator=generator, dtype=torch.float64) * torch.tensor([1.0, 2.0, 0.1],
-                                                                                       dtype=torch.float64)[:, None]
+    x = (
+        torch.randn(40, 3, 7, generator=generator, dtype=torch.float64)
+        * torch.tensor([1.0, 2.0, 0.1], dtype=torch.float64)[:, None]
+    )
     model = DiagonalGaussian(3).fit(x)
     values = x.transpose(0, 1).reshape(3, -1).numpy()
     np.testing.assert_allclose(model.mean.numpy(), values.mean(1))
     np.testing.assert_allclose(model.std.numpy(), values.std(1))
     test = torch.randn(4, 3, 7, dtype=torch.float64)
-    expected = stats.norm.logpdf(test.numpy(), model.mean.numpy()[None, :, None], model.std.numpy()[None, :, None])
+    expected = stats.norm.logpdf(
+        test.numpy(), model.mean.numpy()[None, :, None], model.std.numpy()[None, :, None]
+    )
     np.testing.assert_allclose(model.log_prob(test).numpy(), expected.sum(axis=(1, 2)), rtol=1e-6)
     assert math.isfinite(float(model.log_prob(test).sum()))
     with pytest.raises(ValueError, match="3 channels"):

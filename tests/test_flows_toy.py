@@ -4,7 +4,14 @@ import numpy as np
 import pytest
 import torch
 
-from motionlab.models.flows import ToyFlow, ToyFlowConfig, grid_density, perturb_parameters_, toy_nll_loss, two_moons
+from motionlab.models.flows import (
+    ToyFlow,
+    ToyFlowConfig,
+    grid_density,
+    perturb_parameters_,
+    toy_nll_loss,
+    two_moons,
+)
 from motionlab.train import TensorBatches, TrainConfig, train
 
 
@@ -19,7 +26,9 @@ def test_two_moons_is_seeded_and_standardised():
 
 def test_density_of_a_random_flow_integrates_to_one():
     torch.manual_seed(0)
-    flow = perturb_parameters_(ToyFlow(ToyFlowConfig(steps=3, hidden=8)), 0.1, torch.Generator().manual_seed(0)).eval()
+    flow = perturb_parameters_(
+        ToyFlow(ToyFlowConfig(steps=3, hidden=8)), 0.1, torch.Generator().manual_seed(0)
+    ).eval()
     grid = grid_density(flow, extent=12.0, resolution=300)
     assert abs(grid.integral - 1.0) < 1e-3
     assert grid.density.shape == (300, 300) and (grid.density >= 0).all()
@@ -31,8 +40,13 @@ def test_a_few_training_steps_lower_the_nll_and_sampling_is_seeded():
     flow = ToyFlow(ToyFlowConfig(steps=2, hidden=16))
     with torch.no_grad():
         before = float(-flow.log_prob(data).mean())
-    result = train(flow, toy_nll_loss, TensorBatches((data,)), TrainConfig(steps=40, batch_size=128, lr=1e-2),
-                   progress=False)
+    result = train(
+        flow,
+        toy_nll_loss,
+        TensorBatches((data,)),
+        TrainConfig(steps=40, batch_size=128, lr=1e-2),
+        progress=False,
+    )
     assert result.metrics["train.nll"] < before
     a = flow.sample(10, 0.8, torch.Generator().manual_seed(1))
     assert torch.equal(a, flow.sample(10, 0.8, torch.Generator().manual_seed(1)))
@@ -65,5 +79,7 @@ def test_toy_temperature_widget_callback_draws_seeded_samples():
     figure = show_toy_temperature(flow, grid, temperature=0.5, n=200, seed=1)
     offsets = figure.axes[0].collections[0].get_offsets()
     assert offsets.shape == (200, 2)
-    np.testing.assert_allclose(np.asarray(offsets), flow.sample(200, 0.5, torch.Generator().manual_seed(1)).numpy())
+    np.testing.assert_allclose(
+        np.asarray(offsets), flow.sample(200, 0.5, torch.Generator().manual_seed(1)).numpy()
+    )
     plt.close("all")

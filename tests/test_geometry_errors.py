@@ -100,7 +100,9 @@ def test_degenerate_vectors_and_columns_raise():
     parallel = torch.tensor([[1.0, 2.0], [2.0, 4.0], [3.0, 6.0]])
     with pytest.raises(ValueError, match="gram_schmidt: the second column is parallel to the first"):
         g.gram_schmidt(parallel)
-    with pytest.raises(ValueError, match=r"gram_schmidt: columns \(or a \(\.\.\., 3, 3\) matrix\) must have shape"):
+    with pytest.raises(
+        ValueError, match=r"gram_schmidt: columns \(or a \(\.\.\., 3, 3\) matrix\) must have shape"
+    ):
         g.gram_schmidt(torch.ones(3, 4))
 
 
@@ -140,8 +142,11 @@ def test_dtype_and_batch_dims_are_preserved(name, call, valid, shape, dtype):
 
 
 # Unit quaternions (general rotations and special ones), and scales whose squared norm underflows or overflows
-# the dtype or whose `2 / |q|^2` overflows (1e-20 in float32), plus scales just inside the range used as it is.
-SCALED_UNITS = torch.tensor([[0.5, 0.5, 0.5, 0.5], [0.1, -0.7, 0.3, 0.64], [0.0, 0.0, 0.0, 1.0], [-0.9, 0.2, 0.3, 0.2]])
+# the dtype or whose `2 / |q|^2` overflows (1e-20 in float32), plus scales just inside the range used as it
+# is.
+SCALED_UNITS = torch.tensor(
+    [[0.5, 0.5, 0.5, 0.5], [0.1, -0.7, 0.3, 0.64], [0.0, 0.0, 0.0, 1.0], [-0.9, 0.2, 0.3, 0.2]]
+)
 EXTREME_SCALES = {
     torch.float32: [1e-20, 1e-25, 1e-30, 1e20, 1e30, 1e38, 1e-15, 1e15],
     torch.float64: [1e-157, 1e-170, 1e-300, 1e155, 1e160, 1e300, 1e-145, 1e145],
@@ -158,7 +163,9 @@ ROTATION_CALLS = [
 
 
 @pytest.mark.parametrize("dtype", [torch.float32, torch.float64])
-@pytest.mark.parametrize(("name", "call"), ROTATION_CALLS, ids=[f"{n}-{i}" for i, (n, _) in enumerate(ROTATION_CALLS)])
+@pytest.mark.parametrize(
+    ("name", "call"), ROTATION_CALLS, ids=[f"{n}-{i}" for i, (n, _) in enumerate(ROTATION_CALLS)]
+)
 def test_tiny_and_huge_quaternions_give_the_rotation_of_their_unit_version(name, call, dtype):
     unit = SCALED_UNITS.to(dtype)
     unit = unit / unit.norm(dim=-1, keepdim=True)
@@ -189,14 +196,20 @@ def test_tiny_and_huge_quaternions_give_the_rotation_of_their_unit_version(name,
         ([1e30, 0.0, math.nan, 1e-30], "nan"),
     ],
 )
-def test_zero_and_non_finite_quaternions_raise_as_before_next_to_tiny_and_huge_parts(name, call, what, row, shown):
+def test_zero_and_non_finite_quaternions_raise_as_before_next_to_tiny_and_huge_parts(
+    name, call, what, row, shown
+):
     corrupt = Q.clone()
     corrupt[1] = torch.tensor(row)
-    with pytest.raises(ValueError, match=rf"^{name}: {what} is zero or not finite at index \(1,\) \(value {shown}\)$"):
+    with pytest.raises(
+        ValueError, match=rf"^{name}: {what} is zero or not finite at index \(1,\) \(value {shown}\)$"
+    ):
         call(corrupt)
 
 
-@pytest.mark.parametrize("dtype, scale", [(torch.float32, 1e-20), (torch.float32, 1e20), (torch.float64, 1e-157)])
+@pytest.mark.parametrize(
+    "dtype, scale", [(torch.float32, 1e-20), (torch.float32, 1e20), (torch.float64, 1e-157)]
+)
 def test_axis_angle_and_geodesic_of_tiny_and_huge_quaternions_are_those_of_their_unit_versions(dtype, scale):
     q = torch.tensor([[0.9, 0.1, -0.3, 0.2], [0.5, 0.5, 0.5, 0.5]], dtype=dtype)
     r = torch.tensor([[0.2, 0.7, 0.1, -0.4], [1.0, 0.0, 0.0, 0.0]], dtype=dtype)

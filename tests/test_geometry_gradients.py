@@ -45,7 +45,9 @@ def test_gradcheck_conversions():
     check(g.axis_angle_to_quat, g.quat_to_axis_angle(q))
     check(g.quat_to_axis_angle, 1.2 * q)
     check(g.sixd_to_matrix, g.matrix_to_sixd(g.quat_to_matrix(q)) + 0.1)
-    check(g.gram_schmidt, torch.randn(4, 3, 3, dtype=torch.float64, generator=torch.Generator().manual_seed(4)))
+    check(
+        g.gram_schmidt, torch.randn(4, 3, 3, dtype=torch.float64, generator=torch.Generator().manual_seed(4))
+    )
     check(g.matrix_to_sixd, g.quat_to_matrix(q))
 
 
@@ -110,7 +112,9 @@ def test_d1_gradient_is_the_unit_slope_of_the_angle(dtype):
 @pytest.mark.parametrize("dtype", DTYPES)
 def test_conversions_have_finite_gradients_at_singular_points(dtype):
     identity = torch.tensor([[1.0, 0, 0, 0]], dtype=dtype)
-    half_turns = torch.tensor([[0.0, 1, 0, 0], [0.0, 0, 1, 0], [0.0, 0, 0, 1], [0.0, 0.6, 0.8, 0]], dtype=dtype)
+    half_turns = torch.tensor(
+        [[0.0, 1, 0, 0], [0.0, 0, 1, 0], [0.0, 0, 0, 1], [0.0, 0.6, 0.8, 0]], dtype=dtype
+    )
     quats = torch.cat([identity, half_turns])
     assert_finite_gradients(g.quat_to_axis_angle, quats)
     assert_finite_gradients(g.axis_angle_to_quat, torch.zeros(2, 3, dtype=dtype))
@@ -124,7 +128,9 @@ def test_conversions_have_finite_gradients_at_singular_points(dtype):
     # the zero rotation vector: q = (1, r/2 + O(r^3)), so d vec(q) / d r = I/2 exactly
     zero = torch.zeros(3, dtype=dtype, requires_grad=True)
     jacobian = torch.autograd.functional.jacobian(g.axis_angle_to_quat, zero)
-    assert torch.allclose(jacobian, torch.cat([torch.zeros(1, 3, dtype=dtype), 0.5 * torch.eye(3, dtype=dtype)]))
+    assert torch.allclose(
+        jacobian, torch.cat([torch.zeros(1, 3, dtype=dtype), 0.5 * torch.eye(3, dtype=dtype)])
+    )
     jacobian = torch.autograd.functional.jacobian(g.quat_to_axis_angle, identity[0].clone())
     assert torch.allclose(jacobian[:, 1:], 2 * torch.eye(3, dtype=dtype))
 
@@ -135,9 +141,11 @@ def test_euler_has_finite_gradients_in_gimbal_lock(dtype):
         proper = order[0].lower() == order[2].lower()
         middles = [0.0, math.pi] if proper else [math.pi / 2, -math.pi / 2]
         angles = torch.tensor([[0.7, middle, -0.4] for middle in middles], dtype=dtype)
-        assert_finite_gradients(lambda a: g.quat_to_euler(g.euler_to_quat(a, order), order), angles)
+        assert_finite_gradients(
+            lambda a, order=order: g.quat_to_euler(g.euler_to_quat(a, order), order), angles
+        )
         exact = torch.tensor([[1.0, 0, 0, 0], [0.5, 0.5, 0.5, 0.5], [0.0, 0.0, 0.0, 1.0]], dtype=dtype)
-        assert_finite_gradients(lambda q: g.quat_to_euler(q, order), exact)
+        assert_finite_gradients(lambda q, order=order: g.quat_to_euler(q, order), exact)
 
 
 @pytest.mark.parametrize("dtype", DTYPES)
@@ -175,5 +183,7 @@ def test_rotation_gradients_of_tiny_and_huge_quaternions_are_those_of_the_unit_o
     for call in calls:
         expected = torch.autograd.functional.jacobian(call, q)
         for scale in scales:
-            jacobian = torch.autograd.functional.jacobian(lambda p: call(p * scale), q)
+            jacobian = torch.autograd.functional.jacobian(
+                lambda p, call=call, scale=scale: call(p * scale), q
+            )
             torch.testing.assert_close(jacobian, expected, msg=f"scale {scale:g}")

@@ -45,10 +45,22 @@ def _axis_angle_quats(axes: list[list[float]], angles: list[float]) -> np.ndarra
     return np.array(rows)
 
 
-AXES = [[1, 0, 0], [0, 1, 0], [0, 0, 1], [1, 1, 0], [1, -1, 0], [0, 1, 1], [1, 1, 1], [-1, 1, 1], [0.3, -0.5, 0.8]]
+AXES = [
+    [1, 0, 0],
+    [0, 1, 0],
+    [0, 0, 1],
+    [1, 1, 0],
+    [1, -1, 0],
+    [0, 1, 1],
+    [1, 1, 1],
+    [-1, 1, 1],
+    [0.3, -0.5, 0.8],
+]
 EDGE_QUATERNIONS = np.concatenate(
     [
-        _axis_angle_quats(AXES, [0.0, 1e-7, -1e-7, 1e-4, math.pi / 2, math.pi - 1e-4, math.pi - 1e-7, math.pi]),
+        _axis_angle_quats(
+            AXES, [0.0, 1e-7, -1e-7, 1e-4, math.pi / 2, math.pi - 1e-4, math.pi - 1e-7, math.pi]
+        ),
         -_axis_angle_quats(AXES, [math.pi, 2.0]),  # w < 0 representatives
     ]
 )
@@ -132,7 +144,9 @@ def test_euler_round_trips_match_scipy(dtype, q):
     for order in ORDERS:
         angles = g.quat_to_euler(q, order)
         # the same rotation (compare matrices, not angles)
-        assert_close(Rotation.from_euler(order, angles.double().numpy()).as_matrix(), rotation.as_matrix(), dtype, 4)
+        assert_close(
+            Rotation.from_euler(order, angles.double().numpy()).as_matrix(), rotation.as_matrix(), dtype, 4
+        )
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")  # scipy warns about gimbal lock in the edge cases
             reference_angles = torch.tensor(rotation.as_euler(order), dtype=dtype)
@@ -153,13 +167,20 @@ def test_euler_round_trips_match_scipy(dtype, q):
 def test_euler_gimbal_lock_gives_the_same_rotation(dtype, order):
     proper = order[0].lower() == order[2].lower()
     lock = [0.0, math.pi] if proper else [math.pi / 2, -math.pi / 2]
-    rows = [[a, mid + nudge, c] for mid in lock for nudge in (0.0, 1e-9, -1e-9) for a, c in ((0.7, -0.4), (-2.9, 2.5))]
+    rows = [
+        [a, mid + nudge, c]
+        for mid in lock
+        for nudge in (0.0, 1e-9, -1e-9)
+        for a, c in ((0.7, -0.4), (-2.9, 2.5))
+    ]
     angles = torch.tensor(rows, dtype=torch.float64)
     rotation = Rotation.from_euler(order, angles.numpy())
     q = g.euler_to_quat(angles.to(dtype), order)
     assert_close(g.quat_to_matrix(q), rotation.as_matrix(), dtype)
     extracted = g.quat_to_euler(q, order)
-    assert_close(Rotation.from_euler(order, extracted.double().numpy()).as_matrix(), rotation.as_matrix(), dtype, 4)
+    assert_close(
+        Rotation.from_euler(order, extracted.double().numpy()).as_matrix(), rotation.as_matrix(), dtype, 4
+    )
     exact = [row[1] in lock for row in rows]
     # like scipy, the third angle is set to zero in (exact) gimbal lock
     assert (extracted[exact, 2].abs() <= TOL[dtype]).all()
@@ -198,7 +219,9 @@ def test_axis_angle_matches_scipy(dtype, q):
     rotation = to_scipy(q)
     rotvec = g.quat_to_axis_angle(q)
     assert (rotvec.double().norm(dim=-1) <= math.pi + TOL[dtype]).all()
-    assert_close(Rotation.from_rotvec(rotvec.double().numpy()).as_matrix(), rotation.as_matrix(), dtype, scale=4)
+    assert_close(
+        Rotation.from_rotvec(rotvec.double().numpy()).as_matrix(), rotation.as_matrix(), dtype, scale=4
+    )
     back = g.axis_angle_to_quat(torch.tensor(rotation.as_rotvec(), dtype=dtype))
     assert_close(g.quat_to_matrix(back), rotation.as_matrix(), dtype)
     # away from the half turn (where the sign of the vector is ambiguous) the vectors agree
@@ -208,7 +231,9 @@ def test_axis_angle_matches_scipy(dtype, q):
 
 @pytest.mark.parametrize("dtype", DTYPES)
 def test_axis_angle_of_large_and_tiny_vectors(dtype):
-    rotvec = torch.tensor([[0.0, 0, 0], [1e-7, 0, 0], [0, 3 * math.pi, 0], [-5.0, 2.0, 1.0]], dtype=torch.float64)
+    rotvec = torch.tensor(
+        [[0.0, 0, 0], [1e-7, 0, 0], [0, 3 * math.pi, 0], [-5.0, 2.0, 1.0]], dtype=torch.float64
+    )
     q = g.axis_angle_to_quat(rotvec.to(dtype))
     assert_close(g.quat_to_matrix(q), Rotation.from_rotvec(rotvec.numpy()).as_matrix(), dtype)
     assert_close(g.quat_to_axis_angle(q)[1], [1e-7, 0, 0], dtype, scale=1e-2)
@@ -300,12 +325,16 @@ def test_interpolation_paths_slerp_has_constant_speed_nlerp_does_not():
     # a batch of pairs: path index first
     batch = g.interpolation_paths(torch.stack([q0, q1]), torch.stack([q1, q0]), n=5)
     assert batch.slerp.shape == (5, 2, 4)
-    np.testing.assert_allclose(batch.slerp[:, 0].numpy(), g.interpolation_paths(q0, q1, 5).slerp.numpy(), atol=1e-12)
+    np.testing.assert_allclose(
+        batch.slerp[:, 0].numpy(), g.interpolation_paths(q0, q1, 5).slerp.numpy(), atol=1e-12
+    )
 
 
 def test_slerp_takes_the_short_way():
     q0 = torch.tensor([1.0, 0, 0, 0], dtype=torch.float64)
-    q1 = -g.axis_angle_to_quat(torch.tensor([0.0, 0, 0.4], dtype=torch.float64))  # same rotation, far hemisphere
+    q1 = -g.axis_angle_to_quat(
+        torch.tensor([0.0, 0, 0.4], dtype=torch.float64)
+    )  # same rotation, far hemisphere
     middle = g.quat_slerp(q0, q1, 0.5)
     assert abs(g.quat_geodesic(q0, middle).item() - 0.2) < 1e-12
 
@@ -313,7 +342,9 @@ def test_slerp_takes_the_short_way():
 @pytest.mark.parametrize("dtype", DTYPES)
 @SETTINGS
 @given(
-    a=arrays(np.float64, (8, 3), elements=st.floats(-1, 1)).filter(lambda a: (np.linalg.norm(a, axis=-1) > 1e-2).all()),
+    a=arrays(np.float64, (8, 3), elements=st.floats(-1, 1)).filter(
+        lambda a: (np.linalg.norm(a, axis=-1) > 1e-2).all()
+    ),
     scale=st.floats(0.1, 10),
 )
 def test_quat_from_two_vectors_is_the_shortest_arc(dtype, a, scale):

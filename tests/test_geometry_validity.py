@@ -34,7 +34,8 @@ def test_penalties_match_hand_computations():
     reflection = torch.diag(torch.tensor([1.0, 1.0, -1.0], dtype=torch.float64))
     assert g.orthogonality_penalty(reflection).item() == 0.0
     assert g.determinant_penalty(reflection).item() == pytest.approx(4.0)
-    # a shear [[1, s, 0], [0, 1, 0], [0, 0, 1]]: M^T M - I has entries s, s (off-diagonal) and s^2 -> 2 s^2 + s^4
+    # a shear [[1, s, 0], [0, 1, 0], [0, 0, 1]]: M^T M - I has entries s, s (off-diagonal) and s^2 -> 2 s^2 +
+    # s^4
     shear = eye.clone()
     shear[0, 1] = 0.5
     assert g.orthogonality_penalty(shear).item() == pytest.approx(2 * 0.25 + 0.0625)
@@ -61,7 +62,9 @@ def test_normalize_and_standardize(dtype):
 def test_gram_schmidt_of_nearly_parallel_columns_is_still_a_rotation(dtype):
     tolerance = 1e-12 if dtype == torch.float64 else 1e-5
     for angle in (1e-2, 1e-4, 1e-5):
-        columns = torch.tensor([[1.0, math.cos(angle)], [0.0, math.sin(angle)], [0.0, 0.0]], dtype=dtype) * 3.0
+        columns = (
+            torch.tensor([[1.0, math.cos(angle)], [0.0, math.sin(angle)], [0.0, 0.0]], dtype=dtype) * 3.0
+        )
         rotation = g.gram_schmidt(columns)
         assert (rotation.T @ rotation - torch.eye(3, dtype=dtype)).abs().max() < tolerance
         assert abs(torch.linalg.det(rotation).item() - 1) < tolerance
@@ -70,7 +73,9 @@ def test_gram_schmidt_of_nearly_parallel_columns_is_still_a_rotation(dtype):
 
 def test_projections_fix_noisy_outputs_penalties_only_measure_them():
     rotations = random_rotations(64, 2)
-    noisy = rotations + 0.05 * torch.randn(64, 3, 3, dtype=torch.float64, generator=torch.Generator().manual_seed(3))
+    noisy = rotations + 0.05 * torch.randn(
+        64, 3, 3, dtype=torch.float64, generator=torch.Generator().manual_seed(3)
+    )
     before = g.orthogonality_penalty(noisy)
     assert (before > 0).all()
     projected = g.gram_schmidt(noisy)

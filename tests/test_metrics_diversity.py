@@ -14,7 +14,9 @@ from motionlab.metrics import apd, class_apd, diversity, multimodality, n_apd
 
 def loop_apd(samples: np.ndarray) -> float:
     flat = samples.reshape(samples.shape[0], -1)
-    pairs = [np.sqrt(((flat[i] - flat[j]) ** 2).sum()) for i, j in itertools.permutations(range(len(flat)), 2)]
+    pairs = [
+        np.sqrt(((flat[i] - flat[j]) ** 2).sum()) for i, j in itertools.permutations(range(len(flat)), 2)
+    ]
     return float(np.mean(pairs))
 
 

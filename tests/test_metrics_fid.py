@@ -21,7 +21,9 @@ def scipy_fid(a: np.ndarray, b: np.ndarray) -> float:
     return float(((mu1 - mu2) ** 2).sum() + np.trace(s1) + np.trace(s2) - 2 * np.trace(cross).real)
 
 
-def with_exact_covariance(rng: np.random.Generator, n: int, variances: np.ndarray, mean: np.ndarray) -> np.ndarray:
+def with_exact_covariance(
+    rng: np.random.Generator, n: int, variances: np.ndarray, mean: np.ndarray
+) -> np.ndarray:
     """``n`` rows whose sample mean is ``mean`` and sample covariance is exactly ``diag(variances)``."""
     z = rng.normal(size=(n, variances.size))
     z -= z.mean(axis=0)
@@ -65,7 +67,9 @@ def test_diagonal_covariances_closed_form():
     var_a, var_b = rng.uniform(0.1, 4.0, size=5), rng.uniform(0.1, 4.0, size=5)
     mean_a, mean_b = rng.normal(size=5), rng.normal(size=5)
     expected = ((mean_a - mean_b) ** 2).sum() + ((np.sqrt(var_a) - np.sqrt(var_b)) ** 2).sum()
-    assert frechet_distance(mean_a, np.diag(var_a), mean_b, np.diag(var_b)) == pytest.approx(expected, rel=1e-12)
+    assert frechet_distance(mean_a, np.diag(var_a), mean_b, np.diag(var_b)) == pytest.approx(
+        expected, rel=1e-12
+    )
     a = with_exact_covariance(rng, 40, var_a, mean_a)
     b = with_exact_covariance(rng, 70, var_b, mean_b)
     assert fid(a, b) == pytest.approx(expected, rel=1e-9)
@@ -159,7 +163,11 @@ def test_property_invariant_to_a_common_rotation_and_translation(seed, n_a, n_b,
         (np.zeros((5, 2)), np.zeros((5, 3)), "fid: a and b must have the same feature dimension"),
         (np.zeros((1, 2)), np.zeros((5, 2)), "fid: a needs at least 2 rows"),
         (np.zeros((5, 2)), np.zeros((0, 2)), "fid: b is empty"),
-        (np.zeros((5, 2)), [[0.0, 1.0], [np.nan, 0.0]], r"fid: b contains NaN or inf \(first at index \(1, 0\)\)"),
+        (
+            np.zeros((5, 2)),
+            [[0.0, 1.0], [np.nan, 0.0]],
+            r"fid: b contains NaN or inf \(first at index \(1, 0\)\)",
+        ),
     ],
 )
 def test_bad_inputs(a, b, match):
@@ -177,7 +185,8 @@ def test_frechet_distance_rejects_invalid_covariances():
 
 
 def spread_spectrum_pair(seed: int, dim: int, n: int) -> tuple[np.ndarray, np.ndarray]:
-    """Two ``(n, dim)`` samples of one Gaussian whose variances run from 100 down to 1e-6 in a random basis."""
+    """Two ``(n, dim)`` samples of one Gaussian whose variances run from 100 down to 1e-6 in a random
+    basis."""
     rng = np.random.default_rng(seed)
     scales = np.sqrt(np.geomspace(100.0, 1e-6, dim))
     basis = special_ortho_group.rvs(dim, random_state=rng)
@@ -192,7 +201,9 @@ def test_variances_over_eight_decades_keep_the_small_cross_terms():
     """
     a, b = spread_spectrum_pair(0, dim=256, n=3000)
     assert fid(a, b) == pytest.approx(scipy_fid(a, b), rel=1e-7)
-    assert frechet_distance(*feature_statistics(a), *feature_statistics(b)) == pytest.approx(fid(a, b), rel=1e-10)
+    assert frechet_distance(*feature_statistics(a), *feature_statistics(b)) == pytest.approx(
+        fid(a, b), rel=1e-10
+    )
 
 
 def test_commuting_covariances_over_eight_decades_closed_form():
@@ -205,7 +216,9 @@ def test_commuting_covariances_over_eight_decades_closed_form():
     mean_a, mean_b = rng.normal(size=dim), rng.normal(size=dim)
     expected = ((mean_a - mean_b) ** 2).sum() + ((np.sqrt(var_a) - np.sqrt(var_b)) ** 2).sum()
     sigma_a, sigma_b = (basis * var_a) @ basis.T, (basis * var_b) @ basis.T
-    assert frechet_distance(basis @ mean_a, sigma_a, basis @ mean_b, sigma_b) == pytest.approx(expected, rel=1e-11)
+    assert frechet_distance(basis @ mean_a, sigma_a, basis @ mean_b, sigma_b) == pytest.approx(
+        expected, rel=1e-11
+    )
     a = with_exact_covariance(rng, 200, var_a, mean_a) @ basis.T
     b = with_exact_covariance(rng, 300, var_b, mean_b) @ basis.T
     assert fid(a, b) == pytest.approx(expected, rel=1e-11)
@@ -213,7 +226,8 @@ def test_commuting_covariances_over_eight_decades_closed_form():
 
 @pytest.mark.parametrize("seed", range(3))
 def test_frechet_distance_of_a_low_rank_and_a_full_rank_covariance_matches_fid(seed):
-    """Σ1 of rank 4 in 50-D against a full-rank Σ2: Σ1's round-off eigenvalues must not pair with Σ2's variances."""
+    """Σ1 of rank 4 in 50-D against a full-rank Σ2: Σ1's round-off eigenvalues must not pair with Σ2's
+    variances."""
     rng = np.random.default_rng(seed)
     basis = np.linalg.qr(rng.normal(size=(50, 4)))[0]
     a = rng.normal(size=(12, 4)) @ basis.T * 3.0

@@ -48,7 +48,12 @@ def test_splits_score_contiguous_chunks_with_their_own_marginals():
 
 
 @settings(max_examples=30, deadline=None)
-@given(seed=st.integers(0, 2**31), n=st.integers(1, 30), classes=st.integers(1, 8), sharpness=st.floats(0.0, 20.0))
+@given(
+    seed=st.integers(0, 2**31),
+    n=st.integers(1, 30),
+    classes=st.integers(1, 8),
+    sharpness=st.floats(0.0, 20.0),
+)
 def test_property_between_one_and_the_number_of_classes(seed, n, classes, sharpness):
     score = inception_score(random_probs(seed, n, classes, sharpness))
     assert 1.0 - 1e-9 <= score <= classes + 1e-9

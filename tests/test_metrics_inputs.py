@@ -1,4 +1,5 @@
-"""Every public metric: torch or NumPy in, float out; NaN, wrong ndim and empty input raise a named ValueError."""
+"""Every public metric: torch or NumPy in, float out; NaN, wrong ndim and empty input raise a named
+ValueError."""
 
 import numpy as np
 import pytest

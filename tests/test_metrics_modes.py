@@ -17,7 +17,8 @@ labelings = st.integers(2, 60).flatmap(
 
 
 def test_ari_hand_value():
-    # Rows {0,1},{2,3}; columns {0,2},{1,3}: no pair together in both; E = 2*2/6, max = 2 -> (0 - 2/3)/(2 - 2/3)
+    # Rows {0,1},{2,3}; columns {0,2},{1,3}: no pair together in both; E = 2*2/6, max = 2 -> (0 - 2/3)/(2 -
+    # 2/3)
     assert adjusted_rand_index([0, 0, 1, 1], [0, 1, 0, 1]) == pytest.approx(-0.5)
 
 
@@ -32,14 +33,18 @@ def test_ari_hand_value():
     ],
 )
 def test_ari_edge_cases_match_sklearn(discovered, truth):
-    assert adjusted_rand_index(discovered, truth) == pytest.approx(adjusted_rand_score(truth, discovered), abs=1e-12)
+    assert adjusted_rand_index(discovered, truth) == pytest.approx(
+        adjusted_rand_score(truth, discovered), abs=1e-12
+    )
 
 
 @settings(max_examples=60, deadline=None)
 @given(labelings)
 def test_property_ari_matches_sklearn(pair):
     discovered, truth = pair
-    assert adjusted_rand_index(discovered, truth) == pytest.approx(adjusted_rand_score(truth, discovered), abs=1e-12)
+    assert adjusted_rand_index(discovered, truth) == pytest.approx(
+        adjusted_rand_score(truth, discovered), abs=1e-12
+    )
 
 
 @settings(max_examples=30, deadline=None)
@@ -83,7 +88,9 @@ def test_mode_homogeneity_pure_modes_and_split_sub_modes():
 @given(labelings)
 def test_property_mode_homogeneity_matches_counting(pair):
     discovered, truth = pair
-    assert mode_homogeneity(discovered, truth) == pytest.approx(counting_homogeneity(discovered, truth), rel=1e-12)
+    assert mode_homogeneity(discovered, truth) == pytest.approx(
+        counting_homogeneity(discovered, truth), rel=1e-12
+    )
 
 
 def test_contingency_table_matches_sklearn():
@@ -96,7 +103,10 @@ def test_contingency_table_matches_sklearn():
     "call, match",
     [
         (lambda: adjusted_rand_index([0], [0]), "adjusted_rand_index: needs at least 2 items"),
-        (lambda: adjusted_rand_index([0, 1, 1], [0, 1]), r"adjusted_rand_index: truth must have one entry per item"),
+        (
+            lambda: adjusted_rand_index([0, 1, 1], [0, 1]),
+            r"adjusted_rand_index: truth must have one entry per item",
+        ),
         (lambda: mode_homogeneity([], []), "mode_homogeneity: discovered is empty"),
         (lambda: mode_homogeneity([[0, 1]], [0, 1]), r"mode_homogeneity: discovered must be 1-D \(N,\)"),
         (lambda: mode_homogeneity([0.0, np.nan], [0, 1]), "mode_homogeneity: discovered contains NaN"),

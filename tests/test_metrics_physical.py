@@ -79,14 +79,18 @@ def test_heights_are_relative_to_each_foot_lowest_point():
 def test_batches_pool_all_planted_intervals():
     motion = walking_foot()
     batch = np.stack([motion, motion])
-    assert foot_skating(torch.from_numpy(batch), fps=FPS) == pytest.approx(foot_skating(motion, fps=FPS), rel=1e-12)
+    assert foot_skating(torch.from_numpy(batch), fps=FPS) == pytest.approx(
+        foot_skating(motion, fps=FPS), rel=1e-12
+    )
 
 
 def test_speed_scales_with_the_frame_rate():
     motion = standing(20)
     motion[:, 11, 0] = 0.01 * np.arange(20)
     contacts = np.ones((20, 4))
-    assert foot_skating(motion, contacts, fps=60.0) == pytest.approx(2 * foot_skating(motion, contacts, fps=30.0))
+    assert foot_skating(motion, contacts, fps=60.0) == pytest.approx(
+        2 * foot_skating(motion, contacts, fps=30.0)
+    )
 
 
 @pytest.mark.parametrize(
@@ -131,7 +135,9 @@ def test_rigid_bones_have_zero_error_and_scaled_bones_a_known_one():
     assert bone_length_error(motion, PARENTS, offsets) == pytest.approx(0.0, abs=1e-12)
     assert bone_length_error(motion, PARENTS, lengths) == pytest.approx(0.0, abs=1e-12)
     stretched = rigid_motion(offsets * 1.1, 8, seed=2)
-    assert bone_length_error(stretched, PARENTS, offsets) == pytest.approx(0.1 * lengths[1:].mean(), rel=1e-10)
+    assert bone_length_error(stretched, PARENTS, offsets) == pytest.approx(
+        0.1 * lengths[1:].mean(), rel=1e-10
+    )
 
 
 def test_bone_length_error_hand_value():

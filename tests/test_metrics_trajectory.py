@@ -1,4 +1,5 @@
-"""Best-of-K ADE/FDE, multimodal ground truth, MMADE/MMFDE and end-point error against loops and hand values."""
+"""Best-of-K ADE/FDE, multimodal ground truth, MMADE/MMFDE and end-point error against loops and hand
+values."""
 
 import math
 
@@ -101,10 +102,22 @@ def test_end_point_error_hand_value():
 @pytest.mark.parametrize(
     "call, match",
     [
-        (lambda: min_ade(np.zeros((2, 3, 4)), np.zeros((3, 5))), r"min_ade: each sample and target must have the same"),
-        (lambda: min_ade(np.zeros((3, 4)), np.zeros((3, 4))), "min_ade: samples must have at least 3 dimensions"),
-        (lambda: min_fde(np.zeros((2, 3, 4)), np.full((3, 4), np.inf)), "min_fde: target contains NaN or inf"),
-        (lambda: mmade(np.zeros((2, 3, 4)), np.zeros((3, 4))), "mmade: gt_futures must have at least 3 dimensions"),
+        (
+            lambda: min_ade(np.zeros((2, 3, 4)), np.zeros((3, 5))),
+            r"min_ade: each sample and target must have the same",
+        ),
+        (
+            lambda: min_ade(np.zeros((3, 4)), np.zeros((3, 4))),
+            "min_ade: samples must have at least 3 dimensions",
+        ),
+        (
+            lambda: min_fde(np.zeros((2, 3, 4)), np.full((3, 4), np.inf)),
+            "min_fde: target contains NaN or inf",
+        ),
+        (
+            lambda: mmade(np.zeros((2, 3, 4)), np.zeros((3, 4))),
+            "mmade: gt_futures must have at least 3 dimensions",
+        ),
         (
             lambda: multimodal_ground_truth(np.zeros((3, 2)), np.zeros((4, 2, 2)), 0.1),
             "multimodal_ground_truth: start_poses and futures must have the same N",
@@ -113,7 +126,10 @@ def test_end_point_error_hand_value():
             lambda: multimodal_ground_truth(np.zeros((3, 2)), np.zeros((3, 2, 2)), 0.0),
             "multimodal_ground_truth: threshold must be a finite positive number",
         ),
-        (lambda: end_point_error(np.zeros((2, 5, 2)), np.zeros((2, 3))), r"end_point_error: targets must be \(2, 2\)"),
+        (
+            lambda: end_point_error(np.zeros((2, 5, 2)), np.zeros((2, 3))),
+            r"end_point_error: targets must be \(2, 2\)",
+        ),
     ],
 )
 def test_bad_inputs(call, match):

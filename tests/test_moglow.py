@@ -1,4 +1,5 @@
-"""MoGlow and its Gaussian baseline: conditioning, likelihoods, frame-by-frame sampling, determinism, errors."""
+"""MoGlow and its Gaussian baseline: conditioning, likelihoods, frame-by-frame sampling, determinism,
+errors."""
 
 import math
 
@@ -13,12 +14,12 @@ from motionlab.models.moglow import (
     LSTMAffineCoupling,
     MoGlow,
     MoGlowConfig,
+    MoGlowFeatures,
     autoregressive_conditioning,
     autoregressive_sample,
     frame_conditioning,
     held_out_nll,
     history_keep_mask,
-    MoGlowFeatures,
     nll_per_frame_loss,
 )
 from motionlab.models.moglow.sampler import sample_frames
@@ -34,8 +35,10 @@ def _moglow(dropout=0.0, dtype=torch.float64, spread=0.1):
 
 def _data(batch=2, frames=12, dtype=torch.float64, seed=0):
     generator = torch.Generator().manual_seed(seed)
-    return (torch.randn(batch, frames, 6, generator=generator, dtype=dtype),
-            torch.randn(batch, frames, 2, generator=generator, dtype=dtype))
+    return (
+        torch.randn(batch, frames, 6, generator=generator, dtype=dtype),
+        torch.randn(batch, frames, 2, generator=generator, dtype=dtype),
+    )
 
 
 def test_conditioning_layout_by_hand():
@@ -63,8 +66,9 @@ def test_history_keep_mask_rate_and_seed():
 
 def test_lstm_coupling_logdet_roundtrip_and_frame_weights():
     torch.manual_seed(0)
-    layer = perturb_parameters_(LSTMAffineCoupling(6, cond_channels=3, hidden=8).double(), 0.3,
-                                torch.Generator().manual_seed(0)).eval()
+    layer = perturb_parameters_(
+        LSTMAffineCoupling(6, cond_channels=3, hidden=8).double(), 0.3, torch.Generator().manual_seed(0)
+    ).eval()
     generator = torch.Generator().manual_seed(1)
     x = torch.randn(2, 6, 5, dtype=torch.float64, generator=generator)
     cond = torch.randn(2, 3, 5, dtype=torch.float64, generator=generator)
@@ -79,8 +83,12 @@ def test_lstm_coupling_logdet_roundtrip_and_frame_weights():
     rebuilt = []
     for t in range(5):
         y_a, y_b, cond_t = y[:, :3, t], y[:, 3:, t], cond[:, :, t]
-        h, c = torch.lstm_cell(y_a, (h, c), w.lstm_input_a, w.lstm_hidden, cond_t @ w.lstm_input_cond.T, w.lstm_bias)
-        shift, raw_scale = (h @ w.out_hidden + y_a @ w.out_input_a + cond_t @ w.out_input_cond + w.out_bias).chunk(2, 1)
+        h, c = torch.lstm_cell(
+            y_a, (h, c), w.lstm_input_a, w.lstm_hidden, cond_t @ w.lstm_input_cond.T, w.lstm_bias
+        )
+        shift, raw_scale = (
+            h @ w.out_hidden + y_a @ w.out_input_a + cond_t @ w.out_input_cond + w.out_bias
+        ).chunk(2, 1)
         rebuilt.append(torch.cat([y_a, y_b / torch.sigmoid(raw_scale) - shift], dim=1))
     assert torch.allclose(torch.stack(rebuilt, dim=2), x, atol=1e-12)
 
@@ -101,7 +109,9 @@ def test_moglow_causality():
 @pytest.mark.parametrize("pose_dim", [6, 7])  # 7: the coupling halves differ in size
 def test_sampling_inverts_the_training_pass_exactly(pose_dim):
     torch.manual_seed(0)
-    cfg = MoGlowConfig(pose_dim=pose_dim, control_dim=2, history=3, steps=3, hidden=8, cond_features=5, dropout=0.5)
+    cfg = MoGlowConfig(
+        pose_dim=pose_dim, control_dim=2, history=3, steps=3, hidden=8, cond_features=5, dropout=0.5
+    )
     model = perturb_parameters_(MoGlow(cfg).double(), 0.1, torch.Generator().manual_seed(1)).eval()
     generator = torch.Generator().manual_seed(0)
     seed_pose = torch.randn(2, 3, pose_dim, generator=generator, dtype=torch.float64)
@@ -112,7 +122,10 @@ def test_sampling_inverts_the_training_pass_exactly(pose_dim):
     replay = torch.Generator().manual_seed(4)
     keep = history_keep_mask(2, 7, 3, 0.5, replay)
     latents = torch.randn(2, 7, pose_dim, generator=replay, dtype=torch.float64)
-    for generated in (sample, sample_frames(model.generation_plan(), control, seed_pose, keep, latents, scripted=False)):
+    for generated in (
+        sample,
+        sample_frames(model.generation_plan(), control, seed_pose, keep, latents, scripted=False),
+    ):
         full = torch.cat([seed_pose, generated], dim=1)
         cond = autoregressive_conditioning(full, control, 3, keep)
         u, _ = model.linear(generated.transpose(1, 2), cond.transpose(1, 2))
@@ -139,13 +152,16 @@ def test_scripted_generation_loop_matches_plain_python_and_reports_divergence():
     scripted = sample_frames(plan, control, seed_pose, keep, noise)
     plain = sample_frames(plan, control, seed_pose, keep, noise, scripted=False)
     assert torch.allclose(scripted, plain, atol=1e-5)
-    assert not torch.equal(scripted, sample_frames(plan, control, seed_pose, None, noise))  # the flags are used
+    assert not torch.equal(
+        scripted, sample_frames(plan, control, seed_pose, None, noise)
+    )  # the flags are used
     with pytest.raises(ValueError, match=r"shapes disagree: control \(2, 12, 2\)"):
         sample_frames(plan, control, seed_pose, keep, noise[:, :8])
     with pytest.raises(ValueError, match=r"plan's tau \* P = 18"):
         sample_frames(plan, control, seed_pose[:, :, :5], keep, noise[:, :, :5])
     with pytest.raises(ValueError, match="share one dtype"):
         sample_frames(plan, control.double(), seed_pose.double(), keep, noise.double())
+
     def plan_tensors(p):
         return list(p[:-1]) + [t for step in p.steps for t in (*step.coupling, *step[1:])]
 
@@ -153,10 +169,16 @@ def test_scripted_generation_loop_matches_plain_python_and_reports_divergence():
     with torch.no_grad():
         for parameter in model.parameters():
             parameter.add_(0.1)
-    assert all(torch.equal(a, b) for a, b in zip(plan_tensors(plan), before))  # a plan is a snapshot of the weights
+    assert all(
+        torch.equal(a, b) for a, b in zip(plan_tensors(plan), before)
+    )  # a plan is a snapshot of the weights
     with torch.no_grad():
-        model.linear.weight[:, :6] = 1e20  # the last pose amplified without bound: overflows within a few frames
-    with pytest.raises(ValueError, match="MoGlow.sample: generation diverged: non-finite poses from generated frame"):
+        model.linear.weight[:, :6] = (
+            1e20  # the last pose amplified without bound: overflows within a few frames
+        )
+    with pytest.raises(
+        ValueError, match="MoGlow.sample: generation diverged: non-finite poses from generated frame"
+    ):
         model.sample(control, seed_pose, 1.0, torch.Generator().manual_seed(0))
 
 
@@ -204,8 +226,10 @@ def test_linear_predictor_recovers_a_linear_system_and_is_a_flow_layer():
     pose = torch.zeros(64, 12, 6, dtype=torch.float64)
     pose[:, :3] = torch.randn(64, 3, 6, generator=generator, dtype=torch.float64)
     for t in range(3, 12):  # x_t = W c_t + 0.5 + tiny noise
-        cond = frame_conditioning(pose[:, t - 3:t], control[:, t - 3:t + 1])
-        pose[:, t] = cond @ weight.T + 0.5 + 1e-3 * torch.randn(64, 6, generator=generator, dtype=torch.float64)
+        cond = frame_conditioning(pose[:, t - 3 : t], control[:, t - 3 : t + 1])
+        pose[:, t] = (
+            cond @ weight.T + 0.5 + 1e-3 * torch.randn(64, 6, generator=generator, dtype=torch.float64)
+        )
     model = MoGlow(MoGlowConfig(**SMALL, steps=1, hidden=4, cond_features=3, dropout=0.0)).double()
     rms = model.initialize(pose, control)
     assert rms < 2e-3

@@ -40,19 +40,29 @@ def test_augmentation_order_and_control_symmetries(clips):
     n = clips.n_clips
     assert aug_pos.shape[0] == 4 * n
     assert torch.equal(aug_pos[:n], positions)
-    assert torch.allclose(aug_pos[n:2 * n], mirror_positions(positions))
-    assert torch.equal(aug_pos[2 * n:], aug_pos[:2 * n].flip(1))
+    assert torch.allclose(aug_pos[n : 2 * n], mirror_positions(positions))
+    assert torch.equal(aug_pos[2 * n :], aug_pos[: 2 * n].flip(1))
     features = moglow_features(aug_pos, aug_rot)
-    original, mirrored, reversed_ = features.control[:n], features.control[n:2 * n], features.control[2 * n:3 * n]
+    original, mirrored, reversed_ = (
+        features.control[:n],
+        features.control[n : 2 * n],
+        features.control[2 * n : 3 * n],
+    )
     # mirroring keeps forward velocity and flips sideways velocity and yaw rate
     np.testing.assert_allclose(mirrored[..., 0], original[..., 0], atol=1e-5)
     np.testing.assert_allclose(mirrored[..., 1:], -original[..., 1:], atol=1e-5)
-    # time reversal: frame t of the reversed clip is the step s -> s - 1 (s = T - t) seen from frame s's heading
+    # time reversal: frame t of the reversed clip is the step s -> s - 1 (s = T - t) seen from frame s's
+    # heading
     frames = original.shape[1]
     s = torch.arange(frames - 1, 0, -1)
     turn = original[:, s, 2]
-    expected_xy = -torch.stack([torch.cos(turn) * original[:, s, 0] + torch.sin(turn) * original[:, s, 1],
-                                -torch.sin(turn) * original[:, s, 0] + torch.cos(turn) * original[:, s, 1]], dim=-1)
+    expected_xy = -torch.stack(
+        [
+            torch.cos(turn) * original[:, s, 0] + torch.sin(turn) * original[:, s, 1],
+            -torch.sin(turn) * original[:, s, 0] + torch.cos(turn) * original[:, s, 1],
+        ],
+        dim=-1,
+    )
     np.testing.assert_allclose(reversed_[:, 1:, :2], expected_xy, atol=1e-5)
     np.testing.assert_allclose(reversed_[:, 1:, 2], -turn, atol=1e-5)
     assert (original[:, 1:, 0] > 0).all() and (reversed_[:, 1:, 0] < 0).all()
@@ -85,7 +95,9 @@ def test_control_programme_values_and_ramp():
     smooth = control_programme([Segment(1.0, 1.5), Segment(2.0, 0.0)], fps=30, ramp=0.5)
     assert smooth.shape == (90, 3)
     steps = smooth[1:, 0] - smooth[:-1, 0]
-    assert float(steps.max()) <= 1e-7 and float(-steps.min()) <= 1.5 / 30 / 15 + 1e-7  # a 15-frame linear ramp
+    assert (
+        float(steps.max()) <= 1e-7 and float(-steps.min()) <= 1.5 / 30 / 15 + 1e-7
+    )  # a 15-frame linear ramp
     assert math.isclose(float(smooth[0, 0]), 1.5 / 30, rel_tol=1e-6) and float(smooth[-1, 0]) == 0.0
     with pytest.raises(ValueError):
         Segment(0.0, 1.0)

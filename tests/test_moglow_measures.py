@@ -10,12 +10,12 @@ from motionlab.models.flows import Glow
 from motionlab.models.moglow import (
     MoGlowFeatures,
     control_mismatch,
+    fixed_length,
     gait_speed,
     joint_speed,
     speed_ratio,
     support_foot_slide,
 )
-from motionlab.models.moglow import fixed_length
 
 
 def _walking_feet(frames: int, speed: float, fps: float = 30.0) -> torch.Tensor:

@@ -71,7 +71,7 @@ def test_steer_is_seeded_and_follows_the_speed(library, model):
     b = steer(net, scalers, features, speed=1.5, turn=0.0, temperature=0.5, seconds=2.0, sample_seed=3)
     assert torch.equal(a.positions, b.positions)
     assert a.positions.shape == (1, net.cfg.history + 60, 22, 3)
-    root = a.positions[0, net.cfg.history:, 0, :2]
+    root = a.positions[0, net.cfg.history :, 0, :2]
     travelled = float((root[1:] - root[:-1]).norm(dim=-1).sum())
     assert math.isclose(travelled / (59 / 30), 1.5, rel_tol=0.1)
 
@@ -87,12 +87,19 @@ def test_show_steering_draws(library, model):
 def test_control_test_pieces(library):
     clips, features = library
     chosen = select_actions(clips, experiment.DATA.actions)
-    test = experiment.control_test(features, chosen.action, chosen.action_names, 2, history=3, blend=3, fps=10)
+    test = experiment.control_test(
+        features, chosen.action, chosen.action_names, 2, history=3, blend=3, fps=10
+    )
     assert test.control.shape == (2, 4 * 30 - 3 * 3, 3)
     assert test.seed.pose.shape == (2, 3, 64)
     walk_speed = float(test.control[:, :20, 0].mean()) * 30
     stand_speed = float(test.control[:, 40:50, 0].abs().mean()) * 30
     assert walk_speed > 0.5 and stand_speed < 0.1
     with pytest.raises(ValueError):
-        experiment.control_test(MoGlowFeatures(features.pose[:, :5], features.control[:, :5]), chosen.action,
-                                chosen.action_names, 1, history=3)
+        experiment.control_test(
+            MoGlowFeatures(features.pose[:, :5], features.control[:, :5]),
+            chosen.action,
+            chosen.action_names,
+            1,
+            history=3,
+        )

@@ -1,11 +1,12 @@
-"""ERD and the QuaterNet-style RNN: shapes, teacher forcing, determinism, randomness only in the initial state."""
+"""ERD and the QuaterNet-style RNN: shapes, teacher forcing, determinism, randomness only in the initial
+state."""
 
 import pytest
 import torch
+from test_motion_cell_common import baseline, batch, perturb
 
 from motionlab.models.motion_cell.baselines import baseline_loss
 from motionlab.models.motion_cell.config import BaselineConfig, LossConfig
-from test_motion_cell_common import baseline, batch, perturb
 
 
 @pytest.mark.parametrize("kind", ["erd", "quaternet"])

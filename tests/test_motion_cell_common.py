@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import functools
 
-import pytest
 import torch
 
 from motionlab.data.store import MotionSet
@@ -16,13 +15,13 @@ from motionlab.models.motion_cell.training import build_model
 TINY = MotionCellConfig(word_dim=8, feature_dim=8, latent_dim=4, hidden_dim=8, control_dim=4)
 
 
-@functools.lru_cache(maxsize=None)
+@functools.cache
 def clips() -> MotionSet:
     """One 1-second clip per style mode (12 clips of 30 frames)."""
     return generate(seed=0, n_per_mode=1, seconds=1.0)
 
 
-@functools.lru_cache(maxsize=None)
+@functools.cache
 def features() -> torch.Tensor:
     data = clips()
     return motion_cell_features(data.rotations, data.positions)
@@ -53,13 +52,3 @@ def motion_cell(**changes) -> torch.nn.Module:
 
 def baseline(kind: str) -> torch.nn.Module:
     return build_model(BaselineConfig(kind=kind, hidden_dim=8, encoder_dim=8, control_dim=4), codec(), seed=0)
-
-
-@pytest.fixture
-def tiny_model() -> torch.nn.Module:
-    return motion_cell()
-
-
-@pytest.fixture
-def tiny_batch() -> WindowBatch:
-    return batch()

@@ -6,6 +6,7 @@ import numpy as np
 import pytest
 import torch
 from scipy.spatial.transform import Rotation
+from test_motion_cell_common import clips, codec, features
 
 from motionlab.data.representations import root_start
 from motionlab.geometry import quat_to_matrix
@@ -13,7 +14,6 @@ from motionlab.models.motion_cell.data import PoseCodec, WindowBatches
 from motionlab.models.motion_cell.output import OutputHead, assemble_pose, split_raw_pose
 from motionlab.models.motion_cell.words import from_words, to_words
 from motionlab.skeleton import body_skeleton
-from test_motion_cell_common import clips, codec, features
 
 
 def test_codec_standardises_the_root_channels_only_and_round_trips():
@@ -83,7 +83,9 @@ def test_axis_angle_and_matrix_heads_agree_with_scipy():
     rng = np.random.default_rng(0)
     rotvec = rng.normal(size=(50, 3))
     q = OutputHead("axis_angle").quaternions(torch.tensor(rotvec))
-    np.testing.assert_allclose(quat_to_matrix(q).numpy(), Rotation.from_rotvec(rotvec).as_matrix(), atol=1e-10)
+    np.testing.assert_allclose(
+        quat_to_matrix(q).numpy(), Rotation.from_rotvec(rotvec).as_matrix(), atol=1e-10
+    )
     raw = rng.normal(size=(50, 3, 3))
     head = OutputHead("matrix")
     q = head.quaternions(torch.tensor(raw).flatten(-2))
@@ -128,4 +130,6 @@ def test_window_batches_are_random_windows_reproducible_by_generator():
 
 def test_pose_vectors_hold_unit_quaternions():
     norms = codec().split(codec().encode(features()))[0].norm(dim=-1)
-    assert math.isclose(float(norms.min()), 1.0, abs_tol=1e-5) and math.isclose(float(norms.max()), 1.0, abs_tol=1e-5)
+    assert math.isclose(float(norms.min()), 1.0, abs_tol=1e-5) and math.isclose(
+        float(norms.max()), 1.0, abs_tol=1e-5
+    )

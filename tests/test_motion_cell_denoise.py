@@ -2,11 +2,11 @@
 
 import pytest
 import torch
+from test_motion_cell_common import clips, codec, features
 
 from motionlab.models.motion_cell.config import DenoiserConfig, LossConfig
 from motionlab.models.motion_cell.denoise import denoiser_loss, noisy_features
 from motionlab.models.motion_cell.training import build_model
-from test_motion_cell_common import clips, codec, features
 
 
 def _denoiser():
@@ -31,7 +31,9 @@ def test_untrained_denoiser_starts_close_to_changing_nothing():
     quaternions, root = model.codec.split(noisy)
     unchanged = torch.cat([(quaternions / quaternions.norm(dim=-1, keepdim=True)).flatten(-2), root], dim=-1)
     assert float((out.poses - unchanged).detach().abs().max()) < 0.05
-    torch.testing.assert_close(model.codec.split(out.poses)[0].norm(dim=-1), torch.ones(quaternions.shape[:-1]))
+    torch.testing.assert_close(
+        model.codec.split(out.poses)[0].norm(dim=-1), torch.ones(quaternions.shape[:-1])
+    )
     torch.testing.assert_close(model.denoise(noisy), out.poses)
 
 

@@ -3,13 +3,13 @@
 import numpy as np
 import pytest
 import torch
+from test_motion_cell_common import clips, motion_cell, perturb
 
-from motionlab.evaluation import EVAL_FEATURES, Evaluator, body_frame_features
 from motionlab.data.datasets import Standardizer
+from motionlab.evaluation import EVAL_FEATURES, Evaluator, body_frame_features
 from motionlab.models.classifiers import ClassifierConfig, MotionClassifier
 from motionlab.models.motion_cell import evaluate as E
 from motionlab.skeleton import average_skeleton
-from test_motion_cell_common import clips, motion_cell, perturb
 
 
 def test_attribute_grid_covers_every_combination_equally():
@@ -70,14 +70,18 @@ def test_collapse_curve_averages_the_non_periodic_samples():
     torch.testing.assert_close(curve, E.distance_to_pose(samples.positions[mask], pose).mean(0))
     level = E.real_collapse_level(clips().positions, clips().action, pose, names)
     real_mask = E.action_mask(torch.as_tensor(clips().action), names)
-    assert level == pytest.approx(float(E.distance_to_pose(clips().positions[real_mask.numpy()], pose).mean()), rel=1e-6)
+    assert level == pytest.approx(
+        float(E.distance_to_pose(clips().positions[real_mask.numpy()], pose).mean()), rel=1e-6
+    )
 
 
 def _untrained_evaluator() -> Evaluator:
     torch.manual_seed(0)
     data = clips()
     standardizer = Standardizer(EVAL_FEATURES).fit(body_frame_features(torch.as_tensor(data.positions)))
-    classifier = MotionClassifier(ClassifierConfig("gru", EVAL_FEATURES, {"action": 6, "mode": 12, "body": 2}, hidden=8))
+    classifier = MotionClassifier(
+        ClassifierConfig("gru", EVAL_FEATURES, {"action": 6, "mode": 12, "body": 2}, hidden=8)
+    )
     return Evaluator(classifier, standardizer).eval()
 
 
@@ -95,7 +99,9 @@ def test_evaluate_model_gives_a_reproducible_table_row():
     with pytest.raises(ValueError, match="n_repeats"):
         E.evaluate_model(model, evaluator, reference, 1, 1)
     other = motion_cell()
-    parallel = E.evaluate_models({"perturbed": model, "plain": other}, evaluator, reference, 1, 2, seed=3, processes=2)
+    parallel = E.evaluate_models(
+        {"perturbed": model, "plain": other}, evaluator, reference, 1, 2, seed=3, processes=2
+    )
     assert list(parallel) == ["perturbed", "plain"]
     assert parallel["perturbed"].row == first.row
     assert torch.equal(parallel["perturbed"].samples.positions, first.samples.positions)
@@ -112,8 +118,12 @@ def test_tsne_embedding_shape_and_seed():
 
 
 def test_joint_speed_ignores_travel_and_matches_a_hand_computation():
-    rest = torch.tensor(average_skeleton().rest_positions(), dtype=torch.float32) + torch.tensor([0.0, 0.0, 0.9])
-    gliding = rest + torch.linspace(0, 3, 10)[:, None, None] * torch.tensor([1.0, 0.0, 0.0])  # a frozen pose sliding along x
+    rest = torch.tensor(average_skeleton().rest_positions(), dtype=torch.float32) + torch.tensor(
+        [0.0, 0.0, 0.9]
+    )
+    gliding = rest + torch.linspace(0, 3, 10)[:, None, None] * torch.tensor(
+        [1.0, 0.0, 0.0]
+    )  # a frozen pose sliding along x
     torch.testing.assert_close(E.joint_speed(gliding[None]), torch.zeros(1, 10), atol=1e-4, rtol=0)
     positions = torch.as_tensor(clips().positions[:2, :6])
     poses = E.body_frame_poses(positions).numpy()
@@ -128,11 +138,17 @@ def test_joint_speed_ignores_travel_and_matches_a_hand_computation():
 def test_speed_curve_averages_the_non_periodic_samples_and_real_level_matches():
     data = clips()
     names = list(data.action_names)
-    samples = E.SampleSet(torch.as_tensor(data.positions), torch.as_tensor(data.action), torch.as_tensor(data.body))
+    samples = E.SampleSet(
+        torch.as_tensor(data.positions), torch.as_tensor(data.action), torch.as_tensor(data.body)
+    )
     mask = E.action_mask(samples.action, names)
     expected = E.joint_speed(samples.positions[mask]).mean(0)
     torch.testing.assert_close(E.speed_curve(samples, names), expected)
-    assert E.real_speed_level(data.positions, data.action, names) == pytest.approx(float(expected.mean()), rel=1e-5)
+    assert E.real_speed_level(data.positions, data.action, names) == pytest.approx(
+        float(expected.mean()), rel=1e-5
+    )
     walks = samples.action == names.index("walk")
     with pytest.raises(ValueError, match="non-periodic"):
-        E.speed_curve(E.SampleSet(samples.positions[walks], samples.action[walks], samples.body[walks]), names)
+        E.speed_curve(
+            E.SampleSet(samples.positions[walks], samples.action[walks], samples.body[walks]), names
+        )

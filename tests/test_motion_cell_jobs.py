@@ -1,15 +1,16 @@
-"""The chapter's runs: settings, job configs (same budget for every Table 2 model), schedules, data helpers."""
+"""The chapter's runs: settings, job configs (same budget for every Table 2 model), schedules, data
+helpers."""
 
 import math
 
 import pytest
 import torch
+from test_motion_cell_common import codec, features
 
 from motionlab.models.motion_cell import jobs
 from motionlab.models.motion_cell.preparation import cut_windows, rotation_error_degrees
 from motionlab.models.motion_cell.settings import chapter_settings
 from motionlab.models.motion_cell.training import motion_cell_schedules
-from test_motion_cell_common import codec, features
 
 
 def test_every_job_has_a_run_and_table_rows_share_one_budget():
@@ -18,7 +19,10 @@ def test_every_job_has_a_run_and_table_rows_share_one_budget():
     assert len(all_jobs) == len(set(all_jobs)) == 9 and all_jobs[0] == ("variant", "sl")
     runs = {job: jobs.job_run(job, settings) for job in all_jobs}
     table = [job for job in all_jobs if job[0] != "output"]
-    budgets = {(runs[j].train.steps, runs[j].train.batch_size, runs[j].train.lr, runs[j].train.lr_schedule) for j in table}
+    budgets = {
+        (runs[j].train.steps, runs[j].train.batch_size, runs[j].train.lr, runs[j].train.lr_schedule)
+        for j in table
+    }
     assert len(budgets) == 1
     assert {runs[j].train.steps for j in all_jobs if j[0] == "output"} == {settings.representation_steps}
     assert len({run.name for run in runs.values()}) == 9
@@ -33,7 +37,10 @@ def test_ablations_change_one_thing_each():
     assert sl.model.word_length == 1 and full.model.word_length == 3
     assert nl.loss.joint_weights == "uniform" and full.loss.joint_weights == "impact"
     last = settings.steps - 1
-    assert nc.train.schedules["classifier"](last) == 0 and full.train.schedules["classifier"](last) == settings.classifier
+    assert (
+        nc.train.schedules["classifier"](last) == 0
+        and full.train.schedules["classifier"](last) == settings.classifier
+    )
     for run in (sl, nl, nc):
         assert run.train.schedules["beta"] == full.train.schedules["beta"]
 
@@ -57,7 +64,9 @@ def test_learning_rate_decay_and_motion_cell_schedules():
     assert decay(80) == pytest.approx(0.55)
     schedules = motion_cell_schedules(100, beta=0.2, classifier=1.0, word_drop=0.5)
     beta, classifier, word_drop = schedules["beta"], schedules["classifier"], schedules["word_drop"]
-    assert beta(5) == 0 and beta(40) == pytest.approx(0.2) and beta(100) == pytest.approx(0.1)  # warm-up, hold, cool-down
+    assert (
+        beta(5) == 0 and beta(40) == pytest.approx(0.2) and beta(100) == pytest.approx(0.1)
+    )  # warm-up, hold, cool-down
     assert classifier(29) == 0 and classifier(50) == pytest.approx(1.0)
     assert word_drop(10) == 0 and word_drop(60) == pytest.approx(0.5)
     with pytest.raises(ValueError, match="steps"):

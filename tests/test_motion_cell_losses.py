@@ -7,6 +7,7 @@ import torch.nn.functional as F
 from scipy.spatial.transform import Rotation
 
 from motionlab.evaluation import EVAL_FEATURES, body_frame_features
+from motionlab.models.motion_cell.config import LossConfig
 from motionlab.models.motion_cell.losses import (
     ClassifierLoss,
     joint_weights,
@@ -16,10 +17,8 @@ from motionlab.models.motion_cell.losses import (
     root_loss,
     rotation_loss,
 )
-from motionlab.models.motion_cell.config import LossConfig
 from motionlab.models.motion_cell.output import OutputHead
 from motionlab.skeleton import joint_impact_weights
-from test_motion_cell_common import tiny_batch, tiny_model  # noqa: F401 (fixtures)
 
 
 def _random_quats(n: int, seed: int) -> torch.Tensor:
@@ -32,7 +31,10 @@ def test_joint_weights_are_the_impact_weights_of_the_non_root_joints_with_mean_o
     expected = joint_impact_weights()[1:]
     np.testing.assert_allclose(weights.numpy(), expected / expected.mean(), rtol=1e-6)
     assert weights.shape == (21,) and abs(float(weights.mean()) - 1) < 1e-6
-    hips, wrists = weights[0], weights[19]  # joint 1 (left hip) reaches the foot; joint 20 (left wrist) is a leaf
+    hips, wrists = (
+        weights[0],
+        weights[19],
+    )  # joint 1 (left hip) reaches the foot; joint 20 (left wrist) is a leaf
     assert hips > wrists
     assert torch.equal(joint_weights("uniform"), torch.ones(21))
     with pytest.raises(ValueError, match="kind"):
@@ -103,7 +105,9 @@ def _clip_positions(seed: int, n: int = 2, frames: int = 12) -> torch.Tensor:
     gen = torch.Generator().manual_seed(seed)
     rotations = axis_angle_to_quat(0.3 * torch.randn(n, frames, 22, 3, generator=gen))
     root = torch.tensor([0.0, 0.0, 0.9]).expand(n, frames, 3)
-    return forward_kinematics(rotations, root, torch.tensor(average_skeleton().offsets, dtype=torch.float32), PARENTS)[0]
+    return forward_kinematics(
+        rotations, root, torch.tensor(average_skeleton().offsets, dtype=torch.float32), PARENTS
+    )[0]
 
 
 def _real_set():
@@ -147,7 +151,9 @@ def test_classifier_loss_feature_matching_and_cross_entropy_by_hand():
     assert float(loss(same[order], gen_action[order], gen_body[order])[0]) == pytest.approx(by_hand, rel=1e-5)
     features = evaluator.classifier.features(evaluator.inputs(same))
     heads = evaluator.classifier.heads
-    expected = F.cross_entropy(heads["action"](features), gen_action) + F.cross_entropy(heads["body"](features), gen_body)
+    expected = F.cross_entropy(heads["action"](features), gen_action) + F.cross_entropy(
+        heads["body"](features), gen_body
+    )
     assert float(entropy) == pytest.approx(float(expected), rel=1e-6)
     # generating exactly the real set (every combination equally often) matches the targets' mean
     assert float(loss(positions, action, body)[0]) == pytest.approx(0.0, abs=1e-8)
@@ -160,7 +166,9 @@ def test_classifier_loss_gradient_reaches_the_positions_but_not_the_classifier()
     generated = _clip_positions(1).requires_grad_(True)
     matching, entropy = loss(generated, torch.tensor([1, 4]), torch.tensor([0, 1]))
     (matching + entropy).backward()
-    assert generated.grad is not None and torch.isfinite(generated.grad).all() and generated.grad.abs().sum() > 0
+    assert (
+        generated.grad is not None and torch.isfinite(generated.grad).all() and generated.grad.abs().sum() > 0
+    )
     assert all(p.grad is None for p in evaluator.parameters())
 
 
@@ -176,14 +184,21 @@ def test_motion_cell_loss_needs_a_classifier_when_its_weight_is_positive(tiny_mo
 
 def test_motion_cell_loss_with_the_classifier_adds_its_terms_every_second_step(tiny_model, tiny_batch):
     positions, action, body = _real_set()
-    loss_fn = motion_cell_loss(LossConfig(classifier_clips=2, classifier_every=2),
-                               ClassifierLoss(_TinyEvaluator(), positions, action, body))
+    loss_fn = motion_cell_loss(
+        LossConfig(classifier_clips=2, classifier_every=2),
+        ClassifierLoss(_TinyEvaluator(), positions, action, body),
+    )
     skipped = loss_fn(tiny_model, tiny_batch, 1, {"beta": 1.0, "classifier": 0.5})
     assert float(skipped["cross_entropy"].detach()) == 0 and float(skipped["feature_matching"].detach()) == 0
     terms = loss_fn(tiny_model, tiny_batch, 2, {"beta": 1.0, "classifier": 0.5})
     assert float(terms["cross_entropy"].detach()) > 0 and float(terms["feature_matching"].detach()) > 0
-    expected = (terms["rotation"] + terms["root"] + terms["kl"]
-                + 2 * 0.5 * (terms["feature_matching"] + terms["cross_entropy"]) + 0.1 * terms["norm"])
+    expected = (
+        terms["rotation"]
+        + terms["root"]
+        + terms["kl"]
+        + 2 * 0.5 * (terms["feature_matching"] + terms["cross_entropy"])
+        + 0.1 * terms["norm"]
+    )
     assert float(terms["loss"].detach()) == pytest.approx(float(expected.detach()), rel=1e-6)
     terms["loss"].backward()
     assert all(torch.isfinite(p.grad).all() for p in tiny_model.parameters() if p.grad is not None)

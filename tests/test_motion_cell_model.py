@@ -1,13 +1,14 @@
-"""The Motion Cell model: shapes, unit quaternions, determinism by seed, generation of any length, bad input."""
+"""The Motion Cell model: shapes, unit quaternions, determinism by seed, generation of any length, bad
+input."""
 
 import math
 
 import pytest
 import torch
+from test_motion_cell_common import batch, motion_cell, perturb
 
 from motionlab.models.motion_cell.cell import InitialState, bounded_logvar
 from motionlab.models.motion_cell.config import MotionCellConfig
-from test_motion_cell_common import batch, motion_cell, perturb, tiny_batch, tiny_model  # noqa: F401 (fixtures)
 
 
 def _quaternion_norms(model, poses):
@@ -47,7 +48,9 @@ def test_dropping_every_word_cuts_the_words_out_of_the_recurrence(tiny_model, ti
     g = lambda: torch.Generator().manual_seed(5)  # noqa: E731
     a = tiny_model(tiny_batch.poses, tiny_batch.action, tiny_batch.body, word_drop=1.0, generator=g())
     changed = tiny_batch.poses.clone()
-    changed[:, :3] += 0.5  # change only word 1: with all words dropped, the prior of word 2 does not see it ...
+    changed[:, :3] += (
+        0.5  # change only word 1: with all words dropped, the prior of word 2 does not see it ...
+    )
     b = tiny_model(changed, tiny_batch.action, tiny_batch.body, word_drop=1.0, generator=g())
     assert not torch.allclose(a.posterior_mu[:, 0], b.posterior_mu[:, 0])
     # ... except through the latent z_1 drawn from the (changed) posterior
@@ -56,8 +59,16 @@ def test_dropping_every_word_cuts_the_words_out_of_the_recurrence(tiny_model, ti
 
 
 def test_forward_is_deterministic_given_the_generator(tiny_model, tiny_batch):
-    runs = [tiny_model(tiny_batch.poses, tiny_batch.action, tiny_batch.body, word_drop=0.5,
-                       generator=torch.Generator().manual_seed(11)) for _ in range(2)]
+    runs = [
+        tiny_model(
+            tiny_batch.poses,
+            tiny_batch.action,
+            tiny_batch.body,
+            word_drop=0.5,
+            generator=torch.Generator().manual_seed(11),
+        )
+        for _ in range(2)
+    ]
     for x, y in zip(*runs):
         assert torch.equal(x, y)
 
@@ -139,8 +150,11 @@ def test_initial_state_is_a_learned_gaussian_per_attribute_combination():
         initial.mean[1 * 2 + 1] = 5.0  # action 1, body 1
         initial.logvar.fill_(math.log(0.25))  # sigma = 0.5
     n = 4000
-    states = initial(torch.tensor([1, 0]).repeat_interleave(n), torch.tensor([1, 1]).repeat_interleave(n),
-                     torch.Generator().manual_seed(0))
+    states = initial(
+        torch.tensor([1, 0]).repeat_interleave(n),
+        torch.tensor([1, 1]).repeat_interleave(n),
+        torch.Generator().manual_seed(0),
+    )
     for part, mean in ((states[:n], 5.0), (states[n:], 0.0)):
         torch.testing.assert_close(part.mean(0), torch.full((4,), mean), atol=0.05, rtol=0)
         torch.testing.assert_close(part.std(0), torch.full((4,), 0.5), atol=0.03, rtol=0)

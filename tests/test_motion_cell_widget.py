@@ -3,9 +3,9 @@
 import ipywidgets as widgets
 import pytest
 import torch
+from test_motion_cell_common import motion_cell, perturb
 
 from motionlab.widgets.motion_cell import motion_cell_widget, sample_motions
-from test_motion_cell_common import motion_cell, perturb
 
 
 def _moving_model():
@@ -34,8 +34,13 @@ def test_sample_motions_rejects_bad_arguments():
 
 
 def test_widget_builds_and_renders_its_first_samples():
-    box = motion_cell_widget(_moving_model(), ["walk", "jog", "jump", "lift", "wave", "kick"], ["broad", "slender"],
-                             step=10, max_frames=60)
+    box = motion_cell_widget(
+        _moving_model(),
+        ["walk", "jog", "jump", "lift", "wave", "kick"],
+        ["broad", "slender"],
+        step=10,
+        max_frames=60,
+    )
     assert isinstance(box, widgets.VBox)
     output = box.children[-1]
     assert isinstance(output, widgets.Output) and len(output.outputs) == 1

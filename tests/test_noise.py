@@ -90,4 +90,7 @@ def test_rotation_noise_angles_match_their_distributions():
     angle = _angle_between(noisy, clean).reshape(mask.shape)
     assert mask.mean() > 0.02
     assert angle[~mask].max() < 1e-6 and angle[mask].min() >= 0.25 - 1e-6 and angle[mask].max() <= 0.75 + 1e-6
-    assert ROTATION_NOISE.spike_size == 0.5 and add_rotation_noise(clean.astype(np.float32), 0)[0].dtype == np.float32
+    assert (
+        ROTATION_NOISE.spike_size == 0.5
+        and add_rotation_noise(clean.astype(np.float32), 0)[0].dtype == np.float32
+    )

@@ -1,4 +1,5 @@
-"""ODMO's embedding loss: eq. 1 against hand computations, the prior term against torch.distributions, pairs, batches."""
+"""ODMO's embedding loss: eq. 1 against hand computations, the prior term against torch.distributions, pairs,
+batches."""
 
 import math
 
@@ -50,7 +51,9 @@ def test_prior_term_matches_torch_distributions(target):
 
 def test_noise_prior_ignores_the_mean_and_is_zero_at_the_prior_variance():
     logvar = torch.full((2, 4), math.log(0.05))
-    assert torch.allclose(prior_term(torch.randn(2, 4) * 10, logvar, 0.05, "noise"), torch.zeros(2), atol=1e-6)
+    assert torch.allclose(
+        prior_term(torch.randn(2, 4) * 10, logvar, 0.05, "noise"), torch.zeros(2), atol=1e-6
+    )
 
 
 def test_prior_term_rejects_bad_arguments():

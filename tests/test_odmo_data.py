@@ -23,7 +23,9 @@ def test_prepare_layout_and_origin(clips):
     assert data.features.shape == (clips.n_clips, clips.n_frames, 66)
     assert torch.allclose(data.features[:, 0, -3:], torch.zeros(clips.n_clips, 3))
     assert torch.equal(data.end_point, data.features[:, -1, -3:])
-    assert torch.equal(data.action, torch.as_tensor(clips.action)) and torch.equal(data.body, torch.as_tensor(clips.body))
+    assert torch.equal(data.action, torch.as_tensor(clips.action)) and torch.equal(
+        data.body, torch.as_tensor(clips.body)
+    )
     every_third = prepare(clips, frame_stride=3, floor_clearance=data.floor_clearance)
     assert torch.equal(every_third.features, data.features[:, ::3])
 
@@ -36,8 +38,11 @@ def test_face_forward_turns_every_clip_to_heading_zero(clips):
     assert torch.allclose(heading_yaw(turned_rotations[:, 0, 0]), torch.zeros(clips.n_clips), atol=1e-5)
     # the turn keeps heights and distances
     assert torch.allclose(turned[..., 2], positions[..., 2])
-    assert torch.allclose((turned[:, :, 1] - turned[:, :, 0]).norm(dim=-1), (positions[:, :, 1] - positions[:, :, 0]).norm(dim=-1),
-                          atol=1e-5)
+    assert torch.allclose(
+        (turned[:, :, 1] - turned[:, :, 0]).norm(dim=-1),
+        (positions[:, :, 1] - positions[:, :, 0]).norm(dim=-1),
+        atol=1e-5,
+    )
 
 
 def test_to_positions_inverts_prepare(clips):
@@ -47,7 +52,7 @@ def test_to_positions_inverts_prepare(clips):
     expected[..., :2] -= expected[:, :1, :1, :2].clone()
     offset = positions - expected
     assert torch.allclose(offset[..., :2], torch.zeros_like(offset[..., :2]), atol=1e-4)
-    height_error = offset[..., 2].mean(dim=(1, 2))   # one vertical shift per clip: the start height
+    height_error = offset[..., 2].mean(dim=(1, 2))  # one vertical shift per clip: the start height
     assert torch.allclose(offset[..., 2], height_error[:, None, None].expand_as(offset[..., 2]), atol=1e-4)
     assert height_error.abs().mean() < 0.01
 

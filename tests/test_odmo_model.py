@@ -1,4 +1,5 @@
-"""ODMO's networks and joint objective: shapes, conditioning, accumulation, teacher forcing, switches, determinism."""
+"""ODMO's networks and joint objective: shapes, conditioning, accumulation, teacher forcing, switches,
+determinism."""
 
 import dataclasses
 
@@ -11,8 +12,16 @@ from motionlab.models.odmo.model import ODMO, joint_objective, sequence_error
 from motionlab.models.odmo.trajectory import accumulate, class_code_condition
 from motionlab.train import Constant, TrainConfig, train
 
-TINY = ODMOConfig(n_classes=3, n_frames=6, n_joints=3, code_dim=4, encoder_hidden=8, encoder_mlp=8,
-                  trajectory_hidden=8, motion_hidden=8)
+TINY = ODMOConfig(
+    n_classes=3,
+    n_frames=6,
+    n_joints=3,
+    code_dim=4,
+    encoder_hidden=8,
+    encoder_mlp=8,
+    trajectory_hidden=8,
+    motion_hidden=8,
+)
 
 
 def clips(n: int = 6, seed: int = 0) -> tuple[torch.Tensor, torch.Tensor]:
@@ -117,7 +126,11 @@ def test_joint_objective_sums_the_switched_on_terms(variant):
     torch.manual_seed(3)
     out = joint_objective(model, clips(), 0, {"teacher_forcing": 0.5})
     expected = out["motion"] + cfg.prior_weight * out["prior"]
-    expected = expected + (out["trajectory"] if cfg.use_trajectory_loss else 0) + (out["consistency"] if cfg.use_consistency else 0)
+    expected = (
+        expected
+        + (out["trajectory"] if cfg.use_trajectory_loss else 0)
+        + (out["consistency"] if cfg.use_consistency else 0)
+    )
     expected = expected + (cfg.contrastive_weight * out["contrastive"] if cfg.use_contrastive else 0)
     assert torch.allclose(out["loss"], expected)
     assert set(out) == {"loss", "motion", "trajectory", "consistency", "contrastive", "prior"}
@@ -126,8 +139,13 @@ def test_joint_objective_sums_the_switched_on_terms(variant):
 def test_training_and_generation_are_deterministic():
     def trained() -> torch.Tensor:
         model = tiny_model()
-        cfg = TrainConfig(steps=3, batch_size=6, lr=1e-2, schedules={"teacher_forcing": Constant(0.5)},
-                          checkpoint_every=None)
+        cfg = TrainConfig(
+            steps=3,
+            batch_size=6,
+            lr=1e-2,
+            schedules={"teacher_forcing": Constant(0.5)},
+            checkpoint_every=None,
+        )
         train(model, joint_objective, BalancedBatches(*clips(12), TINY.n_classes), cfg, progress=False)
         torch.manual_seed(5)
         return model.generate(torch.randn(2, TINY.code_dim), torch.tensor([0, 2]), torch.zeros(2, 3))[0]

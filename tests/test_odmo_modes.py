@@ -1,4 +1,5 @@
-"""Mode discovery and sampling: the silhouette rule, GMM fits against known clusters, counts, nearest end points."""
+"""Mode discovery and sampling: the silhouette rule, GMM fits against known clusters, counts, nearest end
+points."""
 
 import numpy as np
 import pytest
@@ -24,7 +25,7 @@ def test_selection_rule_takes_the_first_k_not_beaten_by_five_percent():
     ks = [3, 4, 5, 6]
     assert choose_component_count(ks, [0.50, 0.51, 0.9, 0.2]) == 3  # 0.50 > 0.95 * 0.51
     assert choose_component_count(ks, [0.40, 0.50, 0.51, 0.2]) == 4  # 0.40 <= 0.475, then 0.50 > 0.4845
-    assert choose_component_count(ks, [0.1, 0.2, 0.3, 0.4]) == 6     # always beaten: the last k
+    assert choose_component_count(ks, [0.1, 0.2, 0.3, 0.4]) == 6  # always beaten: the last k
     with pytest.raises(ValueError, match="one silhouette per k"):
         choose_component_count(ks, [0.1])
 
@@ -85,7 +86,9 @@ def test_nearest_end_points_come_from_the_same_class():
     action = np.array([0, 0, 1])
     ends = np.array([[1.0, 0, 0], [2.0, 0, 0], [3.0, 0, 0]])
     modes = single_gaussian_modes(np.repeat(codes, 2, 0), np.repeat(action, 2), np.repeat(ends, 2, 0), 2)
-    assert np.array_equal(modes.nearest_end_points(0, np.array([[0.2, 0.0], [0.9, 0.0]])), [[1.0, 0, 0], [2.0, 0, 0]])
+    assert np.array_equal(
+        modes.nearest_end_points(0, np.array([[0.2, 0.0], [0.9, 0.0]])), [[1.0, 0, 0], [2.0, 0, 0]]
+    )
     assert np.array_equal(modes.nearest_end_points(1, np.array([[0.9, 0.0]])), [[3.0, 0, 0]])
 
 
@@ -98,4 +101,6 @@ def test_single_gaussian_and_prior_samplers():
     assert np.allclose(conv.classes[1].covariances[0], np.cov(codes[50:], rowvar=False) + 1e-4 * np.eye(2))
     prior = prior_modes(codes, action, np.zeros((100, 3)), 2)
     drawn, _ = prior.sample(0, 4000, np.random.default_rng(0))
-    assert np.allclose(drawn.mean(0), 0, atol=0.06) and np.allclose(np.cov(drawn, rowvar=False), np.eye(2), atol=0.08)
+    assert np.allclose(drawn.mean(0), 0, atol=0.06) and np.allclose(
+        np.cov(drawn, rowvar=False), np.eye(2), atol=0.08
+    )

@@ -19,14 +19,22 @@ from motionlab.models.odmo import customize, evaluate
 from motionlab.models.odmo.config import ODMOConfig
 from motionlab.models.odmo.data import ODMOData
 from motionlab.models.odmo.experiment import MeasurePlan, measure_variant, train_and_measure
-from motionlab.models.odmo.training import ODMOTraining
 from motionlab.models.odmo.model import ODMO
 from motionlab.models.odmo.modes import discover_modes
 from motionlab.models.odmo.sampler import ODMOSampler, encode_clips
+from motionlab.models.odmo.training import ODMOTraining
 from motionlab.widgets import odmo as odmo_widgets
 
-CFG = ODMOConfig(n_classes=2, n_frames=5, n_joints=3, code_dim=3, encoder_hidden=8, encoder_mlp=8,
-                 trajectory_hidden=8, motion_hidden=8)
+CFG = ODMOConfig(
+    n_classes=2,
+    n_frames=5,
+    n_joints=3,
+    code_dim=3,
+    encoder_hidden=8,
+    encoder_mlp=8,
+    trajectory_hidden=8,
+    motion_hidden=8,
+)
 PARENTS = [-1, 0, 1]
 STRIDE = 2
 
@@ -36,7 +44,7 @@ def data() -> ODMOData:
     gen = torch.Generator().manual_seed(0)
     n = 40
     features = torch.randn(n, CFG.n_frames, CFG.feature_dim, generator=gen) * 0.1
-    features[..., 2:6:3] -= 0.5   # the two non-root joints hang below the root
+    features[..., 2:6:3] -= 0.5  # the two non-root joints hang below the root
     features[..., -3:] = torch.cumsum(torch.rand(n, CFG.n_frames, 3, generator=gen) * 0.2, dim=1)
     features[:, 0, -3:] = 0.0
     action = torch.arange(n) % 2
@@ -54,7 +62,8 @@ def sampler(data) -> ODMOSampler:
 
 
 class StandInEvaluator:
-    """Features: per-clip mean and spread of the joint positions; "action" = whether the root ends at x > 0.2."""
+    """Features: per-clip mean and spread of the joint positions; "action" = whether the root ends at x >
+    0.2."""
 
     def features(self, positions):
         p = torch.as_tensor(positions, dtype=torch.float64).flatten(2)
@@ -75,7 +84,11 @@ def test_encode_and_sample_shapes_and_determinism(data, sampler):
     assert codes.shape == (len(data), CFG.code_dim) and not sampler.model.training
     a = sampler.sample(1, 6, np.random.default_rng(3))
     b = sampler.sample(1, 6, np.random.default_rng(3))
-    assert a.positions.shape == (6, CFG.n_frames * STRIDE, 3, 3) and a.features.shape == (6, CFG.n_frames, CFG.feature_dim)
+    assert a.positions.shape == (6, CFG.n_frames * STRIDE, 3, 3) and a.features.shape == (
+        6,
+        CFG.n_frames,
+        CFG.feature_dim,
+    )
     assert torch.equal(a.positions, b.positions) and (a.action == 1).all()
     assert ODMOSampler.from_data(sampler.model, data, kind="conventional").modes.classes[0].n_modes == 1
     both = sampler.sample_classes(4, np.random.default_rng(0))
@@ -90,7 +103,9 @@ def test_customisation_sends_the_requested_codes_and_end_points(sampler):
     weights = np.array([0.0, 0.5, 1.0])
     mixed = customize.mode_interpolation(sampler, 0, 0, 1, weights)
     centres = sampler.modes.classes[0].means
-    assert np.allclose(mixed.codes[[0, 2]], centres[[0, 1]]) and np.allclose(mixed.codes[1], centres[:2].mean(0))
+    assert np.allclose(mixed.codes[[0, 2]], centres[[0, 1]]) and np.allclose(
+        mixed.codes[1], centres[:2].mean(0)
+    )
     target = np.array([1.0, -0.5, 0.0])
     styles = customize.styles_to_end_point(sampler, 1, target, np.random.default_rng(0), per_mode=2)
     assert sorted(set(styles.mode.tolist())) == list(range(sampler.modes.classes[1].n_modes))
@@ -109,7 +124,9 @@ def test_mode_recovery_matches_scikit_learn(data, sampler):
 
 
 def test_end_point_control_measures_the_generated_root(sampler):
-    reference = evaluate.Reference(StandInEvaluator(), torch.zeros(4, 12), torch.zeros(4, 10, 3, 3), np.array([0, 0, 1, 1]))
+    reference = evaluate.Reference(
+        StandInEvaluator(), torch.zeros(4, 12), torch.zeros(4, 10, 3, 3), np.array([0, 0, 1, 1])
+    )
     table = evaluate.end_point_control(reference, sampler, n_codes=3, n_end_points=4, seed=0)
     assert len(table["dist_e"].values) == 6 and 0.0 <= table["accuracy"].mean <= 1.0
     assert set(table) == {"accuracy", "dist_e", "dist_e_trajectory"}
@@ -117,31 +134,55 @@ def test_end_point_control_measures_the_generated_root(sampler):
     rng = np.random.default_rng(0)
     members = np.flatnonzero(sampler.modes.action == 0)
     source, other = rng.choice(members, size=3), rng.choice(members, size=3)
-    targets = customize.end_point_sweep(sampler.modes.end_points[source[0]], sampler.modes.end_points[other[0]], 4)
+    targets = customize.end_point_sweep(
+        sampler.modes.end_points[source[0]], sampler.modes.end_points[other[0]], 4
+    )
     clips = customize.to_end_point(sampler, 0, np.repeat(sampler.modes.codes[source[:1]], 4, axis=0), targets)
-    assert table["dist_e"].values[0] == pytest.approx(end_point_error(clips.features[..., -3:].numpy(), targets))
-    assert table["dist_e_trajectory"].values[0] == pytest.approx(end_point_error(clips.trajectory.numpy(), targets))
+    assert table["dist_e"].values[0] == pytest.approx(
+        end_point_error(clips.features[..., -3:].numpy(), targets)
+    )
+    assert table["dist_e_trajectory"].values[0] == pytest.approx(
+        end_point_error(clips.trajectory.numpy(), targets)
+    )
 
 
 def test_metric_and_homogeneity_tables(sampler):
     real = torch.randn(8, CFG.n_frames * STRIDE, 3, 3)
-    reference = evaluate.Reference(StandInEvaluator(), StandInEvaluator().features(real), real, np.array([0, 1] * 4))
+    reference = evaluate.Reference(
+        StandInEvaluator(), StandInEvaluator().features(real), real, np.array([0, 1] * 4)
+    )
     row = evaluate.metric_row(reference, sampler, n_per_class=4, n_sets=2, seed=1)
     assert list(row) == list(evaluate.METRICS)
     assert all(len(interval.values) == 2 for interval in row.values())
-    assert row == evaluate.metric_row(reference, sampler, n_per_class=4, n_sets=2, seed=1)  # seeded by its arguments
+    assert row == evaluate.metric_row(
+        reference, sampler, n_per_class=4, n_sets=2, seed=1
+    )  # seeded by its arguments
     homogeneity = evaluate.mode_homogeneity_interval(reference, sampler, n_per_mode=2, n_sets=2)
     assert all(0.0 <= v <= 1.0 for v in homogeneity.values)
 
 
 def test_measure_variant_follows_the_plan(data, sampler):
     real = torch.randn(8, CFG.n_frames * STRIDE, 3, 3)
-    reference = evaluate.Reference(StandInEvaluator(), StandInEvaluator().features(real), real, np.array([0, 1] * 4))
-    plan = MeasurePlan(n_per_class=4, n_sets=2, n_per_mode=2, n_codes=2, n_end_points=2, prior_sampled=("vae",),
-                       conventional=("odmo",), homogeneity=("odmo",), end_point=("vae",))
+    reference = evaluate.Reference(
+        StandInEvaluator(), StandInEvaluator().features(real), real, np.array([0, 1] * 4)
+    )
+    plan = MeasurePlan(
+        n_per_class=4,
+        n_sets=2,
+        n_per_mode=2,
+        n_codes=2,
+        n_end_points=2,
+        prior_sampled=("vae",),
+        conventional=("odmo",),
+        homogeneity=("odmo",),
+        end_point=("vae",),
+    )
     modes = ODMOSampler.from_data(sampler.model, data, kind="modes")
     odmo = measure_variant("odmo", sampler.model, data, reference, plan)
-    assert set(odmo.samplers) == {"table", "modes", "conventional"} and odmo.samplers["table"] is odmo.samplers["modes"]
+    assert (
+        set(odmo.samplers) == {"table", "modes", "conventional"}
+        and odmo.samplers["table"] is odmo.samplers["modes"]
+    )
     assert list(odmo.rows) == ["odmo", "odmo_conv"] and odmo.end_point is None
     assert odmo.rows["odmo"] == evaluate.metric_row(reference, modes, 4, 2)
     conventional = ODMOSampler.from_data(sampler.model, data, kind="conventional")
@@ -149,32 +190,53 @@ def test_measure_variant_follows_the_plan(data, sampler):
     assert odmo.homogeneity == evaluate.mode_homogeneity_interval(reference, modes, 2, 2)
     vae = measure_variant("vae", sampler.model, data, reference, plan)
     assert list(vae.rows) == ["vae"] and vae.homogeneity is None
-    assert vae.rows["vae"] == evaluate.metric_row(reference, ODMOSampler.from_data(sampler.model, data, kind="prior"), 4, 2)
+    assert vae.rows["vae"] == evaluate.metric_row(
+        reference, ODMOSampler.from_data(sampler.model, data, kind="prior"), 4, 2
+    )
     assert vae.end_point == evaluate.end_point_control(reference, modes, 2, 2)
 
 
 def test_train_and_measure_trains_in_workers_and_measures_like_in_process(data, tmp_path, monkeypatch):
     monkeypatch.setenv("MOTIONLAB_BUILD", str(tmp_path))  # the workers get it with every call
     real = torch.randn(8, CFG.n_frames * STRIDE, 3, 3)
-    reference = evaluate.Reference(StandInEvaluator(), StandInEvaluator().features(real), real, np.array([0, 1] * 4))
-    plan = MeasurePlan(n_per_class=2, n_sets=2, n_per_mode=2, n_codes=2, n_end_points=2, prior_sampled=("vae",),
-                       conventional=(), homogeneity=("odmo",), end_point=())
+    reference = evaluate.Reference(
+        StandInEvaluator(), StandInEvaluator().features(real), real, np.array([0, 1] * 4)
+    )
+    plan = MeasurePlan(
+        n_per_class=2,
+        n_sets=2,
+        n_per_mode=2,
+        n_codes=2,
+        n_end_points=2,
+        prior_sampled=("vae",),
+        conventional=(),
+        homogeneity=("odmo",),
+        end_point=(),
+    )
     configs = {"odmo": CFG, "vae": CFG}
     training = ODMOTraining(steps=2, batch_size=4)
-    models, results, seconds, measured = train_and_measure(configs, data, training, reference, plan, processes=2)
-    assert list(measured) == ["odmo", "vae"] and set(seconds) == {"odmo", "vae"} and all(results[n].loaded_from_cache
-                                                                                          for n in configs)
+    models, results, seconds, measured = train_and_measure(
+        configs, data, training, reference, plan, processes=2
+    )
+    assert (
+        list(measured) == ["odmo", "vae"]
+        and set(seconds) == {"odmo", "vae"}
+        and all(results[n].loaded_from_cache for n in configs)
+    )
     for name, model in models.items():
         assert measured[name] == measure_variant(name, model, data, reference, plan)._replace(
-            samplers=measured[name].samplers)  # the same numbers as measuring here
+            samplers=measured[name].samplers
+        )  # the same numbers as measuring here
     _, _, seconds_again, again = train_and_measure(configs, data, training, reference, plan, processes=2)
     assert seconds_again == {} and [m.rows for m in again.values()] == [m.rows for m in measured.values()]
 
 
 def test_widget_callbacks_and_builders(sampler):
-    for fig in (odmo_widgets.mode_sample_figure(sampler, PARENTS, 0, 0, seed=1),
-                odmo_widgets.interpolation_figure(sampler, PARENTS, 1, 0, 1, 0.5),
-                odmo_widgets.end_point_figure(sampler, 0, 1.0, 0.5, seed=0, per_mode=1)):
+    for fig in (
+        odmo_widgets.mode_sample_figure(sampler, PARENTS, 0, 0, seed=1),
+        odmo_widgets.interpolation_figure(sampler, PARENTS, 1, 0, 1, 0.5),
+        odmo_widgets.end_point_figure(sampler, 0, 1.0, 0.5, seed=0, per_mode=1),
+    ):
         assert isinstance(fig, Figure) and fig.axes
         plt.close(fig)
     with pytest.raises(ValueError, match="discovered modes"):
@@ -182,9 +244,11 @@ def test_widget_callbacks_and_builders(sampler):
     with pytest.raises(ValueError, match="weight"):
         odmo_widgets.interpolation_figure(sampler, PARENTS, 0, 0, 1, 1.5)
     names = ["a", "b"]
-    built = [odmo_widgets.mode_sampler_widget(sampler, PARENTS, names),
-             odmo_widgets.interpolation_widget(sampler, PARENTS, names),
-             odmo_widgets.end_point_widget(sampler, names)]
+    built = [
+        odmo_widgets.mode_sampler_widget(sampler, PARENTS, names),
+        odmo_widgets.interpolation_widget(sampler, PARENTS, names),
+        odmo_widgets.end_point_widget(sampler, names),
+    ]
     assert all(isinstance(w, widgets.VBox) for w in built)
     plt.close("all")
 
@@ -192,9 +256,14 @@ def test_widget_callbacks_and_builders(sampler):
 def test_real_row_equals_set_metrics_on_the_canonical_test_clips():
     test = generate(seed=5, n_per_mode=1, seconds=1.0, split="test")
     positions = evaluate.canonical_positions(test, 0.0)
-    reference = evaluate.Reference(StandInEvaluator(), StandInEvaluator().features(positions), positions,
-                                   np.asarray(test.action))
+    reference = evaluate.Reference(
+        StandInEvaluator(), StandInEvaluator().features(positions), positions, np.asarray(test.action)
+    )
     row = evaluate.real_row(reference, test, 0.0, n_sets=3, seed=2)
-    by_hand = evaluate.repeat_metric(lambda rng: evaluate.set_metrics(reference, positions, np.asarray(test.action), rng),
-                                     lambda generator: np.random.default_rng(generator.initial_seed()), 3, 2)
+    by_hand = evaluate.repeat_metric(
+        lambda rng: evaluate.set_metrics(reference, positions, np.asarray(test.action), rng),
+        lambda generator: np.random.default_rng(generator.initial_seed()),
+        3,
+        2,
+    )
     assert all(row[name].values == by_hand[name].values for name in evaluate.METRICS)

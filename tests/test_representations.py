@@ -43,8 +43,9 @@ from motionlab.skeleton import PARENTS, body_skeleton, forward_kinematics
 FPS = 30.0
 
 
-def make_clips(n_clips: int = 3, n_frames: int = 40, seed: int = 0, dtype: torch.dtype = torch.float64,
-               n_modes: int = 3) -> SimpleNamespace:
+def make_clips(
+    n_clips: int = 3, n_frames: int = 40, seed: int = 0, dtype: torch.dtype = torch.float64, n_modes: int = 3
+) -> SimpleNamespace:
     """Smooth random motions in the generator's format, posed with forward kinematics.
 
     Local joint rotations are sums of two slow sinusoids per axis (up to 0.4 rad each); the root
@@ -63,14 +64,18 @@ def make_clips(n_clips: int = 3, n_frames: int = 40, seed: int = 0, dtype: torch
     yaw0 = rng.uniform(-np.pi, np.pi, (n_clips, 1))
     turn = rng.uniform(-1.5, 1.5, (n_clips, 1))
     yaw = yaw0 + turn * t + 0.2 * np.sin(2 * np.pi * 0.7 * t)
-    tilt = 0.12 * np.sin(2 * np.pi * rng.uniform(0.5, 1.5, (n_clips, 1, 3)) * t[None, :, None]
-                         + rng.uniform(0, 2 * np.pi, (n_clips, 1, 3)))
+    tilt = 0.12 * np.sin(
+        2 * np.pi * rng.uniform(0.5, 1.5, (n_clips, 1, 3)) * t[None, :, None]
+        + rng.uniform(0, 2 * np.pi, (n_clips, 1, 3))
+    )
     root = Rotation.from_euler("z", yaw.reshape(-1, 1)) * Rotation.from_rotvec(tilt.reshape(-1, 3))
     root_quat = np.roll(root.as_quat(), 1, axis=-1).reshape(n_clips, n_frames, 4)  # scipy is (x, y, z, w)
 
     speed = rng.uniform(0.5, 1.5, (n_clips, 1))
     sway = 0.1 * np.sin(2 * np.pi * 1.0 * t)
-    velocity = np.stack([speed * np.cos(yaw) - sway * np.sin(yaw), speed * np.sin(yaw) + sway * np.cos(yaw)], -1)
+    velocity = np.stack(
+        [speed * np.cos(yaw) - sway * np.sin(yaw), speed * np.sin(yaw) + sway * np.cos(yaw)], -1
+    )
     xy = rng.uniform(-2, 2, (n_clips, 1, 2)) + np.cumsum(velocity / FPS, axis=1)
     height = 0.9 + 0.03 * np.sin(2 * np.pi * 1.8 * t) * np.ones((n_clips, 1))
     root_positions = torch.tensor(np.concatenate([xy, height[..., None]], -1), dtype=dtype)
@@ -80,9 +85,15 @@ def make_clips(n_clips: int = 3, n_frames: int = 40, seed: int = 0, dtype: torch
     body = torch.tensor(rng.integers(0, 2, n_clips))
     offsets = torch.tensor(np.stack([body_skeleton(b).offsets for b in range(2)]), dtype=dtype)
     positions, _ = forward_kinematics(rotations, root_positions, offsets[body][:, None], PARENTS)
-    return SimpleNamespace(positions=positions, rotations=rotations, root_positions=root_positions,
-                           action=torch.tensor(rng.integers(0, 4, n_clips)),
-                           mode=torch.arange(n_clips) % n_modes, body=body, offsets=offsets)
+    return SimpleNamespace(
+        positions=positions,
+        rotations=rotations,
+        root_positions=root_positions,
+        action=torch.tensor(rng.integers(0, 4, n_clips)),
+        mode=torch.arange(n_clips) % n_modes,
+        body=body,
+        offsets=offsets,
+    )
 
 
 @pytest.fixture(scope="module")
@@ -117,16 +128,22 @@ def test_split_heading_matches_scipy_shortest_arc_oracle():
     # the tilt is the shortest arc from world up to the pelvis's up axis seen in the heading frame
     up = (Rotation.from_euler("z", -yaw.numpy()[:, None]) * rotations).apply([0, 0, 1])
     axis = np.cross([0, 0, 1], up)
-    expected = axis / np.linalg.norm(axis, axis=-1, keepdims=True) * np.arccos(np.clip(up[:, 2], -1, 1))[:, None]
+    expected = (
+        axis / np.linalg.norm(axis, axis=-1, keepdims=True) * np.arccos(np.clip(up[:, 2], -1, 1))[:, None]
+    )
     np.testing.assert_allclose(tilt_vector, expected, atol=1e-9)
     assert bool(((yaw >= -math.pi) & (yaw < math.pi)).all())
 
 
-@pytest.mark.parametrize("yaw, pitch, roll", [(0.3, 0.0, 0.0), (-2.5, 0.4, 0.0), (1.2, 0.0, -0.3), (3.0, 0.2, 0.1)])
+@pytest.mark.parametrize(
+    "yaw, pitch, roll", [(0.3, 0.0, 0.0), (-2.5, 0.4, 0.0), (1.2, 0.0, -0.3), (3.0, 0.2, 0.1)]
+)
 def test_motion_cell_root_angles_by_hand(yaw, pitch, roll):
     # a root turned by `yaw` about z after a tilt with rotation vector (roll, pitch, 0)
-    q = quat_mul(yaw_to_quat(torch.tensor(yaw, dtype=torch.float64)),
-                 axis_angle_to_quat(torch.tensor([roll, pitch, 0.0], dtype=torch.float64)))
+    q = quat_mul(
+        yaw_to_quat(torch.tensor(yaw, dtype=torch.float64)),
+        axis_angle_to_quat(torch.tensor([roll, pitch, 0.0], dtype=torch.float64)),
+    )
     rotations = torch.zeros(2, 3, 4, dtype=torch.float64)
     rotations[..., 0] = 1
     rotations[:, 0] = q
@@ -162,7 +179,9 @@ def test_root_control_on_a_circle_by_hand():
     control = root_control(xy, angle)
     torch.testing.assert_close(control[0], torch.zeros(3, dtype=torch.float64))
     # the chord from t-1 to t is 2 r sin(w/2) long and points w/2 left of the heading at t-1
-    expected = torch.tensor([radius * math.sin(turn), radius * (1 - math.cos(turn)), turn], dtype=torch.float64)
+    expected = torch.tensor(
+        [radius * math.sin(turn), radius * (1 - math.cos(turn)), turn], dtype=torch.float64
+    )
     torch.testing.assert_close(control[1:], expected.expand(n_frames - 1, 3), rtol=0, atol=1e-12)
 
 
@@ -186,8 +205,12 @@ def test_integrate_root_control_inverts_root_control(seed, n_frames):
     yaw = 4 * torch.randn(2, n_frames, generator=gen, dtype=torch.float64)
     back_xy, back_yaw = integrate_root_control(root_control(xy, yaw), xy[:, 0], yaw[:, 0])
     torch.testing.assert_close(back_xy, xy, rtol=0, atol=1e-10)
-    torch.testing.assert_close(torch.remainder(back_yaw - yaw + math.pi, 2 * math.pi) - math.pi,
-                               torch.zeros_like(yaw), rtol=0, atol=1e-10)
+    torch.testing.assert_close(
+        torch.remainder(back_yaw - yaw + math.pi, 2 * math.pi) - math.pi,
+        torch.zeros_like(yaw),
+        rtol=0,
+        atol=1e-10,
+    )
 
 
 # ----------------------------------------------------------------------------------------------------
@@ -202,7 +225,9 @@ def test_motion_cell_layout(clips):
     torch.testing.assert_close(root["root_height"], clips.root_positions[..., 2])
     for name in ("forward_velocity", "sideways_velocity", "yaw_rate"):
         assert bool((root[name][:, 0] == 0).all())
-    speed = torch.linalg.vector_norm(clips.root_positions[:, 1:, :2] - clips.root_positions[:, :-1, :2], dim=-1)
+    speed = torch.linalg.vector_norm(
+        clips.root_positions[:, 1:, :2] - clips.root_positions[:, :-1, :2], dim=-1
+    )
     torch.testing.assert_close(torch.hypot(root["forward_velocity"], root["sideways_velocity"])[:, 1:], speed)
     # these clips walk forwards at 0.5-1.5 m/s: 1/60 to 1/20 m per frame, give or take the sway
     assert 0.01 < root["forward_velocity"][:, 1:].min() and root["forward_velocity"].max() < 0.06
@@ -214,7 +239,9 @@ def test_motion_cell_round_trip_through_forward_kinematics(clips):
     rotations, root_positions = from_motion_cell(features, start)
     assert _same_rotation(rotations, clips.rotations) < 1e-12
     torch.testing.assert_close(root_positions, clips.root_positions, rtol=0, atol=1e-12)
-    decoded = representation("motion_cell").decode(features, start, clips.offsets[clips.body][:, None], PARENTS)
+    decoded = representation("motion_cell").decode(
+        features, start, clips.offsets[clips.body][:, None], PARENTS
+    )
     torch.testing.assert_close(decoded, clips.positions, rtol=0, atol=1e-12)
 
 
@@ -222,10 +249,16 @@ def test_motion_cell_round_trip_in_float32():
     clips32 = make_clips(n_frames=90, seed=3, dtype=torch.float32)
     rep = representation("motion_cell")
     features = rep.encode(clips32.positions, clips32.rotations)
-    decoded = rep.decode(features, root_start(clips32.positions, clips32.rotations),
-                         clips32.offsets[clips32.body][:, None], PARENTS)
+    decoded = rep.decode(
+        features,
+        root_start(clips32.positions, clips32.rotations),
+        clips32.offsets[clips32.body][:, None],
+        PARENTS,
+    )
     assert features.dtype == decoded.dtype == torch.float32
-    torch.testing.assert_close(decoded, clips32.positions, rtol=0, atol=2e-5)  # 3 s of integrated float32 steps
+    torch.testing.assert_close(
+        decoded, clips32.positions, rtol=0, atol=2e-5
+    )  # 3 s of integrated float32 steps
 
 
 def test_motion_cell_default_start_is_origin_facing_x(clips):
@@ -301,8 +334,9 @@ def test_representation_descriptions(clips, name, dim):
     assert covered == set(range(dim))
     features = rep.encode(clips.positions, clips.rotations)
     assert features.shape == (3, 40, dim)
-    decoded = rep.decode(features, root_start(clips.positions, clips.rotations),
-                         clips.offsets[clips.body][:, None], PARENTS)
+    decoded = rep.decode(
+        features, root_start(clips.positions, clips.rotations), clips.offsets[clips.body][:, None], PARENTS
+    )
     torch.testing.assert_close(decoded, clips.positions, rtol=0, atol=1e-12)
 
 
@@ -334,7 +368,9 @@ def test_errors_name_the_problem(clips):
         to_odmo(clips.positions[..., :2])
     bad = clips.positions.clone()
     bad[1, 4, 7, 0] = float("nan")
-    with pytest.raises(ValueError, match=r"to_trajevae: positions contains NaN or inf \(first at index \(1, 4, 7, 0\)"):
+    with pytest.raises(
+        ValueError, match=r"to_trajevae: positions contains NaN or inf \(first at index \(1, 4, 7, 0\)"
+    ):
         to_trajevae(bad)
     with pytest.raises(ValueError, match="must share"):
         to_motion_cell(clips.rotations, clips.root_positions[:, :-1])

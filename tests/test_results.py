@@ -16,7 +16,9 @@ def test_metrics_and_claims_are_written(build, monkeypatch):
     monkeypatch.setenv("MOTIONLAB_PROFILE", "full")
     chapter = Chapter("04_motion_cell")
     chapter.metric("mcell.fid", 0.42, ci95=0.05)
-    chapter.claim("04.fid_beats_erd", value=0.42, threshold=1.37, op="<", text="Motion Cell FID is below ERD's")
+    chapter.claim(
+        "04.fid_beats_erd", value=0.42, threshold=1.37, op="<", text="Motion Cell FID is below ERD's"
+    )
     data = json.loads(results_path().read_text())
     assert results_path() == build / "course" / "results.json"
     assert data["profile"] == "full"

@@ -11,8 +11,11 @@ from motionlab import runlog
 
 
 def test_a_run_is_copied_to_the_terminal_and_to_a_log_with_its_exit_code(tmp_path: Path, capfd) -> None:
-    code = runlog.run_logged("test", [sys.executable, "-c", "import sys; print('out'); print('err', file=sys.stderr); "
-                                                           "sys.exit(3)"], tmp_path)
+    code = runlog.run_logged(
+        "test",
+        [sys.executable, "-c", "import sys; print('out'); print('err', file=sys.stderr); sys.exit(3)"],
+        tmp_path,
+    )
     assert code == 3
     [log] = tmp_path.glob("test-*.log")
     text = log.read_text()

@@ -22,7 +22,9 @@ def test_kl_anneal_breakpoints() -> None:
 
 def test_kl_anneal_cooldown_breakpoints() -> None:
     beta = KLAnneal(max_value=2.0, warmup=10, anneal=20, cooldown_start=50, cooldown=10, cooldown_value=0.5)
-    assert [beta(s) for s in (30, 49, 50, 55, 59, 60, 1000)] == pytest.approx([2.0, 2.0, 2.0, 1.25, 0.65, 0.5, 0.5])
+    assert [beta(s) for s in (30, 49, 50, 55, 59, 60, 1000)] == pytest.approx(
+        [2.0, 2.0, 2.0, 1.25, 0.65, 0.5, 0.5]
+    )
 
 
 def test_kl_anneal_zero_lengths_are_jumps() -> None:
@@ -44,7 +46,9 @@ def test_linear_ramp_teacher_forcing_and_delayed_weight() -> None:
 def test_constant_and_piecewise_linear() -> None:
     assert Constant(0.7)(0) == Constant(0.7)(12345) == 0.7
     curve = PiecewiseLinear(((10, 1.0), (20, 3.0), (20, 0.0), (30, 1.0)))
-    assert [curve(s) for s in (0, 10, 15, 19, 20, 25, 30, 99)] == pytest.approx([1.0, 1.0, 2.0, 2.8, 0.0, 0.5, 1.0, 1.0])
+    assert [curve(s) for s in (0, 10, 15, 19, 20, 25, 30, 99)] == pytest.approx(
+        [1.0, 1.0, 2.0, 2.8, 0.0, 0.5, 1.0, 1.0]
+    )
     assert PiecewiseLinear([[0, 1], [4, 3]]).points == ((0, 1.0), (4, 3.0))
 
 
@@ -56,7 +60,10 @@ def test_constant_and_piecewise_linear() -> None:
         (lambda: KLAnneal(max_value=1.0, warmup=-1, anneal=10), "warmup"),
         (lambda: KLAnneal(max_value=1.0, warmup=0, anneal=2.5), "anneal"),
         (lambda: KLAnneal(max_value=1.0, warmup=10, anneal=10, cooldown_start=15), "cooldown_start"),
-        (lambda: KLAnneal(max_value=1.0, warmup=0, anneal=10, cooldown_start=20, cooldown_value=2.0), "cooldown_value"),
+        (
+            lambda: KLAnneal(max_value=1.0, warmup=0, anneal=10, cooldown_start=20, cooldown_value=2.0),
+            "cooldown_value",
+        ),
         (lambda: LinearRamp(start=True, length=1, begin=0.0, end=1.0), "start"),
         (lambda: LinearRamp(start=0, length=1, begin=0.0, end=math.inf), "end"),
         (lambda: Constant("1"), "value"),
@@ -91,7 +98,9 @@ def test_schedules_are_frozen() -> None:
     end=st.floats(-5, 5),
     step=st.integers(0, 3000),
 )
-def test_linear_ramp_matches_numpy_interp(start: int, length: int, begin: float, end: float, step: int) -> None:
+def test_linear_ramp_matches_numpy_interp(
+    start: int, length: int, begin: float, end: float, step: int
+) -> None:
     expected = np.interp(step, [start, start + length], [begin, end])
     assert LinearRamp(start, length, begin, end)(step) == pytest.approx(expected, abs=1e-9)
 
@@ -110,8 +119,15 @@ def test_piecewise_linear_matches_numpy_interp(gaps: list[int], values: list[flo
 
 
 @settings(max_examples=60, deadline=None)
-@given(max_value=st.floats(0, 10), warmup=st.integers(0, 100), anneal=st.integers(0, 100), step=st.integers(0, 300))
-def test_kl_anneal_rises_monotonically_to_its_max(max_value: float, warmup: int, anneal: int, step: int) -> None:
+@given(
+    max_value=st.floats(0, 10),
+    warmup=st.integers(0, 100),
+    anneal=st.integers(0, 100),
+    step=st.integers(0, 300),
+)
+def test_kl_anneal_rises_monotonically_to_its_max(
+    max_value: float, warmup: int, anneal: int, step: int
+) -> None:
     beta = KLAnneal(max_value, warmup, anneal)
     assert 0.0 <= beta(step) <= max_value
     assert beta(step) <= beta(step + 1) + 1e-12

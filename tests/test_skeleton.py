@@ -51,7 +51,9 @@ def test_body_types_have_realistic_different_proportions():
     assert broad.stature == pytest.approx(1.755, abs=0.01)
     assert slender.stature == pytest.approx(1.619, abs=0.01)
     shoulder = [m.collar_out + m.shoulder_out for m in BODY_MEASUREMENTS]
-    assert shoulder[0] / broad.hip_width > shoulder[1] / slender.hip_width + 0.15  # broad shoulders, narrow hips
+    assert (
+        shoulder[0] / broad.hip_width > shoulder[1] / slender.hip_width + 0.15
+    )  # broad shoulders, narrow hips
     leg_ratio = [(m.root_height - m.hip_drop) / m.stature for m in BODY_MEASUREMENTS]
     assert leg_ratio[1] > leg_ratio[0] + 0.01  # the slender body has relatively longer legs
     lengths = [body_skeleton(i).bone_lengths() for i in range(2)]
@@ -98,9 +100,11 @@ def test_forward_kinematics_hand_computed_chain():
     offsets = torch.tensor([[0.0, 0, 0], [1.0, 0, 0], [0.0, 0, 1.0]], dtype=torch.float64)
     s = math.sqrt(0.5)
     rotations = torch.tensor([[s, 0, 0, s], [s, 0, s, 0], [1.0, 0, 0, 0]], dtype=torch.float64)
-    positions, global_rotations = forward_kinematics(rotations, torch.tensor([1.0, 2, 3], dtype=torch.float64),
-                                                     offsets, [-1, 0, 1])
-    # joint 1: root + Rz(90)(1, 0, 0) = (1, 3, 3); joint 2: + Rz(90) Ry(90) (0, 0, 1) = + Rz(90) (1, 0, 0) = (0, 1, 0)
+    positions, global_rotations = forward_kinematics(
+        rotations, torch.tensor([1.0, 2, 3], dtype=torch.float64), offsets, [-1, 0, 1]
+    )
+    # joint 1: root + Rz(90)(1, 0, 0) = (1, 3, 3); joint 2: + Rz(90) Ry(90) (0, 0, 1) = + Rz(90) (1, 0, 0) =
+    # (0, 1, 0)
     np.testing.assert_allclose(positions.numpy(), [[1, 2, 3], [1, 3, 3], [1, 4, 3]], atol=1e-12)
     expected = _quat_wxyz(Rotation.from_euler("ZY", [90, 90], degrees=True))
     assert abs(abs(np.dot(global_rotations[2].numpy(), expected)) - 1) < 1e-12
@@ -111,8 +115,9 @@ def test_forward_kinematics_matches_scipy_and_numpy_rig():
     skeleton = body_skeleton(0)
     quats = _quat_wxyz(Rotation.random(3 * 22, random_state=1)).reshape(3, 22, 4)
     roots = rng.normal(size=(3, 3))
-    positions, global_rotations = forward_kinematics(torch.from_numpy(quats), torch.from_numpy(roots),
-                                                     skeleton.offsets, PARENTS)
+    positions, global_rotations = forward_kinematics(
+        torch.from_numpy(quats), torch.from_numpy(roots), skeleton.offsets, PARENTS
+    )
     for i in range(3):
         expected = _scipy_fk(quats[i], roots[i], skeleton.offsets, PARENTS)
         np.testing.assert_allclose(positions[i].numpy(), expected, atol=1e-12)
@@ -134,8 +139,10 @@ def test_forward_kinematics_batching_broadcasting_and_gradients():
     scaled, _ = forward_kinematics(3.0 * quats, roots, skeleton.offsets, torch.tensor(PARENTS))
     torch.testing.assert_close(scaled, shared)  # any non-zero quaternion is normalised first
     chain_offsets = torch.tensor([[0.0, 0, 0], [0.3, 0, 0], [0, 0.2, 0.1]], dtype=torch.float64)
-    torch.autograd.gradcheck(lambda q: forward_kinematics(q, torch.zeros(4, 3, dtype=torch.float64), chain_offsets,
-                                                          [-1, 0, 1])[0], quats[0, :4, :3].clone().requires_grad_())
+    torch.autograd.gradcheck(
+        lambda q: forward_kinematics(q, torch.zeros(4, 3, dtype=torch.float64), chain_offsets, [-1, 0, 1])[0],
+        quats[0, :4, :3].clone().requires_grad_(),
+    )
 
 
 def test_forward_kinematics_rejects_bad_input():
@@ -175,8 +182,9 @@ def test_forward_kinematics_keeps_bones_rigid(seed):
 
 def test_joint_impact_weights_hand_computed():
     # root -> a (1 m) -> b (2 m); root -> c (0.5 m). Longest paths: root 3, a 2, b 0, c 0; floor 0.1 * 3.
-    skeleton = Skeleton(("root", "a", "b", "c"), (-1, 0, 1, 0),
-                        np.array([[0, 0, 0], [0, 0, 1.0], [2.0, 0, 0], [0, 0.5, 0]]))
+    skeleton = Skeleton(
+        ("root", "a", "b", "c"), (-1, 0, 1, 0), np.array([[0, 0, 0], [0, 0, 1.0], [2.0, 0, 0], [0, 0.5, 0]])
+    )
     raw = np.array([3.0, 2.0, 0.3, 0.3])
     np.testing.assert_allclose(joint_impact_weights(skeleton), raw / raw.mean())
     np.testing.assert_allclose(joint_impact_weights(skeleton, leaf_floor=0.0), np.array([3, 2, 0, 0]) / 1.25)
@@ -187,7 +195,9 @@ def test_joint_impact_weights_hand_computed():
 def test_joint_impact_weights_default_skeleton():
     weights = joint_impact_weights()
     average = average_skeleton()
-    np.testing.assert_allclose(average.offsets, (BODY_MEASUREMENTS[0].offsets() + BODY_MEASUREMENTS[1].offsets()) / 2)
+    np.testing.assert_allclose(
+        average.offsets, (BODY_MEASUREMENTS[0].offsets() + BODY_MEASUREMENTS[1].offsets()) / 2
+    )
     assert weights.shape == (22,) and weights.mean() == pytest.approx(1.0) and weights.min() > 0
     assert weights.argmax() == JOINT["pelvis"]
     leaves = [JOINT[n] for n in ("left_foot", "right_foot", "head", "left_wrist", "right_wrist")]

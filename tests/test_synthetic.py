@@ -36,10 +36,14 @@ def _features(data) -> np.ndarray:
     left[..., 2] = 0
     left /= np.linalg.norm(left, axis=-1, keepdims=True)
     forward = np.stack([left[..., 1], -left[..., 0], np.zeros_like(left[..., 0])], axis=-1)
-    local = np.stack([np.einsum("ntjc,ntc->ntj", rel, forward), np.einsum("ntjc,ntc->ntj", rel, left), rel[..., 2]], -1)
+    local = np.stack(
+        [np.einsum("ntjc,ntc->ntj", rel, forward), np.einsum("ntjc,ntc->ntj", rel, left), rel[..., 2]], -1
+    )
     local = local[:, :, 1:].reshape(len(x), data.n_frames, -1)
     speed = np.linalg.norm(np.diff(x[:, :, 0, :2], axis=1), axis=-1) * FPS
-    return np.concatenate([local.mean(1), local.std(1), speed.mean(1, keepdims=True), x[:, :, 0, 2].std(1)[:, None]], 1)
+    return np.concatenate(
+        [local.mean(1), local.std(1), speed.mean(1, keepdims=True), x[:, :, 0, 2].std(1)[:, None]], 1
+    )
 
 
 def test_catalogue_and_labels(data):
@@ -75,8 +79,12 @@ def test_fewer_clips_per_mode_give_a_subset_and_splits_differ(data):
 
 
 def test_forward_kinematics_of_rotations_reproduces_positions(data):
-    positions, _ = forward_kinematics(torch.from_numpy(data.rotations), torch.from_numpy(data.positions[:, :, 0]),
-                                      torch.from_numpy(data.clip_offsets()[:, None]), data.parents)
+    positions, _ = forward_kinematics(
+        torch.from_numpy(data.rotations),
+        torch.from_numpy(data.positions[:, :, 0]),
+        torch.from_numpy(data.clip_offsets()[:, None]),
+        data.parents,
+    )
     np.testing.assert_allclose(positions.numpy(), data.positions, atol=5e-5)
     norms = np.linalg.norm(data.rotations, axis=-1)
     np.testing.assert_allclose(norms, 1.0, atol=1e-6)
@@ -102,11 +110,16 @@ def test_planted_feet_do_not_slide(data):
         chosen = data.action == ACTION_NAMES.index(action)
         assert data.contacts[chosen].mean() > 0.15
         # the generic detector (low and slow) on the balls of the feet, which roll but never slide
-        assert foot_skating(data.positions[chosen], fps=FPS, feet=(JOINT["left_foot"], JOINT["right_foot"])) < 0.04
+        assert (
+            foot_skating(data.positions[chosen], fps=FPS, feet=(JOINT["left_foot"], JOINT["right_foot"]))
+            < 0.04
+        )
     planted = data.contacts[:, :, [0, 1]]
     heights = data.positions[:, :, [JOINT["left_ankle"], JOINT["right_ankle"]], 2]
     ankle = np.array([BODY_MEASUREMENTS[b].ankle_height for b in data.body])[:, None, None]
-    np.testing.assert_allclose(np.where(planted, heights, ankle + 0 * heights), ankle + 0 * heights, atol=1e-4)
+    np.testing.assert_allclose(
+        np.where(planted, heights, ankle + 0 * heights), ankle + 0 * heights, atol=1e-4
+    )
 
 
 def test_motion_is_smooth(data):
@@ -126,7 +139,9 @@ def test_events_start_and_end_at_rest(data):
         for frame in (0, -1):
             pose = chosen[:, frame]
             assert np.all(pose[:, JOINT["head"], 2] > pose[:, 0, 2] + 0.45)  # upright
-            assert np.all(pose[:, [JOINT["left_wrist"], JOINT["right_wrist"]], 2] < pose[:, :1, 2])  # arms down
+            assert np.all(
+                pose[:, [JOINT["left_wrist"], JOINT["right_wrist"]], 2] < pose[:, :1, 2]
+            )  # arms down
     jumps = data.positions[data.action == ACTION_NAMES.index("jump")]
     apex = np.argmax(jumps[:, :, 0, 2], axis=1) / FPS
     assert apex.std() > 0.15 and apex.min() > 0.5 and apex.max() < 3.5  # at a random time inside the clip
@@ -224,9 +239,13 @@ def test_load_or_generate_caches_and_recovers(tmp_path, monkeypatch):
     path = synthetic.cache_path(seed=5, n_per_mode=1, seconds=2.0)
     assert path.is_file() and path.parent == tmp_path / "data"
     assert not stale.exists() and other.exists()  # an older generator's copy of these arguments is gone
-    np.testing.assert_array_equal(load_or_generate(seed=5, n_per_mode=1, seconds=2.0).positions, first.positions)
+    np.testing.assert_array_equal(
+        load_or_generate(seed=5, n_per_mode=1, seconds=2.0).positions, first.positions
+    )
     path.write_bytes(b"not an archive")
-    np.testing.assert_array_equal(load_or_generate(seed=5, n_per_mode=1, seconds=2.0).positions, first.positions)
+    np.testing.assert_array_equal(
+        load_or_generate(seed=5, n_per_mode=1, seconds=2.0).positions, first.positions
+    )
     train, val, test = load_splits(seed=5, n_per_mode=(2, 1, 1), seconds=2.0)
     assert (train.n_clips, val.n_clips, test.n_clips) == (24, 12, 12)
     assert not np.array_equal(val.positions, test.positions)

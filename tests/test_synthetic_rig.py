@@ -1,4 +1,5 @@
-"""The generator's NumPy building blocks: rotations, leg IK and curves, against scipy and hand computations."""
+"""The generator's NumPy building blocks: rotations, leg IK and curves, against scipy and hand
+computations."""
 
 import numpy as np
 import pytest
@@ -15,9 +16,14 @@ def test_euler_matrix_and_quaternions_match_scipy():
     roll, pitch, yaw = rng.uniform(-3, 3, size=(3, 500))
     expected = Rotation.from_euler("ZYX", np.stack([yaw, pitch, roll], -1)).as_matrix()
     np.testing.assert_allclose(rig.euler_matrix(roll, pitch, yaw), expected, atol=1e-12)
-    rotations = Rotation.concatenate([Rotation.random(500, random_state=1),
-                                      Rotation.from_rotvec(np.pi * np.array([[1, 0, 0], [0, 1, 0], [0.6, -0.8, 0]])),
-                                      Rotation.from_euler("ZY", [[np.pi, 0.1]]), Rotation.identity()])
+    rotations = Rotation.concatenate(
+        [
+            Rotation.random(500, random_state=1),
+            Rotation.from_rotvec(np.pi * np.array([[1, 0, 0], [0, 1, 0], [0.6, -0.8, 0]])),
+            Rotation.from_euler("ZY", [[np.pi, 0.1]]),
+            Rotation.identity(),
+        ]
+    )
     quats = rig.matrix_to_quaternion(rotations.as_matrix())
     assert np.all(quats[:, 0] >= 0)
     back = Rotation.from_quat(quats[:, [1, 2, 3, 0]]).as_matrix()
@@ -60,14 +66,18 @@ def test_leg_ik_approaches_far_targets_smoothly():
     ankles = np.stack([np.zeros_like(distances), np.zeros_like(distances), -distances], -1)
     forward = np.tile([1.0, 0, 0], (200, 1))
     rotation, knee = rig.leg_ik(hip[None], ankles, 0.45, 0.4, forward)
-    reached = np.linalg.norm(rotation @ [0, 0, -0.45] + (rotation @ rig.pitch_matrix(knee) @ [0, 0, -0.4]), axis=-1)
+    reached = np.linalg.norm(
+        rotation @ [0, 0, -0.45] + (rotation @ rig.pitch_matrix(knee) @ [0, 0, -0.4]), axis=-1
+    )
     exact = distances <= rig.LEG_REACH * 0.85
     np.testing.assert_allclose(reached[exact], distances[exact], atol=1e-12)
     assert np.all(np.diff(reached) >= 0) and reached.max() <= 0.85 + 1e-12  # closer and closer, then straight
     assert np.all(np.diff(knee) <= 1e-12) and np.all(knee >= 0) and np.all(knee[reached < 0.849] > 0)
     edge = rig.LEG_REACH * 0.85 + np.array([-2e-6, 0.0, 2e-6])  # no kink where the exact range ends
     rotation, knee = rig.leg_ik(np.zeros((3, 3)), edge[:, None] * [0, 0, -1.0], 0.45, 0.4, forward[:3])
-    reached = np.linalg.norm(rotation @ [0, 0, -0.45] + (rotation @ rig.pitch_matrix(knee) @ [0, 0, -0.4]), axis=-1)
+    reached = np.linalg.norm(
+        rotation @ [0, 0, -0.45] + (rotation @ rig.pitch_matrix(knee) @ [0, 0, -0.4]), axis=-1
+    )
     np.testing.assert_allclose(np.diff(reached) / 2e-6, [1.0, 1.0], atol=1e-3)
 
 
@@ -101,7 +111,9 @@ def test_small_curve_helpers():
     y = np.array([[[0.0], [2.0], [0.0]]])
     np.testing.assert_allclose(interp_rows(x, y, np.array([[0.5, 2.0, 4.0, -1.0]]))[0, :, 0], [1, 1, -1, -2])
     rng = np.random.default_rng(0)
-    noise = smooth_noise(np.linspace(0, 200, 20001), rng.uniform(0.1, 0.5, (1, 3)), rng.uniform(-3, 3, (1, 3)))
+    noise = smooth_noise(
+        np.linspace(0, 200, 20001), rng.uniform(0.1, 0.5, (1, 3)), rng.uniform(-3, 3, (1, 3))
+    )
     assert noise.std() == pytest.approx(1.0, rel=0.05)  # unit root-mean-square
     start, scale = place_event(np.array([1.0, 10.0]), n_frames=120, fps=30, where=np.array([0.99, 0.0]))
     last = 119 / 30

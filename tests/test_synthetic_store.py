@@ -39,7 +39,10 @@ def _write(path: Path, arrays: dict) -> Path:
     [
         (lambda a: a.pop("contacts"), "missing keys \\['contacts'\\]"),
         (lambda a: a.update(extra=np.zeros(2)), "unknown keys \\['extra'\\]"),
-        (lambda a: a.update(positions=a["positions"].astype(np.float64)), "'positions' must have dtype float32"),
+        (
+            lambda a: a.update(positions=a["positions"].astype(np.float64)),
+            "'positions' must have dtype float32",
+        ),
         (lambda a: a.update(mode=a["mode"][:-1]), "'mode' axis 0 \\(N\\)"),
         (lambda a: a.update(rotations=a["rotations"][..., :3]), "'rotations' axis 3"),
         (lambda a: a["positions"].__setitem__((0, 0, 0, 0), np.nan), "'positions' contains NaN"),
@@ -83,20 +86,48 @@ def test_subset(data):
 def test_command_line_writes_the_documented_keys_and_shapes(tmp_path):
     out, sums = tmp_path / "cli.npz", tmp_path / "sums.json"
     completed = subprocess.run(
-        [sys.executable, "-m", "motionlab.data.synthetic", "--out", str(out), "--seed", "3", "--n-per-mode", "1",
-         "--seconds", "1.5", "--checksums", str(sums)],
-        capture_output=True, text=True, check=True,
+        [
+            sys.executable,
+            "-m",
+            "motionlab.data.synthetic",
+            "--out",
+            str(out),
+            "--seed",
+            "3",
+            "--n-per-mode",
+            "1",
+            "--seconds",
+            "1.5",
+            "--checksums",
+            str(sums),
+        ],
+        capture_output=True,
+        text=True,
+        check=True,
     )
     assert "wrote 12 clips x 45 frames" in completed.stdout
     with np.load(out) as archive:
         shapes = {key: archive[key].shape for key in archive.files}
         dtypes = {key: archive[key].dtype for key in archive.files}
     assert shapes == {
-        "positions": (12, 45, 22, 3), "rotations": (12, 45, 22, 4), "action": (12,), "mode": (12,), "body": (12,),
-        "contacts": (12, 45, 4), "action_names": (6,), "mode_names": (12,), "mode_action": (12,), "parents": (22,),
-        "offsets": (2, 22, 3), "fps": (),
+        "positions": (12, 45, 22, 3),
+        "rotations": (12, 45, 22, 4),
+        "action": (12,),
+        "mode": (12,),
+        "body": (12,),
+        "contacts": (12, 45, 4),
+        "action_names": (6,),
+        "mode_names": (12,),
+        "mode_action": (12,),
+        "parents": (22,),
+        "offsets": (2, 22, 3),
+        "fps": (),
     }
-    assert dtypes["positions"] == np.float32 and dtypes["rotations"] == np.float32 and dtypes["contacts"] == bool
+    assert (
+        dtypes["positions"] == np.float32
+        and dtypes["rotations"] == np.float32
+        and dtypes["contacts"] == np.bool_
+    )
     assert all(dtypes[k] == np.int64 for k in ("action", "mode", "body", "mode_action", "parents", "fps"))
     record = json.loads(sums.read_text())
     assert record["sha256"] == generate(seed=3, n_per_mode=1, seconds=1.5).checksums()
@@ -114,7 +145,11 @@ def test_reference_set_regenerates():
     assert committed.checksums() == record["sha256"]
     ours, theirs = regenerated.checksums(), record["sha256"]
     floats = {"positions", "rotations", "offsets"}
-    assert {k: v for k, v in ours.items() if k not in floats} == {k: v for k, v in theirs.items() if k not in floats}
+    assert {k: v for k, v in ours.items() if k not in floats} == {
+        k: v for k, v in theirs.items() if k not in floats
+    }
     for name in floats:
-        np.testing.assert_allclose(getattr(regenerated, name), getattr(committed, name), rtol=0, atol=1e-6, err_msg=name)
+        np.testing.assert_allclose(
+            getattr(regenerated, name), getattr(committed, name), rtol=0, atol=1e-6, err_msg=name
+        )
     assert (REFERENCE / "reference_seed0.npz").stat().st_size < 2_000_000

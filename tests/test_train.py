@@ -5,8 +5,8 @@ from __future__ import annotations
 import os
 import re
 import shutil
-from dataclasses import replace
 import signal
+from dataclasses import replace
 from pathlib import Path
 
 import pytest
@@ -46,7 +46,9 @@ def make_model(seed: int = 0) -> nn.Module:
     return nn.Sequential(nn.Linear(FEATURES, 16), nn.Dropout(0.2), nn.Tanh(), nn.Linear(16, FEATURES))
 
 
-def loss_fn(model: nn.Module, batch: torch.Tensor, step: int, coeffs: dict[str, float]) -> dict[str, torch.Tensor]:
+def loss_fn(
+    model: nn.Module, batch: torch.Tensor, step: int, coeffs: dict[str, float]
+) -> dict[str, torch.Tensor]:
     noisy = batch + 0.1 * torch.randn_like(batch)
     recon = ((model(noisy) - batch) ** 2).mean()
     size = sum((p**2).sum() for p in model.parameters()) / 100
@@ -58,10 +60,14 @@ def data(n: int = 64) -> torch.Tensor:
 
 
 def dataloader() -> DataLoader:
-    return DataLoader(TensorDataset(data()), batch_size=16, shuffle=True, drop_last=True, generator=torch.Generator())
+    return DataLoader(
+        TensorDataset(data()), batch_size=16, shuffle=True, drop_last=True, generator=torch.Generator()
+    )
 
 
-def loader_loss_fn(model: nn.Module, batch: list[torch.Tensor], step: int, coeffs: dict[str, float]) -> dict[str, torch.Tensor]:
+def loader_loss_fn(
+    model: nn.Module, batch: list[torch.Tensor], step: int, coeffs: dict[str, float]
+) -> dict[str, torch.Tensor]:
     return loss_fn(model, batch[0], step, coeffs)
 
 
@@ -75,8 +81,13 @@ def assert_bitwise_equal(a: dict[str, torch.Tensor], b: dict[str, torch.Tensor])
         assert torch.equal(a[key], b[key]), key
 
 
-CFG = TrainConfig(steps=12, batch_size=16, lr=1e-2, checkpoint_every=5,
-                  schedules={"beta": KLAnneal(max_value=1.0, warmup=2, anneal=4)})
+CFG = TrainConfig(
+    steps=12,
+    batch_size=16,
+    lr=1e-2,
+    checkpoint_every=5,
+    schedules={"beta": KLAnneal(max_value=1.0, warmup=2, anneal=4)},
+)
 
 
 # --- the loop ------------------------------------------------------------------------------------------
@@ -84,7 +95,13 @@ def test_same_seed_gives_bitwise_identical_weights_and_a_different_one_does_not(
     runs = []
     for seed in (0, 0, 1):
         model = make_model()
-        train(model, loss_fn, TensorBatches(data()), TrainConfig(steps=12, batch_size=16, seed=seed), progress=False)
+        train(
+            model,
+            loss_fn,
+            TensorBatches(data()),
+            TrainConfig(steps=12, batch_size=16, seed=seed),
+            progress=False,
+        )
         runs.append(weights(model))
     assert_bitwise_equal(runs[0], runs[1])
     assert not torch.equal(runs[0]["0.weight"], runs[2]["0.weight"])
@@ -107,14 +124,22 @@ def test_history_shapes_schedules_and_epoch_means() -> None:
         seen.append((step, dict(coeffs), model.training))
         return loss_fn(model, batch, step, coeffs)
 
-    cfg = TrainConfig(epochs=3, batch_size=16, val_every=5, lr=1e-2, lr_schedule=LinearRamp(0, 4, 0.5, 1.0),
-                      schedules={"beta": KLAnneal(max_value=1.0, warmup=2, anneal=4)})
+    cfg = TrainConfig(
+        epochs=3,
+        batch_size=16,
+        val_every=5,
+        lr=1e-2,
+        lr_schedule=LinearRamp(0, 4, 0.5, 1.0),
+        schedules={"beta": KLAnneal(max_value=1.0, warmup=2, anneal=4)},
+    )
     val = TensorBatches(data(20), drop_last=False, shuffle=False)
     result = train(make_model(), recording_loss, TensorBatches(data()), cfg, val_data=val, progress=False)
     history = result.history
     assert len(history) == 12 and history.step == list(range(12))
     assert history.epoch == [0] * 4 + [1] * 4 + [2] * 4
-    assert set(history.terms) == {"loss", "recon", "size"} and all(len(v) == 12 for v in history.terms.values())
+    assert set(history.terms) == {"loss", "recon", "size"} and all(
+        len(v) == 12 for v in history.terms.values()
+    )
     assert history.coeffs["beta"] == pytest.approx([0, 0, 0, 0.25, 0.5, 0.75, 1, 1, 1, 1, 1, 1])
     assert history.lr == pytest.approx([1e-2 * f for f in (0.5, 0.625, 0.75, 0.875)] + [1e-2] * 8)
     training_calls = [(s, c) for s, c, training in seen if training]
@@ -142,7 +167,9 @@ def test_gradient_clipping_bounds_the_norm_the_optimiser_sees() -> None:
     clipped_norms: list[float] = []
 
     def measure(step, model, history):  # gradients are still in place right after the step
-        clipped_norms.append(float(torch.linalg.vector_norm(torch.cat([p.grad.flatten() for p in model.parameters()]))))
+        clipped_norms.append(
+            float(torch.linalg.vector_norm(torch.cat([p.grad.flatten() for p in model.parameters()])))
+        )
 
     def steep_loss(model, batch, step, coeffs):
         return {"loss": 1000.0 * loss_fn(model, batch, step, coeffs)["loss"]}
@@ -172,8 +199,14 @@ def test_non_finite_loss_stops_naming_the_term_and_step(bad_value: float, term: 
     model = make_model()
     snapshots: list[dict[str, torch.Tensor]] = []
     with pytest.raises(NonFiniteLossError, match=rf"'{term}' is {bad_value} at step 3") as info:
-        train(model, exploding, TensorBatches(data()), CFG, progress=False,
-              callbacks=[lambda s, m, h: snapshots.append(weights(m))])
+        train(
+            model,
+            exploding,
+            TensorBatches(data()),
+            CFG,
+            progress=False,
+            callbacks=[lambda s, m, h: snapshots.append(weights(m))],
+        )
     assert info.value.term == term and info.value.step == 3
     assert isinstance(info.value, RuntimeError)
     assert_bitwise_equal(weights(model), snapshots[-1])  # the bad step did not update the weights
@@ -285,7 +318,9 @@ def test_cache_hit_skips_training_and_restores_weights_and_history() -> None:
 def test_bookkeeping_intervals_do_not_invalidate_the_cache() -> None:
     train_or_load("tiny", MODEL_CONFIG, make_model(), loss_fn, TensorBatches(data()), CFG)
     relaxed = replace(CFG, log_every=3, checkpoint_every=None)
-    assert train_or_load("tiny", MODEL_CONFIG, make_model(), loss_fn, TensorBatches(data()), relaxed).loaded_from_cache
+    assert train_or_load(
+        "tiny", MODEL_CONFIG, make_model(), loss_fn, TensorBatches(data()), relaxed
+    ).loaded_from_cache
 
 
 @pytest.mark.parametrize(
@@ -303,8 +338,15 @@ def test_a_changed_configuration_retrains(change: dict) -> None:
     train_or_load("tiny", MODEL_CONFIG, make_model(), loss_fn, TensorBatches(data()), CFG)
     kwargs = {"model_config": MODEL_CONFIG, "train_config": CFG, **change}
     data_config = kwargs.pop("data_config", None)
-    result = train_or_load("tiny", kwargs["model_config"], make_model(), loss_fn, TensorBatches(data()),
-                           kwargs["train_config"], data_config=data_config)
+    result = train_or_load(
+        "tiny",
+        kwargs["model_config"],
+        make_model(),
+        loss_fn,
+        TensorBatches(data()),
+        kwargs["train_config"],
+        data_config=data_config,
+    )
     assert not result.loaded_from_cache
     assert len(list(config.checkpoint_dir().glob("tiny-*.pt"))) == 2
 
@@ -333,18 +375,35 @@ def test_a_cache_entry_without_history_is_retrained_from_the_fresh_model() -> No
 
 # How an entry written by an older version of the code differs, and the reason the warning gives.
 STALE_ENTRIES = {
-    "config key removed since": (lambda p: p["config"]["model"].update(activation="tanh"),
-                                 "its config has keys the code no longer has \\('model.activation'\\)"),
-    "config key added since": (lambda p: p["config"]["model"].pop("hidden"), "its config lacks 'model.hidden'"),
-    "config value changed": (lambda p: p["config"]["train"].update(lr=0.5), "its config differs at 'train.lr'"),
+    "config key removed since": (
+        lambda p: p["config"]["model"].update(activation="tanh"),
+        "its config has keys the code no longer has \\('model.activation'\\)",
+    ),
+    "config key added since": (
+        lambda p: p["config"]["model"].pop("hidden"),
+        "its config lacks 'model.hidden'",
+    ),
+    "config value changed": (
+        lambda p: p["config"]["train"].update(lr=0.5),
+        "its config differs at 'train.lr'",
+    ),
     "tensor missing": (lambda p: p["state_dict"].pop("3.bias"), "the state dict lacks '3.bias'"),
-    "tensor unexpected": (lambda p: p["state_dict"].update({"4.weight": torch.zeros(2)}),
-                          "the state dict has unexpected '4.weight'"),
-    "tensor renamed": (lambda p: p["state_dict"].update({"3.b": p["state_dict"].pop("3.bias")}),
-                       "the state dict lacks '3.bias' and has unexpected '3.b'"),
-    "tensor reshaped": (lambda p: p["state_dict"].update({"0.weight": torch.zeros(16, 7)}),
-                        "'0.weight' has shape \\(16, 7\\), the model's \\(16, 6\\)"),
-    "not a tensor": (lambda p: p["state_dict"].update({"0.bias": [0.0] * 16}), "'0.bias' is a list, not a tensor"),
+    "tensor unexpected": (
+        lambda p: p["state_dict"].update({"4.weight": torch.zeros(2)}),
+        "the state dict has unexpected '4.weight'",
+    ),
+    "tensor renamed": (
+        lambda p: p["state_dict"].update({"3.b": p["state_dict"].pop("3.bias")}),
+        "the state dict lacks '3.bias' and has unexpected '3.b'",
+    ),
+    "tensor reshaped": (
+        lambda p: p["state_dict"].update({"0.weight": torch.zeros(16, 7)}),
+        "'0.weight' has shape \\(16, 7\\), the model's \\(16, 6\\)",
+    ),
+    "not a tensor": (
+        lambda p: p["state_dict"].update({"0.bias": [0.0] * 16}),
+        "'0.bias' is a list, not a tensor",
+    ),
     "older format": (lambda p: p.update(format=0), "its format is 0, this code reads 1"),
     "other name": (lambda p: p.update(name="tiny_v0"), "it was written for 'tiny_v0'"),
     "extra not a dict": (lambda p: p.update(extra=[1, 2]), "its extra is a list, not a dict"),
@@ -369,7 +428,9 @@ def test_an_entry_written_by_older_code_is_retrained_saying_why(stale: str) -> N
     assert re.fullmatch(f"ignoring checkpoint {re.escape(first.path.name)}: {why}", messages[0]), messages[0]
     assert not again.loaded_from_cache and again.path == first.path and again.history == first.history
     assert_bitwise_equal(weights(reference), weights(model))
-    assert train_or_load("tiny", MODEL_CONFIG, make_model(seed=3), loss_fn, TensorBatches(data()), CFG).loaded_from_cache
+    assert train_or_load(
+        "tiny", MODEL_CONFIG, make_model(seed=3), loss_fn, TensorBatches(data()), CFG
+    ).loaded_from_cache
 
 
 # --- resuming ------------------------------------------------------------------------------------------
@@ -411,7 +472,9 @@ def test_resumed_training_equals_uninterrupted_bitwise(source: str, stop: int) -
     expected = train(reference, fn, make_source(), CFG, progress=False)
 
     with pytest.raises(Interrupt):
-        train_or_load("tiny", MODEL_CONFIG, make_model(), fn, make_source(), CFG, callbacks=[interrupt_at(stop)])
+        train_or_load(
+            "tiny", MODEL_CONFIG, make_model(), fn, make_source(), CFG, callbacks=[interrupt_at(stop)]
+        )
     state_file = resume_path("tiny", run_identity(MODEL_CONFIG, CFG))
     assert state_file.name == checkpoint_path("tiny", run_identity(MODEL_CONFIG, CFG)).stem + ".resume.pt"
     assert state_file.exists()
@@ -435,8 +498,15 @@ def test_resume_from_the_last_periodic_state_after_a_hard_crash(tmp_path: Path) 
             shutil.copy(state_file, kept)
 
     with pytest.raises(Interrupt):
-        train_or_load("tiny", MODEL_CONFIG, make_model(), loss_fn, TensorBatches(data()), CFG,
-                      callbacks=[keep_periodic, interrupt_at(8)])
+        train_or_load(
+            "tiny",
+            MODEL_CONFIG,
+            make_model(),
+            loss_fn,
+            TensorBatches(data()),
+            CFG,
+            callbacks=[keep_periodic, interrupt_at(8)],
+        )
     shutil.copy(kept, state_file)  # as if the process had died at step 8 without saving
     model = make_model()
     result = train_or_load("tiny", MODEL_CONFIG, model, loss_fn, TensorBatches(data()), CFG)
@@ -454,7 +524,9 @@ def test_ctrl_c_is_held_to_the_step_boundary_then_saved() -> None:
             os.kill(os.getpid(), signal.SIGINT)
 
     with pytest.raises(KeyboardInterrupt, match="after step 7"):
-        train_or_load("tiny", MODEL_CONFIG, make_model(), loss_fn, TensorBatches(data()), CFG, callbacks=[press_ctrl_c])
+        train_or_load(
+            "tiny", MODEL_CONFIG, make_model(), loss_fn, TensorBatches(data()), CFG, callbacks=[press_ctrl_c]
+        )
     assert signal.getsignal(signal.SIGINT) is handler  # restored
     model = make_model()
     result = train_or_load("tiny", MODEL_CONFIG, model, loss_fn, TensorBatches(data()), CFG)

@@ -17,7 +17,9 @@ from motionlab.train.plot import running_mean
 def _history() -> History:
     history = History()
     for step, (epoch, loss) in enumerate([(0, 4.0), (0, 2.0), (1, 3.0), (1, 1.0), (2, 5.0)]):
-        history.record_step(step, epoch, {"loss": loss, "kl": loss / 2}, {"beta": step / 10}, 1e-3, 10.0 - step)
+        history.record_step(
+            step, epoch, {"loss": loss, "kl": loss / 2}, {"beta": step / 10}, 1e-3, 10.0 - step
+        )
     history.record_validation(2, {"loss": 2.5, "kl": 1.25})
     history.record_validation(5, {"loss": 1.5, "kl": 0.75})
     return history

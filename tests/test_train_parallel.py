@@ -12,8 +12,15 @@ from torch import nn
 
 from motionlab import config
 from motionlab.train import TensorBatches, TrainConfig, build_seeded, is_cached, train_or_load
-from motionlab.train.parallel import (InBackground, close_shared_pools, run_chains, run_in_workers, run_paired,
-                                      shared_pool, worker_pool)
+from motionlab.train.parallel import (
+    InBackground,
+    close_shared_pools,
+    run_chains,
+    run_in_workers,
+    run_paired,
+    shared_pool,
+    worker_pool,
+)
 
 CFG = TrainConfig(steps=15, batch_size=8, lr=1e-2, checkpoint_every=None)
 
@@ -58,7 +65,9 @@ def tiny_model() -> nn.Module:
     return nn.Sequential(nn.Linear(4, 8), nn.Tanh(), nn.Linear(8, 4))
 
 
-def loss_fn(model: nn.Module, batch: torch.Tensor, step: int, coeffs: dict[str, float]) -> dict[str, torch.Tensor]:
+def loss_fn(
+    model: nn.Module, batch: torch.Tensor, step: int, coeffs: dict[str, float]
+) -> dict[str, torch.Tensor]:
     return {"loss": ((model(batch) - batch) ** 2).mean()}
 
 
@@ -77,8 +86,9 @@ def test_results_come_back_in_order_from_other_processes_on_one_thread() -> None
     assert all(threads == config.DEFAULT_THREADS for _, _, threads in results)
 
 
-def test_the_shared_pool_is_reused_and_each_call_is_set_up_afresh(tmp_path: Path,
-                                                                    monkeypatch: pytest.MonkeyPatch) -> None:
+def test_the_shared_pool_is_reused_and_each_call_is_set_up_afresh(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
     first = run_in_workers(where_and_threads, [("a",), ("b",)], processes=2)
     assert shared_pool(2) is shared_pool(2)
     monkeypatch.setenv("MOTIONLAB_BUILD", str(tmp_path / "other"))
@@ -88,22 +98,35 @@ def test_the_shared_pool_is_reused_and_each_call_is_set_up_afresh(tmp_path: Path
     again = run_in_workers(where_and_threads, [("g",), ("h",)], processes=2)
     assert len({pid for _, pid, _ in first + again}) <= 2  # the same two workers (a pool per call: four)
     close_shared_pools()
-    assert run_in_workers(where_and_threads, [("i",), ("j",)], processes=2)[0][0] == "i"  # a new pool after closing
+    assert (
+        run_in_workers(where_and_threads, [("i",), ("j",)], processes=2)[0][0] == "i"
+    )  # a new pool after closing
 
 
 @pytest.mark.parametrize("processes", [1, 2])
 def test_chains_run_their_calls_in_order_and_side_by_side(tmp_path: Path, processes: int) -> None:
-    chains = [[(write_tag, (str(tmp_path / f"{tag}.txt"), tag)), (read_tag, (str(tmp_path / f"{tag}.txt"),))]
-              for tag in "abc"] + [[], [(where_and_threads, ("alone",))]]
+    chains = [
+        [(write_tag, (str(tmp_path / f"{tag}.txt"), tag)), (read_tag, (str(tmp_path / f"{tag}.txt"),))]
+        for tag in "abc"
+    ] + [[], [(where_and_threads, ("alone",))]]
     results = run_chains(chains, processes=processes)
-    assert results[:3] == [[f"wrote {tag}", tag] for tag in "abc"]  # each second call saw its first call's file
+    assert results[:3] == [
+        [f"wrote {tag}", tag] for tag in "abc"
+    ]  # each second call saw its first call's file
     assert results[3] == [] and results[4][0][0] == "alone"
     with pytest.raises(RuntimeError, match="broken step"):
-        run_chains([[(where_and_threads, ("a",)), (fail, ("broken step",))], [(where_and_threads, ("b",))]], processes)
+        run_chains(
+            [[(where_and_threads, ("a",)), (fail, ("broken step",))], [(where_and_threads, ("b",))]],
+            processes,
+        )
     never = tmp_path / "never.txt"
-    with pytest.raises(RuntimeError, match="first failure"):  # the first in the order given, and no later step runs
-        run_chains([[(fail, ("first failure",)), (write_tag, (str(never), "x"))], [(fail, ("second failure",))]],
-                   processes)
+    with pytest.raises(
+        RuntimeError, match="first failure"
+    ):  # the first in the order given, and no later step runs
+        run_chains(
+            [[(fail, ("first failure",)), (write_tag, (str(never), "x"))], [(fail, ("second failure",))]],
+            processes,
+        )
     assert not never.exists()
 
 
@@ -121,7 +144,9 @@ def test_idle_workers_ignore_ctrl_c() -> None:
 
 def test_one_process_or_one_call_runs_here() -> None:
     assert run_in_workers(where_and_threads, [("x",)], processes=2)[0][1] == os.getpid()
-    assert {pid for _, pid, _ in run_in_workers(where_and_threads, [("x",), ("y",)], processes=1)} == {os.getpid()}
+    assert {pid for _, pid, _ in run_in_workers(where_and_threads, [("x",), ("y",)], processes=1)} == {
+        os.getpid()
+    }
     assert run_in_workers(where_and_threads, [], processes=2) == []
 
 
@@ -131,7 +156,10 @@ def test_an_error_in_a_worker_is_raised_here() -> None:
 
 
 def test_a_background_call_runs_elsewhere_and_reports_its_result_or_error() -> None:
-    background, broken = InBackground(where_and_threads, "later"), InBackground(fail, "broken in the background")
+    background, broken = (
+        InBackground(where_and_threads, "later"),
+        InBackground(fail, "broken in the background"),
+    )
     tag, pid, threads = background.wait()
     assert tag == "later" and pid != os.getpid() and threads == config.DEFAULT_THREADS and background.done()
     with pytest.raises(RuntimeError, match="broken in the background"):

@@ -35,7 +35,9 @@ def test_dct_matrix_is_orthonormal_and_idct_inverts():
     np.testing.assert_allclose((matrix @ matrix.T).numpy(), np.eye(59), atol=1e-12)
     x = torch.randn(3, 59, 4, dtype=torch.float64)
     torch.testing.assert_close(idct(dct(x), 59), x)
-    np.testing.assert_allclose(idct(dct(x), 59).numpy(), scipy.fft.idct(dct(x).numpy(), norm="ortho", axis=-2), atol=1e-10)
+    np.testing.assert_allclose(
+        idct(dct(x), 59).numpy(), scipy.fft.idct(dct(x).numpy(), norm="ortho", axis=-2), atol=1e-10
+    )
 
 
 def test_truncated_dct_is_the_least_squares_low_pass():
@@ -68,7 +70,9 @@ def test_sample_joint_masks_keep_rate_and_seed():
     masks = sample_joint_masks(20_000, torch.Generator().manual_seed(1))
     assert masks.shape == (20_000, 22) and masks.dtype == torch.bool
     rate = masks.double().mean().item()
-    assert abs(rate - KEEP_PROBABILITY) < 4 * np.sqrt(KEEP_PROBABILITY * (1 - KEEP_PROBABILITY) / masks.numel())
+    assert abs(rate - KEEP_PROBABILITY) < 4 * np.sqrt(
+        KEEP_PROBABILITY * (1 - KEEP_PROBABILITY) / masks.numel()
+    )
     again = sample_joint_masks(20_000, torch.Generator().manual_seed(1))
     assert torch.equal(masks, again)
     with pytest.raises(ValueError, match="keep_probability"):

@@ -31,8 +31,10 @@ def test_dlow_metrics_by_hand():
     assert values["ade"] == pytest.approx([per_frame.min()] * 2)
     assert values["fde"] == pytest.approx([per_frame.min()] * 2)
     assert values["mmade"] == pytest.approx(values["ade"])
-    pairs = [abs(a - b) for i, a in enumerate(shifts.numpy()) for b in shifts.numpy()[i + 1:]]
-    assert values["apd"] == pytest.approx([np.mean(pairs) * np.sqrt(3 * 6)] * 2)  # 3 future frames x 6 channels
+    pairs = [abs(a - b) for i, a in enumerate(shifts.numpy()) for b in shifts.numpy()[i + 1 :]]
+    assert values["apd"] == pytest.approx(
+        [np.mean(pairs) * np.sqrt(3 * 6)] * 2
+    )  # 3 future frames x 6 channels
     summary = summarise(values)
     assert summary["ade"][0] == pytest.approx(per_frame.min()) and summary["ade"][1] == pytest.approx(0.0)
 
@@ -65,7 +67,9 @@ def test_borrowed_trajectories_start_at_the_own_joints():
         j = int(donor[i])
         expected = windows[j, 1:, channels] - windows[j, 0, channels] + windows[i, 0, channels]
         torch.testing.assert_close(trajectories[i][:, channels], expected)
-        assert gap[i].item() == pytest.approx((windows[i, 0, channels] - windows[j, 0, channels]).norm().item(), rel=1e-5)
+        assert gap[i].item() == pytest.approx(
+            (windows[i, 0, channels] - windows[j, 0, channels]).norm().item(), rel=1e-5
+        )
     assert torch.count_nonzero(trajectories[:, :, ~channels]) == 0
     with pytest.raises(ValueError, match="at least 2 windows"):
         borrowed_trajectories(windows[:1], mask)

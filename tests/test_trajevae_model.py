@@ -1,4 +1,5 @@
-"""TrajeVAE, its ablation switches and the recurrent baselines: shapes, semantics, losses, determinism, errors."""
+"""TrajeVAE, its ablation switches and the recurrent baselines: shapes, semantics, losses, determinism,
+errors."""
 
 import dataclasses
 
@@ -8,9 +9,15 @@ import torch
 from motionlab.models.trajevae.ablations import RUNGS, SWITCHES, ladder
 from motionlab.models.trajevae.baselines import CVAERNN, GRUCompletion, RecurrentConfig
 from motionlab.models.trajevae.config import TrajeVAEConfig
-from motionlab.models.trajevae.losses import cvae_rnn_loss, gru_loss, latent_kl, squared_error_terms, trajevae_loss
-from motionlab.models.trajevae.model import TrajeVAE
+from motionlab.models.trajevae.losses import (
+    cvae_rnn_loss,
+    gru_loss,
+    latent_kl,
+    squared_error_terms,
+    trajevae_loss,
+)
 from motionlab.models.trajevae.masks import given_trajectories
+from motionlab.models.trajevae.model import TrajeVAE
 
 TINY = TrajeVAEConfig(n_frames=9, width=8, latent_dim=3, dct_components=4, heads=2)
 TINY_RNN = RecurrentConfig(n_frames=9, hidden=8)
@@ -187,8 +194,12 @@ def test_cvae_rnn_one_latent_per_sequence():
     start, trajectories = windows[:, 0], given_trajectories(windows[:, 1:], mask)
     samples = model.sample(start, trajectories, 4, generator=torch.Generator().manual_seed(0))
     assert samples.shape == (3, 4, 8, 66) and not torch.equal(samples[:, 0], samples[:, 1])
-    assert torch.equal(samples, model.sample(start, trajectories, 4, generator=torch.Generator().manual_seed(0)))
+    assert torch.equal(
+        samples, model.sample(start, trajectories, 4, generator=torch.Generator().manual_seed(0))
+    )
     terms = cvae_rnn_loss(model.train(), (windows, mask), 0, {})
-    assert terms["loss"].item() == pytest.approx(terms["recon"].item() + cfg.beta * terms["kl"].item(), rel=1e-5)
+    assert terms["loss"].item() == pytest.approx(
+        terms["recon"].item() + cfg.beta * terms["kl"].item(), rel=1e-5
+    )
     with pytest.raises(ValueError, match="latent_dim"):
         CVAERNN(TINY_RNN)

@@ -1,4 +1,5 @@
-"""TrajeVAE's data pipeline, training through the cache, the widget callback and the speed benchmark's pieces."""
+"""TrajeVAE's data pipeline, training through the cache, the widget callback and the speed benchmark's
+pieces."""
 
 import math
 
@@ -13,7 +14,12 @@ from motionlab.models.trajevae.evaluate import N_SAMPLES, multimodal_futures, sw
 from motionlab.models.trajevae.experiment import train_and_sweep
 from motionlab.models.trajevae.masks import first_joints
 from motionlab.models.trajevae.model import TrajeVAE
-from motionlab.models.trajevae.training import build_model, chapter_setup, loss_function, train_completion_model
+from motionlab.models.trajevae.training import (
+    build_model,
+    chapter_setup,
+    loss_function,
+    train_completion_model,
+)
 from motionlab.skeleton import JOINT
 from motionlab.train import TrainConfig
 from motionlab.widgets.trajevae import bend_trajectory, complete_window, left_direction
@@ -47,11 +53,15 @@ def test_batches_are_seeded_and_yaw_augmentation_keeps_shape(clips):
     again = list(batches(0, torch.Generator().manual_seed(3), 4))
     assert len(first) == 1 and first[0][0].shape == (4, 60, 66) and first[0][1].shape == (4, 22)
     assert torch.equal(first[0][0], again[0][0]) and torch.equal(first[0][1], again[0][1])
-    plain = list(CompletionBatches(positions, rotations, augment=False)(0, torch.Generator().manual_seed(3), 4))
+    plain = list(
+        CompletionBatches(positions, rotations, augment=False)(0, torch.Generator().manual_seed(3), 4)
+    )
     turned, straight = first[0][0].unflatten(-1, (-1, 3)), plain[0][0].unflatten(-1, (-1, 3))
     # the same clips (same order), turned about the first pelvis: heights and distances to it are kept
     torch.testing.assert_close(turned[..., 2], straight[..., 2])
-    torch.testing.assert_close(turned[..., :2].norm(dim=-1), straight[..., :2].norm(dim=-1), atol=1e-5, rtol=1e-5)
+    torch.testing.assert_close(
+        turned[..., :2].norm(dim=-1), straight[..., :2].norm(dim=-1), atol=1e-5, rtol=1e-5
+    )
     assert not torch.allclose(turned, straight)
     with pytest.raises(ValueError, match="batch_size"):
         next(batches(0, torch.Generator(), 7))
@@ -61,16 +71,22 @@ def test_training_is_cached_and_reproducible(clips):
     positions, rotations = clips
     cfg = chapter_setup("quick").trajevae
     train_cfg = TrainConfig(steps=3, batch_size=3, lr=1e-3, checkpoint_every=None)
-    model, result = train_completion_model("trajevae_test", cfg, positions, rotations, train_cfg, progress=False)
+    model, result = train_completion_model(
+        "trajevae_test", cfg, positions, rotations, train_cfg, progress=False
+    )
     assert not result.loaded_from_cache and set(result.history.terms) >= {"recon", "kl"}
-    again, cached = train_completion_model("trajevae_test", cfg, positions, rotations, train_cfg, progress=False)
+    again, cached = train_completion_model(
+        "trajevae_test", cfg, positions, rotations, train_cfg, progress=False
+    )
     assert cached.loaded_from_cache
     for a, b in zip(model.state_dict().values(), again.state_dict().values()):
         assert torch.equal(a, b)
     start, trajectories = completion_task(completion_windows(positions[:2]), first_joints(2))
     g = torch.Generator
-    assert torch.equal(model.sample(start, trajectories, 3, generator=g().manual_seed(1)),
-                       again.sample(start, trajectories, 3, generator=g().manual_seed(1)))
+    assert torch.equal(
+        model.sample(start, trajectories, 3, generator=g().manual_seed(1)),
+        again.sample(start, trajectories, 3, generator=g().manual_seed(1)),
+    )
 
 
 def test_train_and_sweep_trains_each_run_once_and_sweeps_it_as_in_process(clips):
@@ -81,12 +97,16 @@ def test_train_and_sweep_trains_each_run_once_and_sweeps_it_as_in_process(clips)
     windows = completion_windows(positions[:4])
     ks = {"trajevae_sweep_test": (0, 2), "trajevae_gru_sweep_test": (1,)}
     multimodal = multimodal_futures(windows)
-    models, results, seconds, sweeps = train_and_sweep(runs, positions, rotations, train_cfg, windows, ks, multimodal)
+    models, results, seconds, sweeps = train_and_sweep(
+        runs, positions, rotations, train_cfg, windows, ks, multimodal
+    )
     assert list(sweeps) == list(runs) and set(seconds) == set(runs) and all(s > 0 for s in seconds.values())
     for name in runs:
         assert results[name].loaded_from_cache and set(sweeps[name]) == set(ks[name])
         assert sweeps[name] == sweep_given_joints(models[name], windows, ks[name], N_SAMPLES, 0, multimodal)
-    _, _, seconds_again, sweeps_again = train_and_sweep(runs, positions, rotations, train_cfg, windows, ks, multimodal)
+    _, _, seconds_again, sweeps_again = train_and_sweep(
+        runs, positions, rotations, train_cfg, windows, ks, multimodal
+    )
     assert seconds_again == {} and sweeps_again == sweeps
 
 
@@ -128,8 +148,16 @@ def test_complete_window_callback(clips):
     positions, _ = clips
     window = completion_windows(positions)[0]
     model = TrajeVAE(chapter_setup("quick").trajevae).eval()
-    result = complete_window(model, window, ["right_foot", "pelvis"], n_samples=3, temperature=0.5,
-                             bend_joint="right_foot", bend=0.4, seed=2)
+    result = complete_window(
+        model,
+        window,
+        ["right_foot", "pelvis"],
+        n_samples=3,
+        temperature=0.5,
+        bend_joint="right_foot",
+        bend=0.4,
+        seed=2,
+    )
     assert result.samples.shape == (3, 60, 22, 3)
     assert result.mask.sum() == 2 and result.mask[JOINT["right_foot"]] and result.mask[0]
     torch.testing.assert_close(result.samples[:, 0], window[0].reshape(22, 3).expand(3, -1, -1))

@@ -41,7 +41,9 @@ def test_plausibility_is_zero_for_real_poses_and_grows_with_stretching():
     assert plausibility(poses, clips.offsets, clips.parents) < 1e-5
     stretched = poses * 1.1
     bones = np.linalg.norm(clips.offsets[clips.body], axis=-1)[:, 1:]  # (12, 21) each clip's own bones
-    assert plausibility(stretched, clips.offsets, clips.parents) == pytest.approx(0.1 * bones.mean(), rel=0.05)
+    assert plausibility(stretched, clips.offsets, clips.parents) == pytest.approx(
+        0.1 * bones.mean(), rel=0.05
+    )
     with pytest.raises(ValueError, match="poses \\(N, 22, 3\\)"):
         plausibility(poses[0], clips.offsets, clips.parents)
 

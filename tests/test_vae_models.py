@@ -48,7 +48,9 @@ def test_elbo_terms_match_hand_computation():
     terms = elbo_terms(model, x, label, torch.Generator().manual_seed(3))
     out = model(x, label, torch.Generator().manual_seed(3))  # the same draw of z
     recon = (-Normal(out.mean, math.sqrt(2.0)).log_prob(x)).sum(1).mean()
-    kl = kl_divergence(Normal(out.mu, torch.exp(0.5 * out.logvar)), Normal(0.0, math.sqrt(0.05))).sum(1).mean()
+    kl = (
+        kl_divergence(Normal(out.mu, torch.exp(0.5 * out.logvar)), Normal(0.0, math.sqrt(0.05))).sum(1).mean()
+    )
     assert terms["recon"].item() == pytest.approx(recon.item(), rel=1e-5)
     assert terms["kl"].item() == pytest.approx(kl.item(), rel=1e-5)
     assert terms["kl_per_dim"].shape == (3,)
@@ -98,7 +100,9 @@ def test_sampling_and_training_are_deterministic_by_seed():
         a = model.sample(label, torch.Generator().manual_seed(7))
         b = model.sample(label, torch.Generator().manual_seed(7))
         assert torch.equal(a, b)
-    data = TensorBatches((torch.randn(32, 6, generator=torch.Generator().manual_seed(1)), torch.arange(32) % 2))
+    data = TensorBatches(
+        (torch.randn(32, 6, generator=torch.Generator().manual_seed(1)), torch.arange(32) % 2)
+    )
     cfg = TrainConfig(steps=5, batch_size=8, checkpoint_every=None, schedules={"beta": Constant(1.0)})
     weights = []
     for _ in range(2):

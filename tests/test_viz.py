@@ -124,12 +124,14 @@ def test_animate_several_motions_overlaid_and_side_by_side() -> None:
     batch = np.stack([walk(8, seed=s) for s in range(3)])  # (N, T, J, 3)
     assert embedded_frames(animate(batch, PARENTS, layout="side", labels=["a", "b", "c"])) == 8
     uneven = [walk(8), walk(5)]  # the shorter one holds its last pose
-    anim = build_animation(uneven, PARENTS, layout="overlay", colors=["red", "blue"], labels=["long", "short"])
+    anim = build_animation(
+        uneven, PARENTS, layout="overlay", colors=["red", "blue"], labels=["long", "short"]
+    )
     assert isinstance(anim, FuncAnimation)
     anim._func(7)
     lines = [line for line in anim._fig.axes[0].lines if line.get_marker() == "o"]
     np.testing.assert_allclose(lines[1].get_data_3d()[0], uneven[1][4][:, 0])
-    assert anim.to_jshtml().count('frames[') >= 8
+    assert anim.to_jshtml().count("frames[") >= 8
     sides = build_animation(uneven, PARENTS, layout="side")
     assert len(sides._fig.axes) == 2
     extents = [np.ptp(ax.get_xlim()) for ax in sides._fig.axes]
@@ -166,17 +168,23 @@ def test_compare_animation_is_blue_and_orange() -> None:
     assert (REAL_COLOR, GENERATED_COLOR) == ("tab:blue", "tab:orange")
 
 
-@pytest.mark.parametrize("kwargs, message", [
-    ({"motions": np.zeros((5, 22)), "parents": PARENTS}, r"motion 0 must have shape \(T, J, 3\)"),
-    ({"motions": np.zeros((2, 2, 5, 22, 3)), "parents": PARENTS}, r"got shape \(2, 2, 5, 22, 3\)"),
-    ({"motions": [walk(4), walk(4)[:, :21]], "parents": PARENTS}, r"motion 1 must have shape \(T, 22, 3\)"),
-    ({"motions": [], "parents": PARENTS}, "no motions"),
-    ({"motions": walk(4), "parents": PARENTS[:5]}, "parents has 5 entries"),
-    ({"motions": walk(4), "parents": PARENTS, "step": 0}, "step must be a positive integer"),
-    ({"motions": walk(4), "parents": PARENTS, "layout": "grid"}, "layout must be one of"),
-    ({"motions": walk(4), "parents": PARENTS, "fps": 0}, "fps must be a positive number"),
-    ({"motions": [walk(4), walk(4)], "parents": PARENTS, "colors": ["red"]}, "1 colors for 2 motions"),
-])
+@pytest.mark.parametrize(
+    "kwargs, message",
+    [
+        ({"motions": np.zeros((5, 22)), "parents": PARENTS}, r"motion 0 must have shape \(T, J, 3\)"),
+        ({"motions": np.zeros((2, 2, 5, 22, 3)), "parents": PARENTS}, r"got shape \(2, 2, 5, 22, 3\)"),
+        (
+            {"motions": [walk(4), walk(4)[:, :21]], "parents": PARENTS},
+            r"motion 1 must have shape \(T, 22, 3\)",
+        ),
+        ({"motions": [], "parents": PARENTS}, "no motions"),
+        ({"motions": walk(4), "parents": PARENTS[:5]}, "parents has 5 entries"),
+        ({"motions": walk(4), "parents": PARENTS, "step": 0}, "step must be a positive integer"),
+        ({"motions": walk(4), "parents": PARENTS, "layout": "grid"}, "layout must be one of"),
+        ({"motions": walk(4), "parents": PARENTS, "fps": 0}, "fps must be a positive number"),
+        ({"motions": [walk(4), walk(4)], "parents": PARENTS, "colors": ["red"]}, "1 colors for 2 motions"),
+    ],
+)
 def test_animate_validates_its_input(kwargs: dict, message: str) -> None:
     with pytest.raises(ValueError, match=message):
         animate(**kwargs)
@@ -187,7 +195,7 @@ def test_plot_root_paths_marks_start_and_end() -> None:
     ax = plot_root_paths(torch.from_numpy(paths), labels=["a", "b", "c"], title="roots")
     assert len(ax.lines) == 9  # path, start, end per motion
     for k in range(3):
-        path, start, end = ax.lines[3 * k: 3 * k + 3]
+        path, start, end = ax.lines[3 * k : 3 * k + 3]
         np.testing.assert_allclose(np.stack(path.get_data(), axis=1), paths[k, :, 0, :2])
         np.testing.assert_allclose(np.ravel(start.get_data()), paths[k, 0, 0, :2])
         np.testing.assert_allclose(np.ravel(end.get_data()), paths[k, -1, 0, :2])

@@ -1,4 +1,5 @@
-"""The chapter-02 data browser (motionlab.widgets.data_browser): clip selection, measurements, plots, wiring."""
+"""The chapter-02 data browser (motionlab.widgets.data_browser): clip selection, measurements, plots,
+wiring."""
 
 import matplotlib
 
@@ -43,11 +44,13 @@ def walking_clip() -> tuple[np.ndarray, np.ndarray]:
     positions[:, 0, 0] = 1.2 * np.arange(n_frames) / FPS
     positions[:, 0, 2] = 0.9
     contacts = np.zeros((n_frames, 4), bool)
-    for column, joint, plants in ((2, LEFT_BALL, [(0, 0.0), (20, 1.0), (40, 2.2)]),
-                                  (3, RIGHT_BALL, [(10, 0.5), (30, 1.6), (50, 2.9)])):
+    for column, joint, plants in (
+        (2, LEFT_BALL, [(0, 0.0), (20, 1.0), (40, 2.2)]),
+        (3, RIGHT_BALL, [(10, 0.5), (30, 1.6), (50, 2.9)]),
+    ):
         for start, x in plants:
-            contacts[start:start + 10, column] = True
-            positions[start:start + 10, joint, 0] = x
+            contacts[start : start + 10, column] = True
+            positions[start : start + 10, joint, 0] = x
     return positions, contacts
 
 
@@ -55,7 +58,8 @@ def test_summarise_clip_walk_by_hand():
     positions, contacts = walking_clip()
     summary = summarise_clip(positions, contacts, FPS)
     assert summary.speed == pytest.approx(1.2, abs=1e-12)
-    # touch-downs (contact starts after a frame without contact): left 20, 40; right 10, 30, 50 (frame 0 is not one)
+    # touch-downs (contact starts after a frame without contact): left 20, 40; right 10, 30, 50 (frame 0 is
+    # not one)
     assert summary.stride == pytest.approx((1.2 + 1.1 + 1.3) / 3, abs=1e-12)
     assert summary.step_rate == pytest.approx(2 / (20 / FPS), abs=1e-12)
     assert summary.pelvis_rise == 0.0 and summary.pelvis_drop == 0.0
@@ -89,7 +93,8 @@ def test_summarise_clip_still_clip_never_moves():
 @settings(max_examples=25, deadline=None)
 @given(radius=st.floats(0.5, 5.0), turn_rate=st.floats(0.05, 1.0), yaw=st.floats(-math.pi, math.pi))
 def test_speed_on_a_circle_matches_radius_times_turn_rate(radius, turn_rate, yaw):
-    # the root circles at angular speed turn_rate (rad/s); its speed is radius * turn_rate (chords: sinc factor)
+    # the root circles at angular speed turn_rate (rad/s); its speed is radius * turn_rate (chords: sinc
+    # factor)
     angle = yaw + turn_rate * np.arange(90) / FPS
     positions = np.zeros((90, 22, 3))
     positions[:, 0, 0], positions[:, 0, 1] = radius * np.cos(angle), radius * np.sin(angle)
@@ -149,7 +154,9 @@ def test_browse_clip_returns_copies_and_walks_have_strides():
 def test_browse_clip_names_bad_arguments():
     with pytest.raises(ValueError, match="unknown action 'swim'"):
         browse_clip("swim", "upright", "broad", 0)
-    with pytest.raises(ValueError, match=r"'walk' has no mode 'lean'; choose one of \('upright', 'hunched'\)"):
+    with pytest.raises(
+        ValueError, match=r"'walk' has no mode 'lean'; choose one of \('upright', 'hunched'\)"
+    ):
         browse_clip("walk", "lean", "broad", 0)
     with pytest.raises(ValueError, match="unknown body 'tall'"):
         browse_clip("walk", "upright", "tall", 0)
@@ -167,8 +174,12 @@ def test_show_clip_draws_filmstrip_and_overview_of_the_clip():
     np.testing.assert_allclose(path_ax.get_lines()[0].get_xydata(), clip.positions[:, 0, :2], atol=1e-6)
     heights = [line.get_ydata() for line in feet_ax.get_lines()]
     np.testing.assert_allclose(np.stack(heights, axis=1), clip.positions[:, [7, 8, 10, 11], 2], atol=1e-6)
-    assert [line.get_label() for line in feet_ax.get_lines()] == ["left_ankle", "right_ankle", "left_foot",
-                                                                 "right_foot"]
+    assert [line.get_label() for line in feet_ax.get_lines()] == [
+        "left_ankle",
+        "right_ankle",
+        "left_foot",
+        "right_foot",
+    ]
 
 
 def test_plot_clip_overview_shades_only_planted_frames():

@@ -55,8 +55,11 @@ def test_clip_codec_round_trip(clips, codec_and_windows):
     assert torch.allclose(train.features.reshape(-1, 67).mean(0), torch.zeros(67), atol=1e-4)
     assert torch.allclose(train.features, other.features)  # same clips, train statistics
     positions = codec.to_positions(train.features).numpy()
-    original = np.stack([np.asarray(clips.positions)[c, s:s + LENGTH] for c, s in zip(train.clip, train.start)])
-    # a window is placed at the origin facing +x: the same motion moved rigidly (one move for the whole window)
+    original = np.stack(
+        [np.asarray(clips.positions)[c, s : s + LENGTH] for c, s in zip(train.clip, train.start)]
+    )
+    # a window is placed at the origin facing +x: the same motion moved rigidly (one move for the whole
+    # window)
     np.testing.assert_allclose(positions[..., 2], original[..., 2], atol=1e-4)
     flat = lambda p: p.reshape(p.shape[0], -1, 3)  # noqa: E731
     np.testing.assert_allclose(_pairwise(flat(positions)), _pairwise(flat(original)), atol=1e-3)
@@ -82,7 +85,9 @@ def test_show_cvae_sample_draws_the_decoded_clip(clips, codec_and_windows):
     codec, _, _ = codec_and_windows
     model = _cvae()
     parents = clips.parents
-    expected = codec.to_positions(model.decode(prior_code(model, 3)[None], torch.tensor([2])).detach())[0].numpy()
+    expected = codec.to_positions(model.decode(prior_code(model, 3)[None], torch.tensor([2])).detach())[
+        0
+    ].numpy()
     fig = show_cvae_sample(model, codec, parents, action=2, seed=3, action_names=list("abcdef"), n_frames=3)
     try:
         assert len(fig.axes) == 3

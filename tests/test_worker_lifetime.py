@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import json
-import os
 import time
 from pathlib import Path
 
@@ -62,12 +61,15 @@ def test_no_worker_outlives_its_chapter(tmp_path: Path) -> None:
 def test_an_interrupt_leaves_the_workers_and_a_killed_kernel_takes_them_along(tmp_path: Path) -> None:
     """Ctrl-C in the notebook (SIGINT to the kernel's process group) stops the cell, not the idle workers: the
     next cell finds the same two. A kernel that is killed runs no clean-up, and its workers still end."""
-    interrupt = ("import os, signal, time\ntry:\n    os.killpg(os.getpgid(0), signal.SIGINT)\n    time.sleep(5)\n"
-                 "except KeyboardInterrupt:\n    print('interrupted')")
+    interrupt = (
+        "import os, signal, time\ntry:\n    os.killpg(os.getpgid(0), signal.SIGINT)\n    time.sleep(5)\n"
+        "except KeyboardInterrupt:\n    print('interrupted')"
+    )
     again = "run_in_workers(os.getpid, [(), ()])\nprint(sorted(shared_pool(2)._processes))"
     kill = "os.kill(os.getpid(), signal.SIGKILL)"
-    execution = execute_notebook(_notebook(_START_WORKERS, interrupt, again, kill), tmp_path,
-                                 CellLimits(cell_seconds=120))
+    execution = execute_notebook(
+        _notebook(_START_WORKERS, interrupt, again, kill), tmp_path, CellLimits(cell_seconds=120)
+    )
     assert execution.failed_cell == 3 and "died" in str(execution.error).lower()
     report = _report(execution)
     assert "interrupted" in execution.notebook.cells[1].outputs[0]["text"]

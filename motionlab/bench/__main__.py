@@ -36,11 +36,14 @@ print("BENCH-JSON " + json.dumps(result))
 
 def entry_names() -> list[str]:
     """The benchmark entries: the public modules of :mod:`motionlab.bench`, sorted."""
-    return sorted(m.name for m in pkgutil.iter_modules(motionlab.bench.__path__) if not m.name.startswith("_"))
+    return sorted(
+        m.name for m in pkgutil.iter_modules(motionlab.bench.__path__) if not m.name.startswith("_")
+    )
 
 
 def _run_entries(names: list[str], out: Path | None) -> int:
-    """Run the entries ``names`` (each in a fresh process) and write the merged report to ``out``; returns 0."""
+    """Run the entries ``names`` (each in a fresh process) and write the merged report to ``out``; returns
+    0."""
     if out is None:
         out = config.build_dir() / "bench.json"
         out.parent.mkdir(parents=True, exist_ok=True)
@@ -53,7 +56,7 @@ def _run_entries(names: list[str], out: Path | None) -> int:
             sys.stderr.write(proc.stderr)
             raise SystemExit(f"bench module {name} failed (exit {proc.returncode})")
         line = next(line for line in proc.stdout.splitlines() if line.startswith("BENCH-JSON "))
-        report["results"][name] = json.loads(line[len("BENCH-JSON "):])
+        report["results"][name] = json.loads(line[len("BENCH-JSON ") :])
         print(f"bench: {name} done in {time.perf_counter() - start:.1f} s", flush=True)
     out.write_text(json.dumps(report, indent=2, sort_keys=True))
     print(json.dumps(report, indent=2, sort_keys=True))
@@ -65,10 +68,15 @@ def main(argv: list[str] | None = None) -> int:
     """The command line; returns the exit status (2, with a one-line message, for a bad argument)."""
     names = entry_names()
     parser = argparse.ArgumentParser(prog=PROG, description="Measure speed and memory; write a JSON report.")
-    parser.add_argument("entries", nargs="*", metavar="ENTRY",
-                        help=f"entries to run (default: all): {', '.join(names)}")
-    parser.add_argument("--out", type=cli.output_file, metavar="FILE",
-                        help="report file (default build/bench.json); its directory must exist")
+    parser.add_argument(
+        "entries", nargs="*", metavar="ENTRY", help=f"entries to run (default: all): {', '.join(names)}"
+    )
+    parser.add_argument(
+        "--out",
+        type=cli.output_file,
+        metavar="FILE",
+        help="report file (default build/bench.json); its directory must exist",
+    )
     args = parser.parse_args(argv)
     unknown = [entry for entry in args.entries if entry not in names]
     if unknown:  # not choices=names: Python 3.11 checks an empty nargs="*" list against the choices too

@@ -33,8 +33,9 @@ def median_seconds(fn: Callable[[], Any], repeats: int = 5, warmup: int = 1) -> 
     return statistics.median(times)
 
 
-def generator_speed(generate: Callable[[int], Any], n_frames: int, fps: int, large_batch: int = 256,
-                    repeats: int = 5) -> dict[str, float]:
+def generator_speed(
+    generate: Callable[[int], Any], n_frames: int, fps: int, large_batch: int = 256, repeats: int = 5
+) -> dict[str, float]:
     """Speed of a motion generator ``generate(batch_size)`` that makes ``n_frames`` frames per clip.
 
     Returns ``rtf_b1_1thread`` (seconds of motion per second of compute, one clip, one thread),

@@ -31,8 +31,19 @@ def run() -> dict:
     env = dict(os.environ, OMP_NUM_THREADS="1", OPENBLAS_NUM_THREADS="1", MKL_NUM_THREADS="1")
     with tempfile.TemporaryDirectory() as folder:
         out = Path(folder) / "bench.npz"
-        command = [sys.executable, "-m", "motionlab.data.synthetic", "--out", str(out), "--seed", "0",
-                   "--n-per-mode", str(N_PER_MODE), "--seconds", str(SECONDS)]
+        command = [
+            sys.executable,
+            "-m",
+            "motionlab.data.synthetic",
+            "--out",
+            str(out),
+            "--seed",
+            "0",
+            "--n-per-mode",
+            str(N_PER_MODE),
+            "--seconds",
+            str(SECONDS),
+        ]
         load = os.getloadavg()[0]
         start = time.perf_counter()
         subprocess.run(command, check=True, capture_output=True, env=env, preexec_fn=_pin_to_one_core)

@@ -19,7 +19,7 @@ from __future__ import annotations
 import os
 import statistics
 import time
-from typing import Callable
+from collections.abc import Callable
 
 import torch
 
@@ -29,7 +29,9 @@ from motionlab.geometry import matrix_geodesic, quat_geodesic, quat_to_matrix
 FLOAT_BYTES = 4  # float32
 
 
-def _median_seconds(fn: Callable[[], object], reference: Callable[[], object], repeats: int) -> tuple[float, float]:
+def _median_seconds(
+    fn: Callable[[], object], reference: Callable[[], object], repeats: int
+) -> tuple[float, float]:
     """Median wall-clock seconds of ``fn`` and of ``reference``, timed alternately after one warm-up each."""
     fn(), reference()
     times: dict[str, list[float]] = {"fn": [], "reference": []}
@@ -65,6 +67,7 @@ def run(n_items: int = 1_000_000, repeats: int = 7) -> dict:
         result[f"{name}.bytes_per_s"] = traffic / seconds
         result[f"{name}.copy_bytes_per_s"] = traffic / copy_seconds
         result[f"{name}.fraction_of_copy_bandwidth"] = copy_seconds / seconds
+
     def pipeline(a: torch.Tensor, b: torch.Tensor) -> tuple[torch.Tensor, torch.Tensor]:
         return quat_to_matrix(a), quat_geodesic(a, b)
 
@@ -75,7 +78,7 @@ def run(n_items: int = 1_000_000, repeats: int = 7) -> dict:
     traffic = n_items * (8 + 9 + 1) * FLOAT_BYTES
     buffer = torch.rand(traffic // (2 * FLOAT_BYTES), generator=gen)
     for name, fn in (("eager", pipeline), ("compiled", compiled)):
-        seconds, copy_seconds = _median_seconds(lambda: fn(q1, q2), buffer.clone, repeats)
+        seconds, copy_seconds = _median_seconds(lambda fn=fn: fn(q1, q2), buffer.clone, repeats)
         result[f"pipeline.{name}.items_per_s"] = n_items / seconds
         result[f"pipeline.{name}.bytes_per_s"] = traffic / seconds
         result[f"pipeline.{name}.fraction_of_copy_bandwidth"] = copy_seconds / seconds

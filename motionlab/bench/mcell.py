@@ -26,7 +26,9 @@ def run() -> dict:
     config.set_threads(1)
     settings = chapter_settings()
     codec = PoseCodec(np.stack([m.offsets() for m in BODY_MEASUREMENTS]), PARENTS)
-    codec.root.fit(torch.randn(100, 6))  # statistics only scale the root channels; they do not change the cost
+    codec.root.fit(
+        torch.randn(100, 6)
+    )  # statistics only scale the root channels; they do not change the cost
     model = build_model(settings.motion_cell, codec).eval()
     generator = torch.Generator().manual_seed(0)
 

@@ -1,15 +1,13 @@
-"""Metric timings: FID on two 2000 x 30 feature sets and APD on 50 sampled 4-second clips of the default skeleton."""
+"""Metric timings: FID on two 2000 x 30 feature sets and APD on 50 sampled 4-second clips of the default
+skeleton."""
 
 from __future__ import annotations
-
 
 import numpy as np
 
 from motionlab import config
 from motionlab.bench._timing import best_seconds
 from motionlab.metrics import apd, fid
-
-
 
 
 def run() -> dict:

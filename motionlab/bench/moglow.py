@@ -27,10 +27,14 @@ def run() -> dict:
     torch.manual_seed(0)
     model = MoGlow(moglow_config(0.5)).eval()
     history, frames = model.cfg.history, SECONDS * FPS
-    scalers = fit_scalers(MoGlowFeatures(torch.randn(16, 30, model.cfg.pose_dim), 0.03 * torch.randn(16, 30, 3)))
+    scalers = fit_scalers(
+        MoGlowFeatures(torch.randn(16, 30, model.cfg.pose_dim), 0.03 * torch.randn(16, 30, 3))
+    )
 
     def generate(batch_size: int) -> torch.Tensor:
-        seed = MoGlowFeatures(torch.randn(batch_size, history, model.cfg.pose_dim), torch.zeros(batch_size, history, 3))
+        seed = MoGlowFeatures(
+            torch.randn(batch_size, history, model.cfg.pose_dim), torch.zeros(batch_size, history, 3)
+        )
         control = torch.full((batch_size, frames, 3), 0.04)
         return generate_motion(model, scalers, control, seed, 1.0, torch.Generator().manual_seed(0)).positions
 

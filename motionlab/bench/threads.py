@@ -13,7 +13,7 @@ from __future__ import annotations
 import os
 import statistics
 import time
-from typing import Callable
+from collections.abc import Callable
 
 import torch
 from torch import Tensor, nn
@@ -45,8 +45,10 @@ class _Conv(nn.Module):
     def __init__(self) -> None:
         super().__init__()
         self.net = nn.Sequential(
-            nn.Conv1d(FEATURES, 128, 5, padding=2), nn.ReLU(),
-            nn.Conv1d(128, 128, 5, padding=2), nn.ReLU(),
+            nn.Conv1d(FEATURES, 128, 5, padding=2),
+            nn.ReLU(),
+            nn.Conv1d(128, 128, 5, padding=2),
+            nn.ReLU(),
             nn.Conv1d(128, FEATURES, 5, padding=2),
         )
 
@@ -59,8 +61,13 @@ def _models() -> dict[str, tuple[nn.Module, Tensor]]:
     gen = torch.Generator().manual_seed(0)
     clips = torch.randn(BATCH_CLIPS, FRAMES, FEATURES, generator=gen)
     mlp = nn.Sequential(
-        nn.Linear(FEATURES, 256), nn.ReLU(), nn.Linear(256, 256), nn.ReLU(),
-        nn.Linear(256, 256), nn.ReLU(), nn.Linear(256, FEATURES),
+        nn.Linear(FEATURES, 256),
+        nn.ReLU(),
+        nn.Linear(256, 256),
+        nn.ReLU(),
+        nn.Linear(256, 256),
+        nn.ReLU(),
+        nn.Linear(256, FEATURES),
     )
     return {
         "gru2x128": (_Recurrent(nn.GRU, 128, 2), clips),
@@ -109,4 +116,3 @@ def run() -> dict:
     result["load_average_after"] = os.getloadavg()[0]
     config.set_threads()
     return result
-

@@ -64,7 +64,9 @@ def _vae_loss(model: nn.Module, poses: Tensor, step: int, coeffs: dict[str, floa
     return {"loss": recon + coeffs["beta"] * kl, "recon": recon, "kl": kl}
 
 
-def _bare_seconds(model: nn.Module, loss_fn: Callable[..., dict[str, Tensor]], batch: Tensor, cfg: TrainConfig) -> float:
+def _bare_seconds(
+    model: nn.Module, loss_fn: Callable[..., dict[str, Tensor]], batch: Tensor, cfg: TrainConfig
+) -> float:
     """Seconds for ``STEPS`` plain AdamW steps with clipping on one fixed batch (no loop bookkeeping)."""
     optimiser = torch.optim.AdamW(model.parameters(), lr=cfg.lr)
     coeffs = {name: schedule(0) for name, schedule in cfg.schedules.items()}
@@ -77,7 +79,9 @@ def _bare_seconds(model: nn.Module, loss_fn: Callable[..., dict[str, Tensor]], b
     return time.perf_counter() - start
 
 
-def _measure(name: str, build: Callable[[], nn.Module], loss_fn: Any, samples: Tensor, cfg: TrainConfig) -> dict[str, float]:
+def _measure(
+    name: str, build: Callable[[], nn.Module], loss_fn: Any, samples: Tensor, cfg: TrainConfig
+) -> dict[str, float]:
     looped, bare = [], []
     for _ in range(REPEATS):
         model = build()
@@ -101,9 +105,20 @@ def run() -> dict:
     clips = torch.randn(4 * 64, 61, FEATURES, generator=gen)  # 60 input frames, 60 targets
     poses = torch.randn(4 * 256, FEATURES, generator=gen)
     result: dict[str, float] = {"threads": threads, "steps": STEPS}
-    result.update(_measure("gru2x128_b64_t60", _NextFrameGRU, _gru_loss, clips,
-                           TrainConfig(steps=STEPS, batch_size=64, checkpoint_every=None)))
-    vae_cfg = TrainConfig(steps=STEPS, batch_size=256, checkpoint_every=None,
-                          schedules={"beta": KLAnneal(max_value=1.0, warmup=5, anneal=10)})
+    result.update(
+        _measure(
+            "gru2x128_b64_t60",
+            _NextFrameGRU,
+            _gru_loss,
+            clips,
+            TrainConfig(steps=STEPS, batch_size=64, checkpoint_every=None),
+        )
+    )
+    vae_cfg = TrainConfig(
+        steps=STEPS,
+        batch_size=256,
+        checkpoint_every=None,
+        schedules={"beta": KLAnneal(max_value=1.0, warmup=5, anneal=10)},
+    )
     result.update(_measure("mlp_vae3x256_b256", _PoseVAE, _vae_loss, poses, vae_cfg))
     return result

@@ -1,4 +1,5 @@
-"""TrajeVAE speed: completing one 4-second window (batch 1, one thread) and 50 samples of a window in one batch.
+"""TrajeVAE speed: completing one 4-second window (batch 1, one thread) and 50 samples of a window in one
+batch.
 
 The weights do not change the cost, so the model is built from the chapter's full-profile configuration
 without training. A "window" is the chapter's 4 s at 15 fps (60 frames: the initial pose and 59 completed
@@ -31,5 +32,6 @@ def run() -> dict[str, float]:
 
     speed = generator_speed(complete, cfg.n_frames, FPS)
     speed["seconds_50_samples_one_window"] = median_seconds(
-        lambda: model.sample(windows[:1, 0], trajectories[:1], 50, generator=generator))
+        lambda: model.sample(windows[:1, 0], trajectories[:1], 50, generator=generator)
+    )
     return speed

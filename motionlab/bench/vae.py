@@ -1,4 +1,5 @@
-"""The chapter 03 CVAE's generation speed: prior code -> standardised 2-second window -> 30 fps joint positions.
+"""The chapter 03 CVAE's generation speed: prior code -> standardised 2-second window -> 30 fps joint
+positions.
 
 The network has the full profile's sizes (:func:`~motionlab.models.vae_experiments.clip_cvae_config`);
 weights are untrained and the standardiser is fitted on noise: the speed depends on neither.

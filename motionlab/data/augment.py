@@ -34,7 +34,8 @@ _SIDES = ("left_", "right_")
 
 
 def mirror_permutation(joint_names: Sequence[str]) -> Tensor:
-    """Indices ``(J,)`` that swap every ``left_<part>`` joint with ``right_<part>`` (others map to themselves).
+    """Indices ``(J,)`` that swap every ``left_<part>`` joint with ``right_<part>`` (others map to
+    themselves).
 
     Raises ``ValueError`` when a left or right joint has no partner.
     """
@@ -45,7 +46,7 @@ def mirror_permutation(joint_names: Sequence[str]) -> Tensor:
     for i, name in enumerate(joint_names):
         for side, other in (_SIDES, _SIDES[::-1]):
             if name.startswith(side):
-                partner = other + name[len(side):]
+                partner = other + name[len(side) :]
                 if partner not in index:
                     raise ValueError(f"mirror_permutation: joint {name!r} has no partner {partner!r}")
                 permutation[i] = index[partner]
@@ -58,9 +59,13 @@ DEFAULT_MIRROR = mirror_permutation(JOINT_NAMES)
 
 def _permutation(permutation: Tensor | None, n_joints: int, func: str) -> Tensor:
     permutation = DEFAULT_MIRROR if permutation is None else torch.as_tensor(permutation, dtype=torch.long)
-    if permutation.shape != (n_joints,) or not torch.equal(torch.sort(permutation).values, torch.arange(n_joints)):
-        raise ValueError(f"{func}: permutation must be a permutation of {n_joints} joint indices, "
-                         f"got {permutation.tolist()}")
+    if permutation.shape != (n_joints,) or not torch.equal(
+        torch.sort(permutation).values, torch.arange(n_joints)
+    ):
+        raise ValueError(
+            f"{func}: permutation must be a permutation of {n_joints} joint indices, "
+            f"got {permutation.tolist()}"
+        )
     return permutation
 
 
@@ -90,12 +95,19 @@ def _check_clips(positions: Tensor, rotations: Tensor, func: str) -> None:
     check_tensor(positions, "positions", func, (None, 3), min_leading=1)
     check_tensor(rotations, "rotations", func, (None, 4), min_leading=1)
     if positions.shape[:-1] != rotations.shape[:-1]:
-        raise ValueError(f"{func}: positions (..., T, J, 3) and rotations (..., T, J, 4) must share (..., T, J), "
-                         f"got {tuple(positions.shape)} and {tuple(rotations.shape)}")
+        raise ValueError(
+            f"{func}: positions (..., T, J, 3) and rotations (..., T, J, 4) must share (..., T, J), "
+            f"got {tuple(positions.shape)} and {tuple(rotations.shape)}"
+        )
 
 
-def random_mirror(positions: Tensor, rotations: Tensor, generator: torch.Generator, p: float = 0.5,
-                  permutation: Tensor | None = None) -> tuple[Tensor, Tensor]:
+def random_mirror(
+    positions: Tensor,
+    rotations: Tensor,
+    generator: torch.Generator,
+    p: float = 0.5,
+    permutation: Tensor | None = None,
+) -> tuple[Tensor, Tensor]:
     """Mirror each clip with probability ``p``; returns new ``(positions, rotations)``.
 
     Args:
@@ -123,11 +135,14 @@ def rotate_yaw(positions: Tensor, rotations: Tensor, angle: Tensor) -> tuple[Ten
             ``yaw_to_quat(angle) ⊗ q_root``.
     """
     _check_clips(positions, rotations, "rotate_yaw")
-    angle = check_tensor(torch.as_tensor(angle, dtype=positions.dtype, device=positions.device), "angle",
-                         "rotate_yaw", ())
+    angle = check_tensor(
+        torch.as_tensor(angle, dtype=positions.dtype, device=positions.device), "angle", "rotate_yaw", ()
+    )
     if angle.shape != positions.shape[:-3]:
-        raise ValueError(f"rotate_yaw: angle must have the clips' leading shape {tuple(positions.shape[:-3])}, "
-                         f"got {tuple(angle.shape)}")
+        raise ValueError(
+            f"rotate_yaw: angle must have the clips' leading shape {tuple(positions.shape[:-3])}, "
+            f"got {tuple(angle.shape)}"
+        )
     turned_xy = rotate_xy(positions[..., :2], angle[..., None, None])
     turned_positions = torch.cat([turned_xy, positions[..., 2:]], dim=-1)
     root = rotations[..., 0, :]
@@ -143,5 +158,7 @@ def random_yaw(positions: Tensor, rotations: Tensor, generator: torch.Generator)
     ``(2 u - 1) pi``.
     """
     _check_clips(positions, rotations, "random_yaw")
-    angle = (2.0 * torch.rand(positions.shape[:-3], generator=generator, dtype=positions.dtype) - 1.0) * math.pi
+    angle = (
+        2.0 * torch.rand(positions.shape[:-3], generator=generator, dtype=positions.dtype) - 1.0
+    ) * math.pi
     return rotate_yaw(positions, rotations, angle.to(positions.device))

@@ -53,8 +53,12 @@ class BodyBatch:
 
         zero = np.zeros(len(table))
         return cls(
-            body=np.asarray(body), offsets=np.stack([m.offsets() for m in table]), thigh=column("thigh"),
-            shank=column("shank"), hip_width=column("hip_width"), ankle_height=column("ankle_height"),
+            body=np.asarray(body),
+            offsets=np.stack([m.offsets() for m in table]),
+            thigh=column("thigh"),
+            shank=column("shank"),
+            hip_width=column("hip_width"),
+            ankle_height=column("ankle_height"),
             root_height=column("root_height"),
             ball=np.stack([column("foot_length"), zero, -column("foot_drop")], axis=-1),
             heel=np.stack([-column("heel_back"), zero, -column("ankle_height")], axis=-1),
@@ -90,15 +94,20 @@ class Drive:
         eye = np.broadcast_to(np.eye(3), (n_clips, n_frames, len(PARENTS), 3, 3)).copy()
         feet_eye = np.broadcast_to(np.eye(3), (n_clips, n_frames, 2, 3, 3)).copy()
         return cls(
-            root_position=np.zeros((n_clips, n_frames, 3)), root_rotation=eye[:, :, 0].copy(), local=eye,
-            ankle=np.zeros((n_clips, n_frames, 2, 3)), foot_rotation=feet_eye,
-            knee_forward=np.zeros((n_clips, n_frames, 2, 3)), support=np.zeros((n_clips, n_frames, 2), bool),
+            root_position=np.zeros((n_clips, n_frames, 3)),
+            root_rotation=eye[:, :, 0].copy(),
+            local=eye,
+            ankle=np.zeros((n_clips, n_frames, 2, 3)),
+            foot_rotation=feet_eye,
+            knee_forward=np.zeros((n_clips, n_frames, 2, 3)),
+            support=np.zeros((n_clips, n_frames, 2), bool),
             contacts=np.zeros((n_clips, n_frames, 4), bool),
         )
 
 
-def foot_pose(ankle_flat: np.ndarray, yaw: np.ndarray, pitch: np.ndarray, ball: np.ndarray,
-              heel: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def foot_pose(
+    ankle_flat: np.ndarray, yaw: np.ndarray, pitch: np.ndarray, ball: np.ndarray, heel: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
     """Ankle position and foot rotation of a foot that rolls on the floor from a flat footprint.
 
     Args:
@@ -115,9 +124,11 @@ def foot_pose(ankle_flat: np.ndarray, yaw: np.ndarray, pitch: np.ndarray, ball: 
     return ankle, rotation
 
 
-def root_height_limit(root_xy: np.ndarray, root_rotation: np.ndarray, ankle: np.ndarray,
-                      bodies: BodyBatch) -> np.ndarray:
-    """Highest pelvis height ``(B, T, 2)`` at which each leg reaches its ankle target exactly (:data:`rig.LEG_REACH`).
+def root_height_limit(
+    root_xy: np.ndarray, root_rotation: np.ndarray, ankle: np.ndarray, bodies: BodyBatch
+) -> np.ndarray:
+    """Highest pelvis height ``(B, T, 2)`` at which each leg reaches its ankle target exactly
+    (:data:`rig.LEG_REACH`).
 
     Args:
         root_xy: ``(B, T, 2)``; root_rotation: ``(B, T, 3, 3)``; ankle: ``(B, T, 2, 3)`` targets.
@@ -156,8 +167,13 @@ def pose(drive: Drive, bodies: BodyBatch, fps: int) -> tuple[np.ndarray, np.ndar
     local[:, :, 0] = drive.root_rotation
     for side in range(2):
         hip = root + rig.apply(drive.root_rotation, bodies.offsets[:, None, _HIPS[side], :])
-        thigh, knee = rig.leg_ik(hip, drive.ankle[:, :, side], bodies.thigh[:, None], bodies.shank[:, None],
-                                 drive.knee_forward[:, :, side])
+        thigh, knee = rig.leg_ik(
+            hip,
+            drive.ankle[:, :, side],
+            bodies.thigh[:, None],
+            bodies.shank[:, None],
+            drive.knee_forward[:, :, side],
+        )
         knee_rotation = rig.pitch_matrix(knee)
         local[:, :, _HIPS[side]] = rig.matmul(rig.transpose(drive.root_rotation), thigh)
         local[:, :, _KNEES[side]] = knee_rotation
@@ -169,7 +185,8 @@ def pose(drive: Drive, bodies: BodyBatch, fps: int) -> tuple[np.ndarray, np.ndar
 
 
 def on_heading(origin: np.ndarray, heading: np.ndarray, forward: np.ndarray, left: np.ndarray) -> np.ndarray:
-    """Points ``(..., 2)`` at ``forward`` metres along ``heading`` and ``left`` metres to its left of ``origin``.
+    """Points ``(..., 2)`` at ``forward`` metres along ``heading`` and ``left`` metres to its left of
+    ``origin``.
 
     ``origin`` is ``(..., 2)``; the other arguments broadcast against ``origin[..., 0]``.
     """
@@ -179,8 +196,9 @@ def on_heading(origin: np.ndarray, heading: np.ndarray, forward: np.ndarray, lef
     return np.stack(np.broadcast_arrays(x, y), axis=-1)
 
 
-def footprints(centre: np.ndarray, heading: np.ndarray, half_width: np.ndarray, toe_out: np.ndarray,
-               bodies: BodyBatch) -> tuple[np.ndarray, np.ndarray]:
+def footprints(
+    centre: np.ndarray, heading: np.ndarray, half_width: np.ndarray, toe_out: np.ndarray, bodies: BodyBatch
+) -> tuple[np.ndarray, np.ndarray]:
     """Flat-foot ankle positions ``(B, 2, 3)`` and foot yaws ``(B, 2)`` (left, right) of a standing stance.
 
     Args:

@@ -149,7 +149,7 @@ class _TokenReader:
 
     def rest_of_line(self) -> list[str]:
         """The remaining tokens on the current line (the reader then moves past them)."""
-        rest = self.tokens[self.position:]
+        rest = self.tokens[self.position :]
         self.position = len(self.tokens)
         return rest
 
@@ -170,8 +170,11 @@ def _read_channels(reader: _TokenReader) -> tuple[str, ...]:
     line = reader.line_index + 1
     count_token = reader.next("a channel count")
     if not _COUNT_RE.fullmatch(count_token) or len(count_token) > 2 or int(count_token) > len(CHANNEL_NAMES):
-        raise reader.error(f"CHANNELS count must be an integer from 0 to {len(CHANNEL_NAMES)}, "
-                           f"found {_shorten(count_token)}", line)
+        raise reader.error(
+            f"CHANNELS count must be an integer from 0 to {len(CHANNEL_NAMES)}, "
+            f"found {_shorten(count_token)}",
+            line,
+        )
     names = []
     for k in range(int(count_token)):
         token = reader.next(f"channel {k + 1} of {count_token}")
@@ -245,8 +248,10 @@ def _parse_hierarchy(reader: _TokenReader) -> _Hierarchy:
                 if not stack:
                     return tree
             else:
-                raise reader.error(f"expected JOINT, End Site or '}}' inside joint "
-                                   f"{tree.names[stack[-1]]!r}, found {_shorten(token)}")
+                raise reader.error(
+                    f"expected JOINT, End Site or '}}' inside joint "
+                    f"{tree.names[stack[-1]]!r}, found {_shorten(token)}"
+                )
 
 
 def _parse_frame_time(token: str, line: int, source: str) -> float:
@@ -270,7 +275,9 @@ def _parse_frame_time(token: str, line: int, source: str) -> float:
     return fps
 
 
-def _header_line(lines: list[str], index: int, pattern: re.Pattern[str], what: str, source: str) -> tuple[int, str]:
+def _header_line(
+    lines: list[str], index: int, pattern: re.Pattern[str], what: str, source: str
+) -> tuple[int, str]:
     """Skip blank lines from ``index``; the next line must match ``pattern``. Returns (line index, value)."""
     while index < len(lines) and not lines[index].strip():
         index += 1
@@ -278,7 +285,9 @@ def _header_line(lines: list[str], index: int, pattern: re.Pattern[str], what: s
         raise _end_of_file(lines, f"the {what!r} line", source)
     match = pattern.fullmatch(lines[index].strip())
     if match is None:
-        raise BVHError(f"expected the {what!r} line, found {_shorten(lines[index].strip())}", index + 1, source)
+        raise BVHError(
+            f"expected the {what!r} line, found {_shorten(lines[index].strip())}", index + 1, source
+        )
     return index, match.group(1)
 
 
@@ -286,38 +295,55 @@ def _parse_motion(lines: list[str], start: int, num_channels: int, source: str) 
     """Parse from the line after ``MOTION``: ``(values (T, C), fps)``."""
     frames_index, frames_token = _header_line(lines, start, _FRAMES_RE, "Frames:", source)
     if not _COUNT_RE.fullmatch(frames_token) or not frames_token.strip("0"):
-        raise BVHError(f"Frames must be a positive integer, found {_shorten(frames_token)}", frames_index + 1, source)
+        raise BVHError(
+            f"Frames must be a positive integer, found {_shorten(frames_token)}", frames_index + 1, source
+        )
     if len(frames_token.lstrip("0")) > 18:
-        raise BVHError(f"Frames count {_shorten(frames_token)} is implausibly large", frames_index + 1, source)
+        raise BVHError(
+            f"Frames count {_shorten(frames_token)} is implausibly large", frames_index + 1, source
+        )
     num_frames = int(frames_token)
     time_index, time_token = _header_line(lines, frames_index + 1, _FRAME_TIME_RE, "Frame Time:", source)
     fps = _parse_frame_time(time_token, time_index + 1, source)
 
     frame_lines = [i for i in range(time_index + 1, len(lines)) if lines[i].strip()]
     if len(frame_lines) < num_frames:
-        raise BVHError(f"truncated motion: 'Frames: {num_frames}' but only {len(frame_lines)} frame lines follow",
-                       frames_index + 1, source)
+        raise BVHError(
+            f"truncated motion: 'Frames: {num_frames}' but only {len(frame_lines)} frame lines follow",
+            frames_index + 1,
+            source,
+        )
     if len(frame_lines) > num_frames:
-        raise BVHError(f"more frame lines than 'Frames: {num_frames}' declares (frame {num_frames + 1} "
-                       "starts here)", frame_lines[num_frames] + 1, source)
+        raise BVHError(
+            f"more frame lines than 'Frames: {num_frames}' declares (frame {num_frames + 1} starts here)",
+            frame_lines[num_frames] + 1,
+            source,
+        )
     if num_channels == 0:
-        raise BVHError("the hierarchy declares no channels, but frame lines follow", frame_lines[0] + 1, source)
+        raise BVHError(
+            "the hierarchy declares no channels, but frame lines follow", frame_lines[0] + 1, source
+        )
 
     values = np.empty((num_frames, num_channels), dtype=np.float64)
     for frame, i in enumerate(frame_lines):
         tokens = lines[i].split()
         if len(tokens) != num_channels:
-            raise BVHError(f"frame {frame + 1} has {len(tokens)} values, the hierarchy declares {num_channels} "
-                           "channels", i + 1, source)
+            raise BVHError(
+                f"frame {frame + 1} has {len(tokens)} values, the hierarchy declares {num_channels} channels",
+                i + 1,
+                source,
+            )
         if not all(map(_NUMBER_RE.fullmatch, tokens)):
             bad = next(k for k, t in enumerate(tokens) if not _NUMBER_RE.fullmatch(t))
-            raise BVHError(f"frame {frame + 1}, value {bad + 1} is not a number: {_shorten(tokens[bad])}",
-                           i + 1, source)
+            raise BVHError(
+                f"frame {frame + 1}, value {bad + 1} is not a number: {_shorten(tokens[bad])}", i + 1, source
+            )
         values[frame] = [float(t) for t in tokens]
         if not np.isfinite(values[frame]).all():
             bad = int(np.flatnonzero(~np.isfinite(values[frame]))[0])
-            raise BVHError(f"frame {frame + 1}, value {bad + 1} is out of range: {_shorten(tokens[bad])}",
-                           i + 1, source)
+            raise BVHError(
+                f"frame {frame + 1}, value {bad + 1} is out of range: {_shorten(tokens[bad])}", i + 1, source
+            )
     return values, fps
 
 
@@ -426,7 +452,8 @@ def _default_channels(motion: Motion, rotation_order: str) -> tuple[tuple[str, .
     rotation = tuple(f"{axis}rotation" for axis in rotation_order)
     moving = POSITION_CHANNELS + rotation
     return tuple(
-        moving if j == 0 or motion.joint_translations is not None else rotation for j in range(motion.num_joints)
+        moving if j == 0 or motion.joint_translations is not None else rotation
+        for j in range(motion.num_joints)
     )
 
 
@@ -485,15 +512,22 @@ def _joint_columns(
     ``offset`` ``(3,)`` and ``rotation`` ``(T, 4)``; rotations in degrees."""
     tolerance = 1e-6 * max(1.0, float(np.abs(translation).max()))
     for axis in range(3):
-        if POSITION_CHANNELS[axis] not in channels and np.abs(translation[:, axis] - offset[axis]).max() > tolerance:
-            raise ValueError(f"save_bvh: joint {name!r} moves along file axis {'XYZ'[axis]} but its channels "
-                             f"{channels} have no {POSITION_CHANNELS[axis]}")
+        if (
+            POSITION_CHANNELS[axis] not in channels
+            and np.abs(translation[:, axis] - offset[axis]).max() > tolerance
+        ):
+            raise ValueError(
+                f"save_bvh: joint {name!r} moves along file axis {'XYZ'[axis]} but its channels "
+                f"{channels} have no {POSITION_CHANNELS[axis]}"
+            )
     rotation_axes = "".join(c[0] for c in channels if c in ROTATION_CHANNELS)
     order = _euler_order(rotation_axes)
     angles = np.rad2deg(quat_to_euler(rotation, order).numpy())  # (T, 3), one column per letter of order
     unused = [k for k, axis in enumerate(order) if axis not in rotation_axes]
     if unused and np.abs(angles[:, unused]).max() > 1e-4:
-        raise ValueError(f"save_bvh: joint {name!r} rotates about axes its channels {channels} cannot express")
+        raise ValueError(
+            f"save_bvh: joint {name!r} rotates about axes its channels {channels} cannot express"
+        )
     angles = np.unwrap(angles, period=360.0, axis=0)  # continuous curves for animation tools
 
     return [

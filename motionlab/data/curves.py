@@ -23,7 +23,8 @@ def smooth_noise(t: np.ndarray, frequencies: np.ndarray, phases: np.ndarray) -> 
 
 
 def ease(s: np.ndarray) -> np.ndarray:
-    """Minimum-jerk transition from 0 to 1 over ``s`` in ``[0, 1]`` (clamped outside), zero slope at both ends."""
+    """Minimum-jerk transition from 0 to 1 over ``s`` in ``[0, 1]`` (clamped outside), zero slope at both
+    ends."""
     s = np.clip(s, 0.0, 1.0)
     return s**3 * (10 - 15 * s + 6 * s**2)
 
@@ -44,7 +45,8 @@ def hermite(p0: np.ndarray, m0: np.ndarray, p1: np.ndarray, m1: np.ndarray, s: n
 
 
 def _segment(knots: np.ndarray, query: np.ndarray) -> np.ndarray:
-    """Index ``(B, M)`` of the knot interval ``[knots[i], knots[i+1])`` holding each query, clamped to the ends."""
+    """Index ``(B, M)`` of the knot interval ``[knots[i], knots[i+1])`` holding each query, clamped to the
+    ends."""
     index = np.sum(knots[:, None, :] <= query[:, :, None], axis=-1) - 1
     return np.clip(index, 0, knots.shape[1] - 2)
 
@@ -85,8 +87,13 @@ def hermite_keys(times: np.ndarray, values: np.ndarray, slopes: np.ndarray, t: n
     t0, t1 = gather_rows(times, index), gather_rows(times, index + 1)
     s = np.clip((query - t0) / (t1 - t0), 0.0, 1.0)[..., None]
     span = (t1 - t0)[..., None]
-    out = hermite(gather_rows(v, index), gather_rows(m, index) * span, gather_rows(v, index + 1),
-                  gather_rows(m, index + 1) * span, s)
+    out = hermite(
+        gather_rows(v, index),
+        gather_rows(m, index) * span,
+        gather_rows(v, index + 1),
+        gather_rows(m, index + 1) * span,
+        s,
+    )
     return out[..., 0] if scalar else out
 
 
@@ -110,8 +117,11 @@ def keyframes(times: np.ndarray, values: np.ndarray, t: np.ndarray) -> np.ndarra
     return hermite_keys(times, values, slopes.reshape(values.shape), t)
 
 
-def place_event(durations: np.ndarray, n_frames: int, fps: int, where: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Start time ``(B,)`` and time scale ``(B,)`` of one event lasting ``durations`` ``(B,)`` seconds per clip.
+def place_event(
+    durations: np.ndarray, n_frames: int, fps: int, where: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
+    """Start time ``(B,)`` and time scale ``(B,)`` of one event lasting ``durations`` ``(B,)`` seconds per
+    clip.
 
     The clip keeps ``min(0.25 s, 15%)`` of rest at each end. An event longer than the time in between is
     played faster (scale < 1) so that it fits; otherwise it starts at fraction ``where`` ``(B,)`` in

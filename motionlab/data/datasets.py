@@ -5,9 +5,9 @@ The pieces, in the order a chapter uses them (or all at once through :func:`buil
 1. :func:`split_clips` divides the *clips* (not the windows, so overlapping windows of one clip never
    land in two splits) into train / val / test, stratified by motion mode and seeded.
 2. :func:`motion_windows` cuts windows of ``length`` frames every ``stride`` frames from the chosen
-   clips, encodes each window as a clip of its own in a :class:`~motionlab.data.representations.Representation`
-   (so ODMO's and TrajeVAE's "first frame at the origin" is the window's first frame) and returns a
-   :class:`WindowDataset`.
+   clips, encodes each window as a clip of its own in a
+   :class:`~motionlab.data.representations.Representation` (so ODMO's and TrajeVAE's "first frame at the
+   origin" is the window's first frame) and returns a :class:`WindowDataset`.
 3. :class:`Standardizer` learns per-channel mean and std on the train windows only.
 
 Clips come in the generator's format (:class:`MotionClips`): ``positions (N, T, J, 3)``,
@@ -54,8 +54,10 @@ def _labels(values: np.ndarray | Tensor, name: str, func: str, length: int | Non
     """``values`` as a 1-D int64 tensor (of ``length`` items if given)."""
     labels = torch.as_tensor(values)
     if labels.dim() != 1 or labels.is_floating_point() or labels.is_complex() or labels.dtype == torch.bool:
-        raise ValueError(f"{func}: {name} must be a 1-D integer array (N,), got {labels.dtype} of shape "
-                         f"{tuple(labels.shape)}")
+        raise ValueError(
+            f"{func}: {name} must be a 1-D integer array (N,), got {labels.dtype} of shape "
+            f"{tuple(labels.shape)}"
+        )
     if length is not None and labels.shape[0] != length:
         raise ValueError(f"{func}: {name} has {labels.shape[0]} entries but there are {length} items")
     return labels.to(torch.int64)
@@ -78,8 +80,9 @@ def window_starts(n_frames: int, length: int, stride: int) -> Tensor:
     left out. Raises ``ValueError`` when a window is longer than the clip.
     """
     func = "window_starts"
-    n_frames, length, stride = (_count(v, n, func) for v, n in
-                                ((n_frames, "n_frames"), (length, "length"), (stride, "stride")))
+    n_frames, length, stride = (
+        _count(v, n, func) for v, n in ((n_frames, "n_frames"), (length, "length"), (stride, "stride"))
+    )
     if length > n_frames:
         raise ValueError(f"{func}: window length {length} is longer than the clips ({n_frames} frames)")
     return torch.arange(0, n_frames - length + 1, stride)
@@ -109,19 +112,32 @@ class WindowDataset(Dataset):
         clip, start, action, mode, body: ``(W,)`` int64; representation: what the features are in.
     """
 
-    def __init__(self, features: Tensor, representation: Representation, *, root_start: RootStart, clip: Tensor,
-                 start: Tensor, action: Tensor, mode: Tensor, body: Tensor) -> None:
+    def __init__(
+        self,
+        features: Tensor,
+        representation: Representation,
+        *,
+        root_start: RootStart,
+        clip: Tensor,
+        start: Tensor,
+        action: Tensor,
+        mode: Tensor,
+        body: Tensor,
+    ) -> None:
         func = "WindowDataset"
         check_tensor(features, "features", func, (None, representation.dim), min_leading=1)
         if features.dim() != 3:
-            raise ValueError(f"{func}: features must have shape (W, L, {representation.dim}), "
-                             f"got {tuple(features.shape)}")
+            raise ValueError(
+                f"{func}: features must have shape (W, L, {representation.dim}), got {tuple(features.shape)}"
+            )
         n_windows = features.shape[0]
         position = check_tensor(root_start.position, "root_start.position", func, (3,))
         yaw = check_tensor(root_start.yaw, "root_start.yaw", func, ())
         if position.shape != (n_windows, 3) or yaw.shape != (n_windows,):
-            raise ValueError(f"{func}: root_start must hold ({n_windows}, 3) positions and ({n_windows},) yaws, got "
-                             f"{tuple(position.shape)} and {tuple(yaw.shape)}")
+            raise ValueError(
+                f"{func}: root_start must hold ({n_windows}, 3) positions and ({n_windows},) yaws, got "
+                f"{tuple(position.shape)} and {tuple(yaw.shape)}"
+            )
         self.features = features
         self.representation = representation
         self.root_start = RootStart(position, yaw)
@@ -135,20 +151,43 @@ class WindowDataset(Dataset):
         return self.features.shape[0]
 
     def __getitem__(self, index: int) -> dict[str, Tensor]:
-        return {"features": self.features[index], "action": self.action[index], "mode": self.mode[index],
-                "body": self.body[index], "clip": self.clip[index], "start": self.start[index],
-                "root_position": self.root_start.position[index], "root_yaw": self.root_start.yaw[index]}
+        return {
+            "features": self.features[index],
+            "action": self.action[index],
+            "mode": self.mode[index],
+            "body": self.body[index],
+            "clip": self.clip[index],
+            "start": self.start[index],
+            "root_position": self.root_start.position[index],
+            "root_yaw": self.root_start.yaw[index],
+        }
 
     def with_features(self, features: Tensor) -> WindowDataset:
-        """The same windows and labels with other ``features`` ``(W, L, D)`` (for example standardised ones)."""
-        return WindowDataset(features, self.representation, root_start=self.root_start, clip=self.clip,
-                             start=self.start, action=self.action, mode=self.mode, body=self.body)
+        """The same windows and labels with other ``features`` ``(W, L, D)`` (for example standardised
+        ones)."""
+        return WindowDataset(
+            features,
+            self.representation,
+            root_start=self.root_start,
+            clip=self.clip,
+            start=self.start,
+            action=self.action,
+            mode=self.mode,
+            body=self.body,
+        )
 
 
-def motion_windows(clips: MotionClips, representation: Representation, length: int, stride: int,
-                   clip_indices: Sequence[int] | Tensor | None = None, standardizer: Standardizer | None = None,
-                   augment: Augment | None = None) -> WindowDataset:
-    """A :class:`WindowDataset` of the windows of ``clip_indices`` (default: every clip) in ``representation``.
+def motion_windows(
+    clips: MotionClips,
+    representation: Representation,
+    length: int,
+    stride: int,
+    clip_indices: Sequence[int] | Tensor | None = None,
+    standardizer: Standardizer | None = None,
+    augment: Augment | None = None,
+) -> WindowDataset:
+    """A :class:`WindowDataset` of the windows of ``clip_indices`` (default: every clip) in
+    ``representation``.
 
     Windows are ordered clip by clip (in the order of ``clip_indices``), then by start frame. Each window is
     encoded as a clip of its own. ``augment`` (optional) changes the raw windows before encoding;
@@ -158,20 +197,25 @@ def motion_windows(clips: MotionClips, representation: Representation, length: i
     positions = check_tensor(torch.as_tensor(clips.positions), "clips.positions", func, (None, 3))
     rotations = check_tensor(torch.as_tensor(clips.rotations), "clips.rotations", func, (None, 4))
     if positions.dim() != 4 or positions.shape[:-1] != rotations.shape[:-1]:
-        raise ValueError(f"{func}: clips need positions (N, T, J, 3) and rotations (N, T, J, 4) with the same "
-                         f"N, T, J; got {tuple(positions.shape)} and {tuple(rotations.shape)}")
+        raise ValueError(
+            f"{func}: clips need positions (N, T, J, 3) and rotations (N, T, J, 4) with the same "
+            f"N, T, J; got {tuple(positions.shape)} and {tuple(rotations.shape)}"
+        )
     n_clips, n_frames, n_joints = positions.shape[:3]
     if n_joints != representation.n_joints:
-        raise ValueError(f"{func}: clips have {n_joints} joints but the {representation.name} representation "
-                         f"expects {representation.n_joints}")
+        raise ValueError(
+            f"{func}: clips have {n_joints} joints but the {representation.name} representation "
+            f"expects {representation.n_joints}"
+        )
     labels = {name: _labels(getattr(clips, name), f"clips.{name}", func, n_clips) for name in LABELS}
     chosen = torch.arange(n_clips) if clip_indices is None else torch.as_tensor(clip_indices)
     if chosen.numel() == 0:
         raise ValueError(f"{func}: clip_indices is empty; there are no clips to cut windows from")
     chosen = _labels(chosen, "clip_indices", func)
     if int(chosen.min()) < 0 or int(chosen.max()) >= n_clips:
-        raise ValueError(f"{func}: clip_indices must lie in [0, {n_clips}), "
-                         f"got {int(chosen.min())}..{int(chosen.max())}")
+        raise ValueError(
+            f"{func}: clip_indices must lie in [0, {n_clips}), got {int(chosen.min())}..{int(chosen.max())}"
+        )
     starts = window_starts(n_frames, length, stride)
     clip = chosen.repeat_interleave(starts.numel())
     start = starts.repeat(chosen.numel())
@@ -186,8 +230,14 @@ def motion_windows(clips: MotionClips, representation: Representation, length: i
         world.position[chunk], world.yaw[chunk] = root_start(window_positions, window_rotations)
     if standardizer is not None:
         encoded = standardizer.transform(encoded)
-    return WindowDataset(encoded, representation, root_start=world, clip=clip, start=start,
-                         **{name: labels[name][clip] for name in LABELS})
+    return WindowDataset(
+        encoded,
+        representation,
+        root_start=world,
+        clip=clip,
+        start=start,
+        **{name: labels[name][clip] for name in LABELS},
+    )
 
 
 # ----------------------------------------------------------------------------------------------------
@@ -202,8 +252,9 @@ class ClipSplit(NamedTuple):
     test: Tensor
 
 
-def split_clips(mode: np.ndarray | Tensor, fractions: tuple[float, float, float] = (0.8, 0.1, 0.1),
-                seed: int = 0) -> ClipSplit:
+def split_clips(
+    mode: np.ndarray | Tensor, fractions: tuple[float, float, float] = (0.8, 0.1, 0.1), seed: int = 0
+) -> ClipSplit:
     """Split clips into train / val / test, stratified by ``mode`` ``(N,)`` and seeded.
 
     With ``torch.Generator().manual_seed(seed)`` the modes are put in a random order and the clips of
@@ -215,10 +266,15 @@ def split_clips(mode: np.ndarray | Tensor, fractions: tuple[float, float, float]
     """
     func = "split_clips"
     mode = _labels(mode, "mode", func)
-    if len(fractions) != 3 or any(not math.isfinite(f) or f <= 0 for f in fractions) \
-            or not math.isclose(sum(fractions), 1.0, abs_tol=1e-9):
-        raise ValueError(f"{func}: fractions must be three positive numbers (train, val, test) summing to 1, "
-                         f"got {tuple(fractions)}")
+    if (
+        len(fractions) != 3
+        or any(not math.isfinite(f) or f <= 0 for f in fractions)
+        or not math.isclose(sum(fractions), 1.0, abs_tol=1e-9)
+    ):
+        raise ValueError(
+            f"{func}: fractions must be three positive numbers (train, val, test) summing to 1, "
+            f"got {tuple(fractions)}"
+        )
     if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0:
         raise ValueError(f"{func}: seed must be a non-negative integer, got {seed!r}")
     generator = torch.Generator().manual_seed(int(seed))
@@ -237,8 +293,10 @@ def split_clips(mode: np.ndarray | Tensor, fractions: tuple[float, float, float]
     split = {name: torch.nonzero(assigned == s).flatten() for s, name in enumerate(ClipSplit._fields)}
     for name, indices in split.items():
         if indices.numel() == 0:
-            raise ValueError(f"{func}: the {name} split is empty ({mode.numel()} clips with fractions "
-                             f"{tuple(fractions)}); use more clips or a larger {name} fraction")
+            raise ValueError(
+                f"{func}: the {name} split is empty ({mode.numel()} clips with fractions "
+                f"{tuple(fractions)}); use more clips or a larger {name} fraction"
+            )
     return ClipSplit(**split)
 
 
@@ -280,7 +338,8 @@ class Standardizer(nn.Module):
         return check_tensor(x, name, f"Standardizer.{func}", (self.n_features,))
 
     def fit(self, features: Tensor) -> Standardizer:
-        """Set mean and std ``(D,)`` from ``features`` ``(..., D)`` (all leading entries pooled); returns self.
+        """Set mean and std ``(D,)`` from ``features`` ``(..., D)`` (all leading entries pooled); returns
+        self.
 
         The std is the population std (divide by the count), floored at ``min_std``; statistics are
         computed in float64.
@@ -295,7 +354,9 @@ class Standardizer(nn.Module):
 
     def _statistics(self, func: str) -> tuple[Tensor, Tensor]:
         if not self.fitted:
-            raise RuntimeError(f"Standardizer.{func}: not fitted; call fit(train_features) or load a state_dict first")
+            raise RuntimeError(
+                f"Standardizer.{func}: not fitted; call fit(train_features) or load a state_dict first"
+            )
         return self.mean, self.std
 
     def transform(self, features: Tensor) -> Tensor:
@@ -312,7 +373,8 @@ class Standardizer(nn.Module):
 
 
 class SplitData(NamedTuple):
-    """Everything :func:`build_splits` makes: three standardised window data sets, the standardiser, the split."""
+    """Everything :func:`build_splits` makes: three standardised window data sets, the standardiser, the
+    split."""
 
     train: WindowDataset
     val: WindowDataset
@@ -321,10 +383,18 @@ class SplitData(NamedTuple):
     split: ClipSplit
 
 
-def build_splits(clips: MotionClips, representation: Representation, length: int, stride: int, seed: int = 0,
-                 fractions: tuple[float, float, float] = (0.8, 0.1, 0.1), min_std: float = 1e-4,
-                 augment: Augment | None = None) -> SplitData:
-    """Split ``clips`` by mode (:func:`split_clips`), cut and encode windows, standardise with train statistics.
+def build_splits(
+    clips: MotionClips,
+    representation: Representation,
+    length: int,
+    stride: int,
+    seed: int = 0,
+    fractions: tuple[float, float, float] = (0.8, 0.1, 0.1),
+    min_std: float = 1e-4,
+    augment: Augment | None = None,
+) -> SplitData:
+    """Split ``clips`` by mode (:func:`split_clips`), cut and encode windows, standardise with train
+    statistics.
 
     ``augment`` applies to the train windows only. All three data sets hold standardised features;
     ``standardizer.inverse`` gives back the representation's units.
@@ -333,6 +403,8 @@ def build_splits(clips: MotionClips, representation: Representation, length: int
     raw = motion_windows(clips, representation, length, stride, split.train, augment=augment)
     standardizer = Standardizer(representation.dim, min_std).fit(raw.features)
     train = raw.with_features(standardizer.transform(raw.features))
-    val, test = (motion_windows(clips, representation, length, stride, indices, standardizer)
-                 for indices in (split.val, split.test))
+    val, test = (
+        motion_windows(clips, representation, length, stride, indices, standardizer)
+        for indices in (split.val, split.test)
+    )
     return SplitData(train, val, test, standardizer, split)

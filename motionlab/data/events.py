@@ -85,9 +85,14 @@ class _JumpPelvis:
     trunk: np.ndarray  # (B, 6) trunk pitch, shared 45 / 55 by pelvis and spine
 
     def at(self, times: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """Horizontal position ``(B, M, 2)`` and rotation ``(B, M, 3, 3)`` at ``times`` ``(M,)`` or ``(B, M)``."""
-        xy = on_heading(self.centre[:, None], self.heading[:, None], keyframes(self.keys, self.forward, times),
-                        keyframes(self.keys, self.sideways, times))
+        """Horizontal position ``(B, M, 2)`` and rotation ``(B, M, 3, 3)`` at ``times`` ``(M,)`` or ``(B,
+        M)``."""
+        xy = on_heading(
+            self.centre[:, None],
+            self.heading[:, None],
+            keyframes(self.keys, self.forward, times),
+            keyframes(self.keys, self.sideways, times),
+        )
         pitch = 0.45 * keyframes(self.keys, self.trunk, times)
         return xy, rig.euler_matrix(0 * pitch, pitch, keyframes(self.keys, self.yaw, times))
 
@@ -106,22 +111,37 @@ def jump(draws: Draws, bodies: BodyBatch, n_frames: int, fps: int) -> Drive:
 
     # timing: a sped-up event (short clips) is a shorter, equally high jump under a stronger gravity
     flight_time = 2 * np.sqrt(2 * p["rise"] / GRAVITY)
-    start, scale = place_event(p["prep"] + p["push"] + flight_time + p["absorb"] + p["recover"], n_frames, fps, where)
+    start, scale = place_event(
+        p["prep"] + p["push"] + flight_time + p["absorb"] + p["recover"], n_frames, fps, where
+    )
     keys = start[:, None] + scale[:, None] * np.cumsum(
-        np.stack([zero, p["prep"], p["push"], flight_time, p["absorb"], p["recover"]], axis=1), axis=1)
+        np.stack([zero, p["prep"], p["push"], flight_time, p["absorb"], p["recover"]], axis=1), axis=1
+    )
     _, t_bottom, t_off, t_land, t_low, t_end = keys.T
     flight, gravity = t_land - t_off, GRAVITY / scale**2
 
     heading1 = heading0 + p["turn"]
     half_width = p["width"] * bodies.hip_width
     before, yaw0 = footprints(centre, heading0, half_width, p["toe_out"], bodies)
-    after, yaw1 = footprints(on_heading(centre, heading0, p["distance"], p["drift"]), heading1, half_width,
-                             p["toe_out"], bodies)
+    after, yaw1 = footprints(
+        on_heading(centre, heading0, p["distance"], p["drift"]), heading1, half_width, p["toe_out"], bodies
+    )
     landing_x = p["distance"] - p["land_reach_leg"] * leg
     pelvis = _JumpPelvis(
-        keys=keys, centre=centre, heading=heading0,
-        forward=np.stack([zero, -p["hips_back_leg"] * leg, p["lean_leg"] * leg, landing_x,
-                          landing_x - 0.5 * p["hips_back_leg"] * leg, p["distance"]], axis=1),
+        keys=keys,
+        centre=centre,
+        heading=heading0,
+        forward=np.stack(
+            [
+                zero,
+                -p["hips_back_leg"] * leg,
+                p["lean_leg"] * leg,
+                landing_x,
+                landing_x - 0.5 * p["hips_back_leg"] * leg,
+                p["distance"],
+            ],
+            axis=1,
+        ),
         sideways=p["drift"][:, None] * np.array([0, 0, 0, 1, 1, 1.0]),
         yaw=np.stack([heading0, heading0, heading0, heading1, heading1, heading1], axis=1),
         trunk=np.stack([zero, p["trunk"], p["trunk_takeoff"], 0.1 + zero, p["trunk_landing"], zero], axis=1),
@@ -152,16 +172,22 @@ def jump(draws: Draws, bodies: BodyBatch, n_frames: int, fps: int) -> Drive:
     xy_off, rotation_off = pelvis.at(t_off[:, None])
     xy_land, rotation_land = pelvis.at(t_land[:, None])
     z_off = root_height_limit(xy_off, rotation_off, takeoff_ankle[:, None], bodies).min(axis=-1)[:, 0] - 0.02
-    z_land = root_height_limit(xy_land, rotation_land, landing_ankle[:, None], bodies).min(axis=-1)[:, 0] - 0.02
+    z_land = (
+        root_height_limit(xy_land, rotation_land, landing_ankle[:, None], bodies).min(axis=-1)[:, 0] - 0.02
+    )
     v_off = (z_land - z_off) / flight + gravity * flight / 2
     v_land = v_off - gravity * flight
     stand = bodies.root_height
-    heights = np.stack([stand, stand - p["crouch_leg"] * leg, z_off, z_land, stand - p["landing_crouch_leg"] * leg,
-                        stand], axis=1)
+    heights = np.stack(
+        [stand, stand - p["crouch_leg"] * leg, z_off, z_land, stand - p["landing_crouch_leg"] * leg, stand],
+        axis=1,
+    )
     drive = Drive.standing(len(bodies.body), n_frames)
     plant(drive, before, yaw0)
     drive.root_position[..., :2], drive.root_rotation = pelvis.at(t)
-    drive.root_position[..., 2] = hermite_keys(keys, heights, np.stack([zero, zero, v_off, v_land, zero, zero], 1), t)
+    drive.root_position[..., 2] = hermite_keys(
+        keys, heights, np.stack([zero, zero, v_off, v_land, zero, zero], 1), t
+    )
 
     # in the air the stretched legs first move with the pelvis, tuck, and stretch again to land
     s = np.clip((t - t_off[:, None]) / flight[:, None], 0, 1)
@@ -170,15 +196,22 @@ def jump(draws: Draws, bodies: BodyBatch, n_frames: int, fps: int) -> Drive:
     rel = rel_off[:, None] + (rel_land - rel_off)[:, None] * ease(s)[..., None, None]
     rel[..., 2] += (p["tuck_leg"] * leg)[:, None, None] * bump(s)[..., None]
     air_yaw = yaw0[:, None] + (yaw1 - yaw0)[:, None] * ease(s)[..., None]
-    air_pitch = p["heel_up"][:, None, None] + (p["land_pitch"] - p["heel_up"])[:, None, None] * ease(s)[..., None]
+    air_pitch = (
+        p["heel_up"][:, None, None] + (p["land_pitch"] - p["heel_up"])[:, None, None] * ease(s)[..., None]
+    )
 
     in_air = (t > t_off[:, None]) & (t < t_land[:, None])
     landed = t >= t_land[:, None]
-    drive.ankle[:] = np.where(in_air[..., None, None], drive.root_position[:, :, None] + rel,
-                              np.where(landed[..., None, None], ground_after[0], ground_before[0]))
-    drive.foot_rotation[:] = np.where(in_air[..., None, None, None],
-                                      rig.matmul(rig.yaw_matrix(air_yaw), rig.pitch_matrix(air_pitch)),
-                                      np.where(landed[..., None, None, None], ground_after[1], ground_before[1]))
+    drive.ankle[:] = np.where(
+        in_air[..., None, None],
+        drive.root_position[:, :, None] + rel,
+        np.where(landed[..., None, None], ground_after[0], ground_before[0]),
+    )
+    drive.foot_rotation[:] = np.where(
+        in_air[..., None, None, None],
+        rig.matmul(rig.yaw_matrix(air_yaw), rig.pitch_matrix(air_pitch)),
+        np.where(landed[..., None, None, None], ground_after[1], ground_before[1]),
+    )
     knee_yaw = np.where(landed[..., None], yaw1[:, None], np.where(in_air[..., None], air_yaw, yaw0[:, None]))
     drive.knee_forward[:] = np.stack([np.cos(knee_yaw), np.sin(knee_yaw), np.zeros_like(knee_yaw)], axis=-1)
     drive.support[:] = ~in_air[..., None]
@@ -198,7 +231,9 @@ def jump(draws: Draws, bodies: BodyBatch, n_frames: int, fps: int) -> Drive:
     arm = keyframes(arm_keys, np.stack([zero, p["arm_back"], -p["arm_up"], -0.4 * p["arm_up"], zero], 1), t)
     elbow = keyframes(arm_keys, np.stack([zero, p["elbow"], 0.5 * p["elbow"], 1.5 * p["elbow"], zero], 1), t)
     for name, sign in (("left", 1.0), ("right", -1.0)):
-        drive.local[:, :, JOINT[f"{name}_shoulder"]] = rig.euler_matrix(sign * 0.15 * (1 - np.cos(arm)), arm, 0 * t)
+        drive.local[:, :, JOINT[f"{name}_shoulder"]] = rig.euler_matrix(
+            sign * 0.15 * (1 - np.cos(arm)), arm, 0 * t
+        )
         drive.local[:, :, JOINT[f"{name}_elbow"]] = rig.pitch_matrix(-elbow)
     return drive
 
@@ -239,7 +274,9 @@ def lift(draws: Draws, bodies: BodyBatch, n_frames: int, fps: int) -> Drive:
     reach = keyframes(keys, held(p["reach"]), t)
     elbow = keyframes(keys, held(p["elbow"]), t)
     for name, sign in (("left", 1.0), ("right", -1.0)):
-        hanging = rig.euler_matrix(sign * 0.1 * reach, -(tilt + bend + reach), 0 * t)  # vertical, plus the reach
+        hanging = rig.euler_matrix(
+            sign * 0.1 * reach, -(tilt + bend + reach), 0 * t
+        )  # vertical, plus the reach
         drive.local[:, :, JOINT[f"{name}_shoulder"]] = hanging
         drive.local[:, :, JOINT[f"{name}_elbow"]] = rig.pitch_matrix(-elbow)
     return drive

@@ -97,7 +97,8 @@ _EPS = 1e-4  # stance-fraction step for the end slopes of the swing curves
 
 @dataclass(frozen=True)
 class _Course:
-    """Path, heading and gait phase ``(B, n)`` on a padded time axis, and where the clip's frames lie in it."""
+    """Path, heading and gait phase ``(B, n)`` on a padded time axis, and where the clip's frames lie in
+    it."""
 
     path: np.ndarray  # (B, n, 2)
     heading: np.ndarray  # (B, n)
@@ -113,7 +114,9 @@ def _integral(rate: np.ndarray, fps: int, anchor: int) -> np.ndarray:
     return total - total[:, anchor : anchor + 1]
 
 
-def _course(draws: Draws, p: dict[str, np.ndarray], bodies: BodyBatch, n_frames: int, fps: int, jog: bool) -> _Course:
+def _course(
+    draws: Draws, p: dict[str, np.ndarray], bodies: BodyBatch, n_frames: int, fps: int, jog: bool
+) -> _Course:
     """Steps 1-2: speed and yaw rate as smooth random curves, integrated into path, heading and phase."""
     start, heading0 = draws.start(0.5)
     phase0 = draws.unit()
@@ -128,12 +131,18 @@ def _course(draws: Draws, p: dict[str, np.ndarray], bodies: BodyBatch, n_frames:
     a, b = STRIDE_LAW["jog" if jog else "walk"]
     stride = bodies.leg * (a + b * p["speed"]) * p["stride"]
     phase = phase0[:, None] + _integral(speed / stride[:, None], fps, pad)
-    return _Course(path=start[:, None, :] + _integral(velocity, fps, pad), heading=heading, yaw_rate=yaw_rate,
-                   phase=phase, clip=slice(pad, pad + n_frames))
+    return _Course(
+        path=start[:, None, :] + _integral(velocity, fps, pad),
+        heading=heading,
+        yaw_rate=yaw_rate,
+        phase=phase,
+        clip=slice(pad, pad + n_frames),
+    )
 
 
 def _stance_pitch(s: np.ndarray, col: dict[str, np.ndarray]) -> np.ndarray:
-    """Foot pitch over the stance fraction ``s``: heel roll, flat, then roll over the ball (quadratic ease)."""
+    """Foot pitch over the stance fraction ``s``: heel roll, flat, then roll over the ball (quadratic
+    ease)."""
     heel = -col["heel_strike"] * np.clip(1 - s / col["heel_roll"], 0, 1) ** 2
     toe = col["toe_off"] * np.clip((s - col["heel_off"]) / (1 - col["heel_off"]), 0, 1) ** 2
     return heel + toe
@@ -162,8 +171,13 @@ def _foot(drive: Drive, course: _Course, col: dict[str, np.ndarray], bodies: Bod
     def stance(s: np.ndarray, which: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Ankle, foot rotation and pitch at stance fraction ``s`` of stances ``which`` ``(B, T)``."""
         pitch = _stance_pitch(s, col)
-        ankle, rotation = foot_pose(gather_rows(flat, which), gather_rows(print_yaw, which), pitch,
-                                    bodies.ball[:, None], bodies.heel[:, None])
+        ankle, rotation = foot_pose(
+            gather_rows(flat, which),
+            gather_rows(print_yaw, which),
+            pitch,
+            bodies.ball[:, None],
+            bodies.heel[:, None],
+        )
         return ankle, rotation, pitch
 
     in_stance = frac < duty
@@ -178,11 +192,21 @@ def _foot(drive: Drive, course: _Course, col: dict[str, np.ndarray], bodies: Bod
     on_ankle, _, on_pitch = stance(start, index + 1)
     on_after, _, on_pitch_after = stance(start + _EPS, index + 1)
     to_sigma = (1 - duty) / duty / _EPS  # per unit of stance fraction -> per unit of swing fraction
-    swing_ankle = hermite(off_ankle, (off_ankle - off_before) * to_sigma[..., None], on_ankle,
-                          (on_after - on_ankle) * to_sigma[..., None], sigma[..., None])
+    swing_ankle = hermite(
+        off_ankle,
+        (off_ankle - off_before) * to_sigma[..., None],
+        on_ankle,
+        (on_after - on_ankle) * to_sigma[..., None],
+        sigma[..., None],
+    )
     swing_ankle[..., 2] += col["clearance"] * bump(sigma)
-    swing_pitch = hermite(off_pitch, (off_pitch - off_pitch_before) * to_sigma, on_pitch,
-                          (on_pitch_after - on_pitch) * to_sigma, sigma)
+    swing_pitch = hermite(
+        off_pitch,
+        (off_pitch - off_pitch_before) * to_sigma,
+        on_pitch,
+        (on_pitch_after - on_pitch) * to_sigma,
+        sigma,
+    )
 
     def blend(values: np.ndarray) -> np.ndarray:
         """A per-stance angle held during stance and eased to the next stance's during swing."""
@@ -193,7 +217,9 @@ def _foot(drive: Drive, course: _Course, col: dict[str, np.ndarray], bodies: Bod
     knee_yaw = blend(print_heading)
     drive.ankle[:, :, side] = np.where(in_stance[..., None], stance_ankle, swing_ankle)
     drive.foot_rotation[:, :, side] = np.where(in_stance[..., None, None], stance_rotation, swing_rotation)
-    drive.knee_forward[:, :, side] = np.stack([np.cos(knee_yaw), np.sin(knee_yaw), np.zeros_like(knee_yaw)], axis=-1)
+    drive.knee_forward[:, :, side] = np.stack(
+        [np.cos(knee_yaw), np.sin(knee_yaw), np.zeros_like(knee_yaw)], axis=-1
+    )
     drive.support[:, :, side] = True  # swing feet too: the leg must reach the next footprint
     drive.contacts[:, :, side] = in_stance & (s >= col["heel_roll"]) & (s <= col["heel_off"])
     drive.contacts[:, :, 2 + side] = in_stance & (s >= col["heel_roll"])
@@ -204,12 +230,15 @@ def _body(drive: Drive, course: _Course, col: dict[str, np.ndarray], bodies: Bod
     phase, heading = course.phase[:, course.clip], course.heading[:, course.clip]
     stride_angle = 2 * np.pi * phase
     mid_left = 2 * np.pi * (phase - col["lead"] * col["duty"])  # the pelvis passes the left footprint at 0
-    drive.root_position[..., :2] = on_heading(course.path[:, course.clip], heading, 0.0, col["sway"] * np.cos(mid_left))
+    drive.root_position[..., :2] = on_heading(
+        course.path[:, course.clip], heading, 0.0, col["sway"] * np.cos(mid_left)
+    )
     bounce = col["bounce"] * np.cos(2 * mid_left) * (-1.0 if jog else 1.0)  # a walk peaks at mid-stance
     drive.root_position[..., 2] = bodies.root_height[:, None] - col["drop"] + bounce
     pelvis_list = col["pelvis_list"] * np.cos(mid_left)
-    drive.root_rotation = rig.euler_matrix(pelvis_list, 0.35 * col["lean"],
-                                           heading - col["pelvis_rotation"] * np.cos(stride_angle))
+    drive.root_rotation = rig.euler_matrix(
+        pelvis_list, 0.35 * col["lean"], heading - col["pelvis_rotation"] * np.cos(stride_angle)
+    )
 
     zero = np.zeros_like(phase)
     chest_yaw = (col["thorax_rotation"] + col["pelvis_rotation"]) * np.cos(stride_angle) / 3

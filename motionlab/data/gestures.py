@@ -86,9 +86,13 @@ def wave(draws: Draws, bodies: BodyBatch, n_frames: int, fps: int) -> Drive:
     for name, sign in (("left", 1.0), ("right", -1.0)):
         waving = (hand == sign)[..., None, None]
         # twist the raised arm about its length so that the elbow bends in the frontal plane (forearm up)
-        raised = rig.matmul(rig.euler_matrix(sign * col["raise"], col["forward"] + 0 * t, 0 * t),
-                            rig.yaw_matrix(sign * np.pi / 2 + 0 * t))
-        hanging = rig.euler_matrix(sign * 0.08 - hand * col["lean"] + 0 * t, 0 * t, 0 * t)  # vertical under the lean
+        raised = rig.matmul(
+            rig.euler_matrix(sign * col["raise"], col["forward"] + 0 * t, 0 * t),
+            rig.yaw_matrix(sign * np.pi / 2 + 0 * t),
+        )
+        hanging = rig.euler_matrix(
+            sign * 0.08 - hand * col["lean"] + 0 * t, 0 * t, 0 * t
+        )  # vertical under the lean
         drive.local[:, :, JOINT[f"{name}_shoulder"]] = np.where(waving, raised, hanging)
         elbow = np.where(waving[..., 0, 0], flexion, 0.15)
         drive.local[:, :, JOINT[f"{name}_elbow"]] = rig.pitch_matrix(-elbow)
@@ -104,9 +108,13 @@ def kick(draws: Draws, bodies: BodyBatch, n_frames: int, fps: int) -> Drive:
     t = np.arange(n_frames) / fps
     n_clips = centre.shape[0]
     leg, zero, one = bodies.leg, np.zeros(n_clips), np.ones(n_clips)
-    phases = np.stack([p[name] for name in ("shift", "chamber", "extend", "hold", "retract", "down", "settle")], 1)
+    phases = np.stack(
+        [p[name] for name in ("shift", "chamber", "extend", "hold", "retract", "down", "settle")], 1
+    )
     start, scale = place_event(phases.sum(axis=1), n_frames, fps, where)
-    keys = start[:, None] + scale[:, None] * np.concatenate([zero[:, None], np.cumsum(phases, axis=1)], axis=1)
+    keys = start[:, None] + scale[:, None] * np.concatenate(
+        [zero[:, None], np.cumsum(phases, axis=1)], axis=1
+    )
 
     def held(chamber: np.ndarray, extended: np.ndarray) -> np.ndarray:
         """Keys ``(B, 8)``: rest, rest after the shift, chamber, extended (twice), chamber, rest, rest."""
@@ -130,8 +138,14 @@ def kick(draws: Draws, bodies: BodyBatch, n_frames: int, fps: int) -> Drive:
     pitch = keyframes(keys, held(0.7 + zero, p["foot_pitch"]), t)
     roll = side * keyframes(keys, held(zero, p["foot_roll"]), t)
     drive.foot_rotation[rows, :, kicking] = rig.euler_matrix(roll, pitch, yaw[rows, kicking][:, None] + 0 * t)
-    knee = np.stack([np.cos(heading)[:, None] + 0 * t, np.sin(heading)[:, None] + 0 * t,
-                     np.where(front, 0.8, 0.3) * lifted], axis=-1)  # the knee turns up as the leg rises
+    knee = np.stack(
+        [
+            np.cos(heading)[:, None] + 0 * t,
+            np.sin(heading)[:, None] + 0 * t,
+            np.where(front, 0.8, 0.3) * lifted,
+        ],
+        axis=-1,
+    )  # the knee turns up as the leg rises
     drive.knee_forward[rows, :, kicking] = knee / np.linalg.norm(knee, axis=-1, keepdims=True)
     on_floor = (t <= keys[:, 1, None]) | (t >= keys[:, 6, None])
     drive.support[rows, :, kicking] = on_floor

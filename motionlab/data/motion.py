@@ -75,8 +75,10 @@ def _check_names(joint_names: Sequence[str]) -> tuple[str, ...]:
         raise ValueError("Motion.joint_names: a motion needs at least one joint")
     for j, name in enumerate(names):
         if not isinstance(name, str) or not name or any(c.isspace() or c in "{}" for c in name):
-            raise ValueError(f"Motion.joint_names[{j}]: {name!r} is not a valid joint name "
-                             "(non-empty, no whitespace, no braces)")
+            raise ValueError(
+                f"Motion.joint_names[{j}]: {name!r} is not a valid joint name "
+                "(non-empty, no whitespace, no braces)"
+            )
     if len(set(names)) != len(names):
         dup = next(n for n in names if names.count(n) > 1)
         raise ValueError(f"Motion.joint_names: joint name {dup!r} appears more than once")
@@ -96,7 +98,9 @@ def _check_parents(parents: Sequence[int] | torch.Tensor | np.ndarray, num_joint
         raise ValueError(f"Motion.parents[0]: joint 0 must be the root (parent -1), got {out[0]}")
     for j, p in enumerate(out[1:], start=1):
         if not 0 <= p < j:
-            raise ValueError(f"Motion.parents[{j}]: must be the index of an earlier joint (0..{j - 1}), got {p}")
+            raise ValueError(
+                f"Motion.parents[{j}]: must be the index of an earlier joint (0..{j - 1}), got {p}"
+            )
     return tuple(out)
 
 
@@ -121,10 +125,14 @@ def _check_end_sites(end_sites: Sequence[EndSite], num_joints: int) -> tuple[End
             joint = int(joint)
             offset = tuple(float(v) for v in offset)
         except (TypeError, ValueError) as exc:
-            raise ValueError(f"Motion.end_sites[{k}]: expected (joint index, (x, y, z)), got {site!r}") from exc
+            raise ValueError(
+                f"Motion.end_sites[{k}]: expected (joint index, (x, y, z)), got {site!r}"
+            ) from exc
         if not 0 <= joint < num_joints or len(offset) != 3 or not all(np.isfinite(offset)):
-            raise ValueError(f"Motion.end_sites[{k}]: joint index must be in 0..{num_joints - 1} and the "
-                             f"offset three finite numbers, got {site!r}")
+            raise ValueError(
+                f"Motion.end_sites[{k}]: joint index must be in 0..{num_joints - 1} and the "
+                f"offset three finite numbers, got {site!r}"
+            )
         out.append((joint, offset))
     return tuple(out)
 
@@ -176,8 +184,10 @@ class Motion:
         norms = rotations.norm(dim=-1)
         if ((norms - 1).abs() > UNIT_NORM_TOLERANCE).any():
             frame, joint = torch.nonzero((norms - 1).abs() > UNIT_NORM_TOLERANCE)[0].tolist()
-            raise ValueError(f"Motion.rotations: frame {frame}, joint {joint} ({names[joint]}) is not a unit "
-                             f"quaternion (norm {norms[frame, joint].item():.6g})")
+            raise ValueError(
+                f"Motion.rotations: frame {frame}, joint {joint} ({names[joint]}) is not a unit "
+                f"quaternion (norm {norms[frame, joint].item():.6g})"
+            )
         set_field(self, "rotations", rotations / norms.unsqueeze(-1))
         dtype = rotations.dtype
         num_frames = rotations.shape[0]
@@ -200,15 +210,20 @@ class Motion:
             set_field(self, "end_sites", _check_end_sites(self.end_sites, num_joints))
         if self.joint_translations is not None:
             moving = _as_tensor(self.joint_translations, "joint_translations", dtype)
-            _check_shape(moving, "joint_translations", (num_frames, num_joints, 3), f"({num_frames}, {num_joints}, 3)")
+            _check_shape(
+                moving, "joint_translations", (num_frames, num_joints, 3), f"({num_frames}, {num_joints}, 3)"
+            )
             if not torch.equal(moving[:, 0], root):
                 raise ValueError("Motion.joint_translations: row 0 (the root) must equal root_positions")
             set_field(self, "joint_translations", moving)
 
     def __repr__(self) -> str:
         seconds = (self.num_frames - 1) / self.fps
-        return (f"Motion({self.num_joints} joints, {self.num_frames} frames at {self.fps:g} fps = {seconds:.2f} s, "
-                f"root {self.joint_names[0]!r}, {self.rotations.dtype})")
+        return (
+            f"Motion({self.num_joints} joints, {self.num_frames} frames at {self.fps:g} fps = "
+            f"{seconds:.2f} s, "
+            f"root {self.joint_names[0]!r}, {self.rotations.dtype})"
+        )
 
     @property
     def num_frames(self) -> int:
@@ -234,7 +249,9 @@ class Motion:
         ``p_j = p_parent + R_parent · t_j`` and ``R_j = R_parent · R_local_j`` with the per-frame
         translations of :meth:`local_translations` (:func:`motionlab.skeleton.forward_kinematics`).
         """
-        return forward_kinematics(self.rotations, self.root_positions, self.local_translations(), self.parents)[0]
+        return forward_kinematics(
+            self.rotations, self.root_positions, self.local_translations(), self.parents
+        )[0]
 
     def scaled(self, factor: float) -> Motion:
         """The same motion with every length (offsets, translations, end sites) multiplied by ``factor``."""
@@ -245,15 +262,18 @@ class Motion:
             self,
             offsets=self.offsets * factor,
             root_positions=self.root_positions * factor,
-            end_sites=None if self.end_sites is None else tuple(
-                (j, tuple(v * factor for v in off)) for j, off in self.end_sites),
+            end_sites=None
+            if self.end_sites is None
+            else tuple((j, tuple(v * factor for v in off)) for j, off in self.end_sites),
             joint_translations=None if self.joint_translations is None else self.joint_translations * factor,
         )
 
     def __getitem__(self, frames: slice) -> Motion:
         """Frames ``frames`` (a slice with a positive step) as a new ``Motion``; the step divides fps."""
         if not isinstance(frames, slice):
-            raise TypeError(f"Motion can only be sliced by frames (motion[a:b:step]), got {type(frames).__name__}")
+            raise TypeError(
+                f"Motion can only be sliced by frames (motion[a:b:step]), got {type(frames).__name__}"
+            )
         step = 1 if frames.step is None else frames.step
         if step < 1:
             raise ValueError(f"Motion slice step must be a positive integer, got {frames.step!r}")
@@ -312,7 +332,9 @@ class Motion:
         """
         names = tuple(joint_names)
         if sorted(names) != sorted(self.joint_names) or len(set(names)) != len(names):
-            raise ValueError(f"Motion.reorder: joint_names must be a permutation of {self.joint_names}, got {names}")
+            raise ValueError(
+                f"Motion.reorder: joint_names must be a permutation of {self.joint_names}, got {names}"
+            )
         old_index = [self.joint_names.index(n) for n in names]
         new_index = {old: new for new, old in enumerate(old_index)}
         parents = [-1 if self.parents[o] < 0 else new_index[self.parents[o]] for o in old_index]
@@ -324,5 +346,7 @@ class Motion:
             rotations=self.rotations[:, old_index],
             channels=None if self.channels is None else [self.channels[o] for o in old_index],
             end_sites=None if self.end_sites is None else [(new_index[j], off) for j, off in self.end_sites],
-            joint_translations=None if self.joint_translations is None else self.joint_translations[:, old_index],
+            joint_translations=None
+            if self.joint_translations is None
+            else self.joint_translations[:, old_index],
         )

@@ -42,10 +42,14 @@ class NoiseConfig:
             if not np.isfinite(value) or value < 0:
                 raise ValueError(f"NoiseConfig.{name} must be finite and >= 0, got {value!r}")
         if self.spike_rate > 1:
-            raise ValueError(f"NoiseConfig.spike_rate is a probability per frame and joint, got {self.spike_rate}")
+            raise ValueError(
+                f"NoiseConfig.spike_rate is a probability per frame and joint, got {self.spike_rate}"
+            )
         lo, hi = self.spike_frames
         if not (isinstance(lo, int) and isinstance(hi, int) and 1 <= lo <= hi):
-            raise ValueError(f"NoiseConfig.spike_frames must be integers 1 <= lo <= hi, got {self.spike_frames!r}")
+            raise ValueError(
+                f"NoiseConfig.spike_frames must be integers 1 <= lo <= hi, got {self.spike_frames!r}"
+            )
 
 
 #: Defaults for rotations: 0.02 rad jitter, spikes of about 0.5 rad (29 degrees).
@@ -63,14 +67,17 @@ def _generator(rng: np.random.Generator | int) -> np.random.Generator:
 def _check(values: np.ndarray, width: int, name: str) -> np.ndarray:
     values = np.asarray(values)
     if values.ndim < 3 or values.shape[-1] != width or not np.issubdtype(values.dtype, np.floating):
-        raise ValueError(f"{name}: expected a float array (..., T, J, {width}), got {values.dtype} {values.shape}")
+        raise ValueError(
+            f"{name}: expected a float array (..., T, J, {width}), got {values.dtype} {values.shape}"
+        )
     if not np.isfinite(values).all():
         raise ValueError(f"{name}: input contains NaN or infinite values")
     return values
 
 
-def _spikes(shape: tuple[int, ...], rng: np.random.Generator, config: NoiseConfig,
-            displacement: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def _spikes(
+    shape: tuple[int, ...], rng: np.random.Generator, config: NoiseConfig, displacement: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
     """Spike mask ``shape = (..., T, J)`` and the per-frame spike vectors ``(..., T, J, D)``.
 
     ``displacement`` ``(..., T, J, D)`` holds a candidate vector for a spike starting at each frame.
@@ -82,10 +89,13 @@ def _spikes(shape: tuple[int, ...], rng: np.random.Generator, config: NoiseConfi
     vectors = np.zeros(displacement.shape)
     n_frames = shape[-2]
     for offset in range(min(hi, n_frames)):
-        covered = (starts & (lengths > offset))[..., : n_frames - offset, :]  # spikes still on `offset` frames later
+        covered = (starts & (lengths > offset))[
+            ..., : n_frames - offset, :
+        ]  # spikes still on `offset` frames later
         mask[..., offset:, :] |= covered
-        vectors[..., offset:, :, :] = np.where(covered[..., None], displacement[..., : n_frames - offset, :, :],
-                                               vectors[..., offset:, :, :])
+        vectors[..., offset:, :, :] = np.where(
+            covered[..., None], displacement[..., : n_frames - offset, :, :], vectors[..., offset:, :, :]
+        )
     return mask, vectors
 
 
@@ -99,8 +109,9 @@ def _spike_lengths(shape: tuple[int, ...], rng: np.random.Generator, size: float
     return size * rng.uniform(0.5, 1.5, size=shape + (1,))
 
 
-def add_position_noise(positions: np.ndarray, rng: np.random.Generator | int,
-                       config: NoiseConfig = NoiseConfig()) -> tuple[np.ndarray, np.ndarray]:
+def add_position_noise(
+    positions: np.ndarray, rng: np.random.Generator | int, config: NoiseConfig = NoiseConfig()
+) -> tuple[np.ndarray, np.ndarray]:
     """Noisy joint positions (same shape and dtype) and the spike mask ``(..., T, J)`` bool."""
     clean = _check(positions, 3, "add_position_noise")
     rng = _generator(rng)
@@ -111,8 +122,9 @@ def add_position_noise(positions: np.ndarray, rng: np.random.Generator | int,
     return (clean + jitter + spikes).astype(clean.dtype), mask
 
 
-def add_rotation_noise(rotations: np.ndarray, rng: np.random.Generator | int,
-                       config: NoiseConfig = ROTATION_NOISE) -> tuple[np.ndarray, np.ndarray]:
+def add_rotation_noise(
+    rotations: np.ndarray, rng: np.random.Generator | int, config: NoiseConfig = ROTATION_NOISE
+) -> tuple[np.ndarray, np.ndarray]:
     """Noisy local quaternions (same shape and dtype, w first) and the spike mask ``(..., T, J)``.
 
     The noise rotation is applied on the left (in the parent's frame) and is less than a half turn, so
@@ -124,6 +136,8 @@ def add_rotation_noise(rotations: np.ndarray, rng: np.random.Generator | int,
     jitter = config.jitter * rng.standard_normal(shape + (3,))
     displacement = _random_directions(shape, rng) * _spike_lengths(shape, rng, config.spike_size)
     mask, spikes = _spikes(shape, rng, config, displacement)
-    perturbation = quat_mul(axis_angle_to_quat(torch.from_numpy(spikes)), axis_angle_to_quat(torch.from_numpy(jitter)))
+    perturbation = quat_mul(
+        axis_angle_to_quat(torch.from_numpy(spikes)), axis_angle_to_quat(torch.from_numpy(jitter))
+    )
     noisy = quat_mul(perturbation, torch.from_numpy(clean.astype(np.float64)))
     return noisy.numpy().astype(clean.dtype), mask

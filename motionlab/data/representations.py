@@ -71,7 +71,9 @@ class RootStart(NamedTuple):
 # input checks
 
 
-def check_tensor(x: Tensor, name: str, func: str, trailing: tuple[int | None, ...], min_leading: int = 0) -> Tensor:
+def check_tensor(
+    x: Tensor, name: str, func: str, trailing: tuple[int | None, ...], min_leading: int = 0
+) -> Tensor:
     """Check that ``x`` is a finite floating tensor shaped ``(*leading, *trailing)``; return it.
 
     ``None`` in ``trailing`` accepts any size; ``min_leading`` is the least number of leading dimensions
@@ -83,9 +85,11 @@ def check_tensor(x: Tensor, name: str, func: str, trailing: tuple[int | None, ..
         raise ValueError(f"{func}: {name} must be a floating-point tensor, got dtype {x.dtype}")
     layout = "(" + ", ".join(["..."] + ["*" if size is None else str(size) for size in trailing]) + ")"
     if x.dim() < len(trailing) + min_leading:
-        raise ValueError(f"{func}: {name} must have shape {layout} with at least {min_leading} leading "
-                         f"dimension(s), got {tuple(x.shape)}")
-    actual = tuple(x.shape[x.dim() - len(trailing):])
+        raise ValueError(
+            f"{func}: {name} must have shape {layout} with at least {min_leading} leading "
+            f"dimension(s), got {tuple(x.shape)}"
+        )
+    actual = tuple(x.shape[x.dim() - len(trailing) :])
     if any(want is not None and want != got for want, got in zip(trailing, actual)):
         raise ValueError(f"{func}: {name} must have shape {layout}, got {tuple(x.shape)}")
     finite = torch.isfinite(x)
@@ -102,9 +106,11 @@ def _check_start(start: RootStart | None, leading: torch.Size, like: Tensor, fun
     position = check_tensor(start.position, "start.position", func, (3,))
     yaw = check_tensor(start.yaw, "start.yaw", func, ())
     if position.shape[:-1] != leading or yaw.shape != leading:
-        raise ValueError(f"{func}: start must have position {tuple(leading) + (3,)} and yaw {tuple(leading)} for "
-                         f"clips with leading shape {tuple(leading)}, got {tuple(position.shape)} and "
-                         f"{tuple(yaw.shape)}")
+        raise ValueError(
+            f"{func}: start must have position {tuple(leading) + (3,)} and yaw {tuple(leading)} for "
+            f"clips with leading shape {tuple(leading)}, got {tuple(position.shape)} and "
+            f"{tuple(yaw.shape)}"
+        )
     return RootStart(position.to(like.dtype), yaw.to(like.dtype))
 
 
@@ -112,8 +118,10 @@ def _n_joints(n_features: int, per_joint: int, extra: int, name: str, func: str)
     """Joint count ``J`` from a feature size ``(J - 1) * per_joint + extra``."""
     body, rest = divmod(n_features - extra, per_joint)
     if n_features <= extra or rest:
-        raise ValueError(f"{func}: {name} has {n_features} features; expected (J - 1) * {per_joint} + {extra} "
-                         f"for a skeleton of J >= 2 joints")
+        raise ValueError(
+            f"{func}: {name} has {n_features} features; expected (J - 1) * {per_joint} + {extra} "
+            f"for a skeleton of J >= 2 joints"
+        )
     return body + 1
 
 
@@ -145,14 +153,17 @@ def split_heading(root_rotation: Tensor) -> tuple[Tensor, Tensor]:
     upside_down = w * w + z * z < UPSIDE_DOWN_TOLERANCE
     if bool(upside_down.any()):
         where = tuple(int(i) for i in torch.nonzero(upside_down)[0])
-        raise ValueError(f"split_heading: root orientation at index {where} is upside down; its heading is undefined")
+        raise ValueError(
+            f"split_heading: root orientation at index {where} is upside down; its heading is undefined"
+        )
     yaw = wrap_angle(2.0 * torch.atan2(z, w))
     tilt = quat_mul(yaw_to_quat(-yaw), q)
     return yaw, tilt
 
 
 def heading_yaw(root_rotation: Tensor) -> Tensor:
-    """The heading yaw ``(...,)`` in ``[-pi, pi)`` of a root orientation ``(..., 4)`` (see :func:`split_heading`)."""
+    """The heading yaw ``(...,)`` in ``[-pi, pi)`` of a root orientation ``(..., 4)`` (see
+    :func:`split_heading`)."""
     return split_heading(root_rotation)[0]
 
 
@@ -192,8 +203,10 @@ def root_control(root_xy: Tensor, yaw: Tensor) -> Tensor:
     check_tensor(root_xy, "root_xy", "root_control", (2,), min_leading=1)
     check_tensor(yaw, "yaw", "root_control", (), min_leading=1)
     if root_xy.shape[:-1] != yaw.shape:
-        raise ValueError(f"root_control: root_xy (..., T, 2) and yaw (..., T) must share (..., T), "
-                         f"got {tuple(root_xy.shape)} and {tuple(yaw.shape)}")
+        raise ValueError(
+            f"root_control: root_xy (..., T, 2) and yaw (..., T) must share (..., T), "
+            f"got {tuple(root_xy.shape)} and {tuple(yaw.shape)}"
+        )
     step = rotate_xy(root_xy[..., 1:, :] - root_xy[..., :-1, :], -yaw[..., :-1])
     turn = wrap_angle(yaw[..., 1:] - yaw[..., :-1])
     control = torch.cat([step, turn[..., None]], dim=-1)
@@ -211,9 +224,11 @@ def integrate_root_control(control: Tensor, start_xy: Tensor, start_yaw: Tensor)
     check_tensor(start_xy, "start_xy", func, (2,))
     check_tensor(start_yaw, "start_yaw", func, ())
     if start_xy.shape[:-1] != control.shape[:-2] or start_yaw.shape != control.shape[:-2]:
-        raise ValueError(f"{func}: start_xy must be {tuple(control.shape[:-2]) + (2,)} and start_yaw "
-                         f"{tuple(control.shape[:-2])} for control {tuple(control.shape)}, got "
-                         f"{tuple(start_xy.shape)} and {tuple(start_yaw.shape)}")
+        raise ValueError(
+            f"{func}: start_xy must be {tuple(control.shape[:-2]) + (2,)} and start_yaw "
+            f"{tuple(control.shape[:-2])} for control {tuple(control.shape)}, got "
+            f"{tuple(start_xy.shape)} and {tuple(start_yaw.shape)}"
+        )
     turn = control[..., 1:, 2]
     yaw = torch.cat([start_yaw[..., None], start_yaw[..., None] + torch.cumsum(turn, dim=-1)], dim=-1)
     steps = rotate_xy(control[..., 1:, :2], yaw[..., :-1])
@@ -243,13 +258,24 @@ def to_motion_cell(rotations: Tensor, root_positions: Tensor) -> Tensor:
     check_tensor(rotations, "rotations", func, (None, 4), min_leading=1)
     check_tensor(root_positions, "root_positions", func, (3,), min_leading=1)
     if rotations.shape[:-2] != root_positions.shape[:-1] or rotations.shape[-2] < 2:
-        raise ValueError(f"{func}: rotations (..., T, J, 4) with J >= 2 and root_positions (..., T, 3) must share "
-                         f"(..., T), got {tuple(rotations.shape)} and {tuple(root_positions.shape)}")
+        raise ValueError(
+            f"{func}: rotations (..., T, J, 4) with J >= 2 and root_positions (..., T, 3) must share "
+            f"(..., T), got {tuple(rotations.shape)} and {tuple(root_positions.shape)}"
+        )
     yaw, tilt = split_heading(rotations[..., 0, :])
     control = root_control(root_positions[..., :2], yaw)
     tilt_vector = quat_to_axis_angle(tilt)
-    root = torch.stack([control[..., 0], control[..., 1], root_positions[..., 2], control[..., 2],
-                        tilt_vector[..., 1], tilt_vector[..., 0]], dim=-1)
+    root = torch.stack(
+        [
+            control[..., 0],
+            control[..., 1],
+            root_positions[..., 2],
+            control[..., 2],
+            tilt_vector[..., 1],
+            tilt_vector[..., 0],
+        ],
+        dim=-1,
+    )
     return torch.cat([rotations[..., 1:, :].flatten(-2), root], dim=-1)
 
 
@@ -265,9 +291,11 @@ def from_motion_cell(features: Tensor, start: RootStart | None = None) -> tuple[
     check_tensor(features, "features", func, (None,), min_leading=1)
     n_joints = _n_joints(features.shape[-1], 4, len(ROOT_FEATURES), "features", func)
     start = _check_start(start, features.shape[:-2], features, func)
-    joints = quat_normalize(features[..., :-len(ROOT_FEATURES)].unflatten(-1, (n_joints - 1, 4)))
-    forward, sideways, height, turn, pitch, roll = features[..., -len(ROOT_FEATURES):].unbind(-1)
-    xy, yaw = integrate_root_control(torch.stack([forward, sideways, turn], dim=-1), start.position[..., :2], start.yaw)
+    joints = quat_normalize(features[..., : -len(ROOT_FEATURES)].unflatten(-1, (n_joints - 1, 4)))
+    forward, sideways, height, turn, pitch, roll = features[..., -len(ROOT_FEATURES) :].unbind(-1)
+    xy, yaw = integrate_root_control(
+        torch.stack([forward, sideways, turn], dim=-1), start.position[..., :2], start.yaw
+    )
     tilt = axis_angle_to_quat(torch.stack([roll, pitch, torch.zeros_like(roll)], dim=-1))
     root_rotation = quat_mul(yaw_to_quat(yaw), tilt)
     rotations = torch.cat([root_rotation[..., None, :], joints], dim=-2)
@@ -279,7 +307,8 @@ def from_motion_cell(features: Tensor, start: RootStart | None = None) -> tuple[
 
 
 def to_odmo(positions: Tensor) -> Tensor:
-    """ODMO features ``(..., T, (J - 1) * 3 + 3)`` (66 for 22 joints) from global positions ``(..., T, J, 3)``.
+    """ODMO features ``(..., T, (J - 1) * 3 + 3)`` (66 for 22 joints) from global positions ``(..., T, J,
+    3)``.
 
     Layout per frame: the local movement profile, joints 1..J-1 minus the root position in world axes
     (not rotated, as in ODMO), then the root trajectory: root xyz minus the first frame's root xyz.
@@ -329,8 +358,10 @@ def to_moglow(positions: Tensor, root_rotations: Tensor) -> Tensor:
     check_tensor(positions, "positions", func, (None, 3), min_leading=1)
     check_tensor(root_rotations, "root_rotations", func, (4,), min_leading=1)
     if positions.shape[:-2] != root_rotations.shape[:-1] or positions.shape[-2] < 2:
-        raise ValueError(f"{func}: positions (..., T, J, 3) with J >= 2 and root_rotations (..., T, 4) must share "
-                         f"(..., T), got {tuple(positions.shape)} and {tuple(root_rotations.shape)}")
+        raise ValueError(
+            f"{func}: positions (..., T, J, 3) with J >= 2 and root_rotations (..., T, 4) must share "
+            f"(..., T), got {tuple(positions.shape)} and {tuple(root_rotations.shape)}"
+        )
     yaw = heading_yaw(root_rotations)
     root_xy = positions[..., 0, :2]
     local_xy = rotate_xy(positions[..., 1:, :2] - root_xy[..., None, :], -yaw[..., None])
@@ -349,8 +380,10 @@ def from_moglow(features: Tensor, start: RootStart | None = None) -> Tensor:
     n_joints = _n_joints(features.shape[-1], 3, 1 + len(CONTROL_FEATURES), "features", func)
     start = _check_start(start, features.shape[:-2], features, func)
     height = features[..., :1]
-    local = features[..., 1:-len(CONTROL_FEATURES)].unflatten(-1, (n_joints - 1, 3))
-    root_xy, yaw = integrate_root_control(features[..., -len(CONTROL_FEATURES):], start.position[..., :2], start.yaw)
+    local = features[..., 1 : -len(CONTROL_FEATURES)].unflatten(-1, (n_joints - 1, 3))
+    root_xy, yaw = integrate_root_control(
+        features[..., -len(CONTROL_FEATURES) :], start.position[..., :2], start.yaw
+    )
     joints_xy = rotate_xy(local[..., :2], yaw[..., None]) + root_xy[..., None, :]
     joints = torch.cat([joints_xy, local[..., 2:]], dim=-1)
     root = torch.cat([root_xy, height], dim=-1)
@@ -375,7 +408,8 @@ def to_trajevae(positions: Tensor) -> Tensor:
 
 
 def from_trajevae(features: Tensor, start: RootStart | None = None) -> Tensor:
-    """Invert :func:`to_trajevae`: global positions ``(..., T, J, 3)``, the first pelvis above ``start``'s xy."""
+    """Invert :func:`to_trajevae`: global positions ``(..., T, J, 3)``, the first pelvis above ``start``'s
+    xy."""
     func = "from_trajevae"
     check_tensor(features, "features", func, (None,), min_leading=1)
     if features.shape[-1] % 3:
@@ -407,7 +441,8 @@ class Representation:
             example MoGlow's ``"pose"`` contains ``"root_height"``).
         encode: ``(positions (..., T, J, 3), rotations (..., T, J, 4)) -> features (..., T, D)``.
         decode: ``(features, start=None, offsets=None, parents=None) -> positions (..., T, J, 3)``;
-            only Motion Cell needs the skeleton (``offsets`` ``(J, 3)`` or ``(..., J, 3)``, ``parents`` ``(J,)``).
+            only Motion Cell needs the skeleton (``offsets`` ``(J, 3)`` or ``(..., J, 3)``, ``parents``
+            ``(J,)``).
     """
 
     name: str
@@ -422,7 +457,9 @@ class Representation:
         if group not in self.channels:
             raise KeyError(f"{self.name} has no channel group {group!r}; groups: {sorted(self.channels)}")
         if features.shape[-1] != self.dim:
-            raise ValueError(f"{self.name}: features must have {self.dim} channels, got shape {tuple(features.shape)}")
+            raise ValueError(
+                f"{self.name}: features must have {self.dim} channels, got shape {tuple(features.shape)}"
+            )
         return features[..., self.channels[group]]
 
 
@@ -430,10 +467,16 @@ def _encode_motion_cell(positions: Tensor, rotations: Tensor) -> Tensor:
     return to_motion_cell(rotations, positions[..., 0, :])
 
 
-def _decode_motion_cell(features: Tensor, start: RootStart | None = None, offsets: Tensor | None = None,
-                        parents: Tensor | None = None) -> Tensor:
+def _decode_motion_cell(
+    features: Tensor,
+    start: RootStart | None = None,
+    offsets: Tensor | None = None,
+    parents: Tensor | None = None,
+) -> Tensor:
     if offsets is None or parents is None:
-        raise ValueError("motion_cell decode: needs the skeleton's offsets and parents for forward kinematics")
+        raise ValueError(
+            "motion_cell decode: needs the skeleton's offsets and parents for forward kinematics"
+        )
     rotations, root_positions = from_motion_cell(features, start)
     return forward_kinematics(rotations, root_positions, offsets, parents)[0]
 
@@ -442,8 +485,12 @@ def _encode_odmo(positions: Tensor, rotations: Tensor) -> Tensor:
     return to_odmo(positions)
 
 
-def _decode_odmo(features: Tensor, start: RootStart | None = None, offsets: Tensor | None = None,
-                 parents: Tensor | None = None) -> Tensor:
+def _decode_odmo(
+    features: Tensor,
+    start: RootStart | None = None,
+    offsets: Tensor | None = None,
+    parents: Tensor | None = None,
+) -> Tensor:
     return from_odmo(features, start)
 
 
@@ -451,8 +498,12 @@ def _encode_moglow(positions: Tensor, rotations: Tensor) -> Tensor:
     return to_moglow(positions, rotations[..., 0, :])
 
 
-def _decode_moglow(features: Tensor, start: RootStart | None = None, offsets: Tensor | None = None,
-                   parents: Tensor | None = None) -> Tensor:
+def _decode_moglow(
+    features: Tensor,
+    start: RootStart | None = None,
+    offsets: Tensor | None = None,
+    parents: Tensor | None = None,
+) -> Tensor:
     return from_moglow(features, start)
 
 
@@ -460,8 +511,12 @@ def _encode_trajevae(positions: Tensor, rotations: Tensor) -> Tensor:
     return to_trajevae(positions)
 
 
-def _decode_trajevae(features: Tensor, start: RootStart | None = None, offsets: Tensor | None = None,
-                     parents: Tensor | None = None) -> Tensor:
+def _decode_trajevae(
+    features: Tensor,
+    start: RootStart | None = None,
+    offsets: Tensor | None = None,
+    parents: Tensor | None = None,
+) -> Tensor:
     return from_trajevae(features, start)
 
 
@@ -469,8 +524,14 @@ def _motion_cell(n_joints: int) -> Representation:
     n_rot = (n_joints - 1) * 4
     channels = {"joint_rotations": slice(0, n_rot), "root": slice(n_rot, n_rot + len(ROOT_FEATURES))}
     channels |= {name: slice(n_rot + i, n_rot + i + 1) for i, name in enumerate(ROOT_FEATURES)}
-    return Representation("motion_cell", n_joints, n_rot + len(ROOT_FEATURES), channels,
-                          _encode_motion_cell, _decode_motion_cell)
+    return Representation(
+        "motion_cell",
+        n_joints,
+        n_rot + len(ROOT_FEATURES),
+        channels,
+        _encode_motion_cell,
+        _decode_motion_cell,
+    )
 
 
 def _odmo(n_joints: int) -> Representation:
@@ -481,10 +542,14 @@ def _odmo(n_joints: int) -> Representation:
 
 def _moglow(n_joints: int) -> Representation:
     n_pose = 1 + (n_joints - 1) * 3
-    channels = {"pose": slice(0, n_pose), "root_height": slice(0, 1),
-                "control": slice(n_pose, n_pose + len(CONTROL_FEATURES))}
-    return Representation("moglow", n_joints, n_pose + len(CONTROL_FEATURES), channels,
-                          _encode_moglow, _decode_moglow)
+    channels = {
+        "pose": slice(0, n_pose),
+        "root_height": slice(0, 1),
+        "control": slice(n_pose, n_pose + len(CONTROL_FEATURES)),
+    }
+    return Representation(
+        "moglow", n_joints, n_pose + len(CONTROL_FEATURES), channels, _encode_moglow, _decode_moglow
+    )
 
 
 def _trajevae(n_joints: int) -> Representation:
@@ -493,7 +558,10 @@ def _trajevae(n_joints: int) -> Representation:
 
 
 _BUILDERS: dict[str, Callable[[int], Representation]] = {
-    "motion_cell": _motion_cell, "odmo": _odmo, "moglow": _moglow, "trajevae": _trajevae,
+    "motion_cell": _motion_cell,
+    "odmo": _odmo,
+    "moglow": _moglow,
+    "trajevae": _trajevae,
 }
 
 REPRESENTATION_NAMES = tuple(_BUILDERS)
@@ -501,7 +569,8 @@ REPRESENTATION_NAMES = tuple(_BUILDERS)
 
 
 def representation(name: str, n_joints: int = 22) -> Representation:
-    """The :class:`Representation` called ``name`` (one of :data:`REPRESENTATION_NAMES`) for ``n_joints`` joints."""
+    """The :class:`Representation` called ``name`` (one of :data:`REPRESENTATION_NAMES`) for ``n_joints``
+    joints."""
     if name not in _BUILDERS:
         raise ValueError(f"representation: unknown name {name!r}; choose one of {REPRESENTATION_NAMES}")
     if isinstance(n_joints, bool) or not isinstance(n_joints, int) or n_joints < 2:

@@ -138,8 +138,12 @@ def matrix_to_quaternion(matrix: np.ndarray) -> np.ndarray:
     ...), which is never small, so half-turns are handled too. Accurate to about 1e-10 in float64.
     """
     m00, m01, m02, m10, m11, m12, m20, m21, m22 = np.ascontiguousarray(matrix.reshape(-1, 9).T)
-    size = np.sqrt(np.maximum(np.stack([1 + m00 + m11 + m22, 1 + m00 - m11 - m22,
-                                        1 - m00 + m11 - m22, 1 - m00 - m11 + m22]), 0.0))
+    size = np.sqrt(
+        np.maximum(
+            np.stack([1 + m00 + m11 + m22, 1 + m00 - m11 - m22, 1 - m00 + m11 - m22, 1 - m00 - m11 + m22]),
+            0.0,
+        )
+    )
     wx, wy, wz = m21 - m12, m02 - m20, m10 - m01
     xy, xz, yz = m01 + m10, m02 + m20, m12 + m21
     largest = np.argmax(size, axis=0)

@@ -42,7 +42,9 @@ class Draws:
     def unit(self) -> np.ndarray:
         """The next column of uniforms ``(B,)`` in ``[0, 1)``."""
         if self._next >= self._uniforms.shape[1]:
-            raise RuntimeError(f"an action asked for more than {self._uniforms.shape[1]} random draws per clip")
+            raise RuntimeError(
+                f"an action asked for more than {self._uniforms.shape[1]} random draws per clip"
+            )
         column = self._uniforms[:, self._next]
         self._next += 1
         return column
@@ -68,7 +70,8 @@ class Draws:
         return np.where(self.unit() < 0.5, 1.0, -1.0)
 
     def noise_terms(self, n_terms: int, band: Sequence[float]) -> tuple[np.ndarray, np.ndarray]:
-        """Frequencies (Hz, uniform in ``band``) and phases of ``n_terms`` sinusoids, each ``(B, n_terms)``."""
+        """Frequencies (Hz, uniform in ``band``) and phases of ``n_terms`` sinusoids, each ``(B,
+        n_terms)``."""
         freqs = np.stack([self.between(tuple(band)) for _ in range(n_terms)], axis=-1)
         phases = np.stack([self.angle() for _ in range(n_terms)], axis=-1)
         return freqs, phases

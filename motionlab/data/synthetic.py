@@ -75,13 +75,21 @@ def _check_arguments(seed: int, n_per_mode: int, seconds: float, fps: int, split
         raise ValueError(f"generate: n_per_mode must be a positive integer, got {n_per_mode!r}")
     if not integer(fps) or fps < MIN_FPS:
         raise ValueError(f"generate: fps must be an integer of at least {MIN_FPS}, got {fps!r}")
-    if not isinstance(seconds, (int, float, np.floating)) or not math.isfinite(seconds) or seconds < MIN_SECONDS:
-        raise ValueError(f"generate: seconds must be a finite number of at least {MIN_SECONDS}, got {seconds!r}")
+    if (
+        not isinstance(seconds, (int, float, np.floating))
+        or not math.isfinite(seconds)
+        or seconds < MIN_SECONDS
+    ):
+        raise ValueError(
+            f"generate: seconds must be a finite number of at least {MIN_SECONDS}, got {seconds!r}"
+        )
     if split not in SPLITS:
         raise ValueError(f"generate: split must be one of {SPLITS}, got {split!r}")
 
 
-def generate(seed: int, n_per_mode: int, seconds: float = 4.0, fps: int = 30, split: str = "train") -> MotionSet:
+def generate(
+    seed: int, n_per_mode: int, seconds: float = 4.0, fps: int = 30, split: str = "train"
+) -> MotionSet:
     """Generate ``12 * n_per_mode`` labelled clips of ``round(seconds * fps)`` frames.
 
     Args:
@@ -99,7 +107,10 @@ def generate(seed: int, n_per_mode: int, seconds: float = 4.0, fps: int = 30, sp
     replicate = np.tile(np.arange(n_per_mode), len(MODE_NAMES))
     body_type = replicate % len(BODY_TYPES)
     split_id = SPLITS.index(split)
-    streams = (np.random.SeedSequence(int(seed), spawn_key=(split_id, int(m), int(k))) for m, k in zip(mode, replicate))
+    streams = (
+        np.random.SeedSequence(int(seed), spawn_key=(split_id, int(m), int(k)))
+        for m, k in zip(mode, replicate)
+    )
     uniforms = np.stack([np.random.default_rng(stream).random(DRAWS_PER_CLIP) for stream in streams])
 
     n_clips, n_joints = mode.size, len(PARENTS)
@@ -114,9 +125,16 @@ def generate(seed: int, n_per_mode: int, seconds: float = 4.0, fps: int = 30, sp
             rotations[chunk], positions[chunk] = pose(drive, bodies, fps)
             contacts[chunk] = drive.contacts
     return MotionSet(
-        positions=positions, rotations=rotations, action=MODE_ACTION[mode], mode=mode.astype(np.int64),
-        body=body_type.astype(np.int64), contacts=contacts, action_names=np.array(ACTION_NAMES),
-        mode_names=np.array(MODE_NAMES), mode_action=MODE_ACTION.copy(), parents=np.array(PARENTS, dtype=np.int64),
+        positions=positions,
+        rotations=rotations,
+        action=MODE_ACTION[mode],
+        mode=mode.astype(np.int64),
+        body=body_type.astype(np.int64),
+        contacts=contacts,
+        action_names=np.array(ACTION_NAMES),
+        mode_names=np.array(MODE_NAMES),
+        mode_action=MODE_ACTION.copy(),
+        parents=np.array(PARENTS, dtype=np.int64),
         offsets=np.stack([m.offsets() for m in BODY_MEASUREMENTS]).astype(np.float32),
         fps=np.array(fps, dtype=np.int64),
     )
@@ -134,8 +152,9 @@ def _stale_caches(path: Path) -> list[Path]:
     return [other for other in path.parent.glob(f"{prefix}_*.npz") if other != path]
 
 
-def load_or_generate(seed: int, n_per_mode: int, seconds: float = 4.0, fps: int = 30,
-                     split: str = "train") -> MotionSet:
+def load_or_generate(
+    seed: int, n_per_mode: int, seconds: float = 4.0, fps: int = 30, split: str = "train"
+) -> MotionSet:
     """:func:`generate`, cached on disk; a cache file that does not load cleanly is regenerated.
 
     Files are keyed by the arguments and :func:`generator_fingerprint`, so a changed generator makes new
@@ -155,12 +174,15 @@ def load_or_generate(seed: int, n_per_mode: int, seconds: float = 4.0, fps: int 
     return data
 
 
-def load_splits(seed: int, n_per_mode: tuple[int, int, int], seconds: float = 4.0,
-                fps: int = 30) -> tuple[MotionSet, MotionSet, MotionSet]:
+def load_splits(
+    seed: int, n_per_mode: tuple[int, int, int], seconds: float = 4.0, fps: int = 30
+) -> tuple[MotionSet, MotionSet, MotionSet]:
     """Train, validation and test sets, each from its own streams, with ``n_per_mode[i]`` clips per mode."""
     if len(n_per_mode) != len(SPLITS):
         raise ValueError(f"load_splits: n_per_mode needs one count per split {SPLITS}, got {n_per_mode!r}")
-    train, val, test = (load_or_generate(seed, n, seconds, fps, split) for n, split in zip(n_per_mode, SPLITS))
+    train, val, test = (
+        load_or_generate(seed, n, seconds, fps, split) for n, split in zip(n_per_mode, SPLITS)
+    )
     return train, val, test
 
 
@@ -170,31 +192,56 @@ def _write(args: argparse.Namespace) -> int:
     data = generate(args.seed, args.n_per_mode, args.seconds, args.fps, args.split)
     data.save(args.out, compress=args.compress)
     if args.checksums is not None:
-        record = {"seed": args.seed, "n_per_mode": args.n_per_mode, "seconds": args.seconds, "fps": args.fps,
-                  "split": args.split, "sha256": data.checksums()}
+        record = {
+            "seed": args.seed,
+            "n_per_mode": args.n_per_mode,
+            "seconds": args.seconds,
+            "fps": args.fps,
+            "split": args.split,
+            "sha256": data.checksums(),
+        }
         args.checksums.write_text(json.dumps(record, indent=2, sort_keys=True) + "\n")
-    print(f"wrote {data.n_clips} clips x {data.n_frames} frames ({len(MODE_NAMES)} modes x {args.n_per_mode}) "
-          f"to {args.out} in {time.perf_counter() - start:.2f} s")
+    print(
+        f"wrote {data.n_clips} clips x {data.n_frames} frames ({len(MODE_NAMES)} modes x {args.n_per_mode}) "
+        f"to {args.out} in {time.perf_counter() - start:.2f} s"
+    )
     return 0
 
 
 def main(argv: list[str] | None = None) -> int:
     """The command line; returns the exit status (2, with a one-line message, for a bad argument)."""
     prog = "python -m motionlab.data.synthetic"
-    parser = argparse.ArgumentParser(prog=prog, description="Write a synthetic motion-capture data set (.npz).")
-    parser.add_argument("--out", required=True, type=cli.output_file,
-                        help="output file (.npz); its directory must exist")
+    parser = argparse.ArgumentParser(
+        prog=prog, description="Write a synthetic motion-capture data set (.npz)."
+    )
+    parser.add_argument(
+        "--out", required=True, type=cli.output_file, help="output file (.npz); its directory must exist"
+    )
     parser.add_argument("--seed", required=True, type=cli.non_negative_int, help="non-negative integer seed")
-    parser.add_argument("--n-per-mode", type=cli.positive_int, default=10,
-                        help="clips per style mode (12 modes; default 10)")
-    parser.add_argument("--seconds", type=cli.float_at_least(MIN_SECONDS), default=4.0,
-                        help=f"clip length in seconds, at least {MIN_SECONDS:g} (default 4)")
-    parser.add_argument("--fps", type=cli.int_at_least(MIN_FPS), default=30,
-                        help=f"frames per second, at least {MIN_FPS} (default 30)")
-    parser.add_argument("--split", choices=SPLITS, default="train", help="family of random streams (default train)")
-    parser.add_argument("--compress", action="store_true", help="write a compressed archive (slower, ~10%% smaller)")
-    parser.add_argument("--checksums", type=cli.output_file,
-                        help="also write the SHA-256 of every array to this JSON file")
+    parser.add_argument(
+        "--n-per-mode", type=cli.positive_int, default=10, help="clips per style mode (12 modes; default 10)"
+    )
+    parser.add_argument(
+        "--seconds",
+        type=cli.float_at_least(MIN_SECONDS),
+        default=4.0,
+        help=f"clip length in seconds, at least {MIN_SECONDS:g} (default 4)",
+    )
+    parser.add_argument(
+        "--fps",
+        type=cli.int_at_least(MIN_FPS),
+        default=30,
+        help=f"frames per second, at least {MIN_FPS} (default 30)",
+    )
+    parser.add_argument(
+        "--split", choices=SPLITS, default="train", help="family of random streams (default train)"
+    )
+    parser.add_argument(
+        "--compress", action="store_true", help="write a compressed archive (slower, ~10%% smaller)"
+    )
+    parser.add_argument(
+        "--checksums", type=cli.output_file, help="also write the SHA-256 of every array to this JSON file"
+    )
     args = parser.parse_args(argv)
     return cli.run(prog, lambda: _write(args))
 

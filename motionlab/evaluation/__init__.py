@@ -2,7 +2,14 @@
 real-data reference rows. Metrics themselves live in :mod:`motionlab.metrics`.
 """
 
-from motionlab.evaluation.inputs import EVAL_FEATURES, body_frame_features, hip_heading
 from motionlab.evaluation.evaluator import Evaluator, EvaluatorConfig, load_evaluator
+from motionlab.evaluation.inputs import EVAL_FEATURES, body_frame_features, hip_heading
 
-__all__ = ["EVAL_FEATURES", "Evaluator", "EvaluatorConfig", "body_frame_features", "hip_heading", "load_evaluator"]
+__all__ = [
+    "EVAL_FEATURES",
+    "Evaluator",
+    "EvaluatorConfig",
+    "body_frame_features",
+    "hip_heading",
+    "load_evaluator",
+]

@@ -57,8 +57,13 @@ def cache_benchmark_evaluator(kind: Literal["conv", "gru"]) -> None:
     benchmark_evaluator(kind, progress=False)
 
 
-def sample_metrics(evaluator: Evaluator, positions: np.ndarray | torch.Tensor, action: np.ndarray,
-                   reference_features: torch.Tensor, rng: np.random.Generator) -> dict[str, float]:
+def sample_metrics(
+    evaluator: Evaluator,
+    positions: np.ndarray | torch.Tensor,
+    action: np.ndarray,
+    reference_features: torch.Tensor,
+    rng: np.random.Generator,
+) -> dict[str, float]:
     """The action-conditioned metric row of one sample set (the ODMO / Action2Motion table columns).
 
     Args:
@@ -70,23 +75,34 @@ def sample_metrics(evaluator: Evaluator, positions: np.ndarray | torch.Tensor, a
     Returns:
         ``accuracy``, ``fid``, ``diversity``, ``multimodality`` and the inception score ``is``.
     """
-    return feature_metrics(*evaluator.features_and_probs(positions, "action"), action, reference_features, rng)
+    return feature_metrics(
+        *evaluator.features_and_probs(positions, "action"), action, reference_features, rng
+    )
 
 
-def feature_metrics(features: torch.Tensor, probs: torch.Tensor, action: np.ndarray, reference_features: torch.Tensor,
-                    rng: np.random.Generator) -> dict[str, float]:
+def feature_metrics(
+    features: torch.Tensor,
+    probs: torch.Tensor,
+    action: np.ndarray,
+    reference_features: torch.Tensor,
+    rng: np.random.Generator,
+) -> dict[str, float]:
     """:func:`sample_metrics` from the evaluator's ``features`` ``(N, D)`` and action ``probs`` ``(N, C)``."""
     action = np.asarray(action)
     return {
         "accuracy": float((probs.argmax(dim=-1).numpy() == action).mean()),
         "fid": fid(features, reference_features),
         "diversity": diversity(features, n_pairs=min(200, len(action)), rng=rng),
-        "multimodality": multimodality(features, action, n_pairs=min(20, int(np.bincount(action).min())), rng=rng),
+        "multimodality": multimodality(
+            features, action, n_pairs=min(20, int(np.bincount(action).min())), rng=rng
+        ),
         "is": inception_score(probs),
     }
 
 
-def real_reference(evaluator: Evaluator, benchmark: Benchmark, n_repeats: int = 10, seed: int = 0) -> dict[str, tuple[float, float]]:
+def real_reference(
+    evaluator: Evaluator, benchmark: Benchmark, n_repeats: int = 10, seed: int = 0
+) -> dict[str, tuple[float, float]]:
     """The papers' "real data" row: held-out test clips measured against the training clips.
 
     Each repeat draws the pairs of Diversity / Multimodality afresh (the test set itself is fixed and is the
@@ -94,6 +110,8 @@ def real_reference(evaluator: Evaluator, benchmark: Benchmark, n_repeats: int = 
     """
     reference = evaluator.features(benchmark.train.positions)
     features, probs = evaluator.features_and_probs(benchmark.test.positions, "action")
-    rows = [feature_metrics(features, probs, benchmark.test.action, reference, np.random.default_rng([seed, r]))
-            for r in range(n_repeats)]
+    rows = [
+        feature_metrics(features, probs, benchmark.test.action, reference, np.random.default_rng([seed, r]))
+        for r in range(n_repeats)
+    ]
     return {key: mean_ci([row[key] for row in rows]) for key in rows[0]}

@@ -55,8 +55,9 @@ class EvaluatorConfig:
 
 def default_evaluator_config(kind: Literal["conv", "gru"]) -> EvaluatorConfig:
     """The course's evaluator settings for the active profile."""
-    return EvaluatorConfig(kind=kind, steps=config.choose(quick=40, full=300),
-                           hidden=config.choose(quick=32, full=128))
+    return EvaluatorConfig(
+        kind=kind, steps=config.choose(quick=40, full=300), hidden=config.choose(quick=32, full=128)
+    )
 
 
 class Evaluator(nn.Module):
@@ -78,9 +79,13 @@ class Evaluator(nn.Module):
     def _chunked(self, positions: Tensor | np.ndarray, fn) -> Tensor:
         positions = torch.as_tensor(positions, dtype=torch.float32)
         if positions.dim() != 4 or positions.shape[0] == 0:
-            raise ValueError(f"Evaluator: positions must be a non-empty (N, T, 22, 3), got {tuple(positions.shape)}")
+            raise ValueError(
+                f"Evaluator: positions must be a non-empty (N, T, 22, 3), got {tuple(positions.shape)}"
+            )
         self.eval()
-        return torch.cat([fn(self.inputs(positions[i:i + CHUNK])) for i in range(0, positions.shape[0], CHUNK)])
+        return torch.cat(
+            [fn(self.inputs(positions[i : i + CHUNK])) for i in range(0, positions.shape[0], CHUNK)]
+        )
 
     def _head(self, head: str) -> nn.Module:
         if head not in self.classifier.heads:
@@ -104,9 +109,11 @@ class Evaluator(nn.Module):
         """Feature vectors ``(N, D)`` for FID, Diversity and Multimodality (deterministic)."""
         return self._chunked(positions, self.classifier.features)
 
-    def features_and_probs(self, positions: Tensor | np.ndarray, head: str = "action") -> tuple[Tensor, Tensor]:
-        """:meth:`features` ``(N, D)`` and :meth:`probs` ``(N, C)`` of one head from a single pass over the clips
-        (the same numbers as the two calls, at half the cost: the recurrent trunk dominates)."""
+    def features_and_probs(
+        self, positions: Tensor | np.ndarray, head: str = "action"
+    ) -> tuple[Tensor, Tensor]:
+        """:meth:`features` ``(N, D)`` and :meth:`probs` ``(N, C)`` of one head from a single pass over the
+        clips (the same numbers as the two calls, at half the cost: the recurrent trunk dominates)."""
         classify, width = self._head(head), self.classifier.feature_dim
 
         def both(x: Tensor) -> Tensor:
@@ -116,12 +123,17 @@ class Evaluator(nn.Module):
         out = self._chunked(positions, both)
         return out[:, :width], torch.softmax(out[:, width:].double(), dim=-1)
 
-    def accuracy(self, positions: Tensor | np.ndarray, labels: Tensor | np.ndarray, head: str = "action") -> float:
+    def accuracy(
+        self, positions: Tensor | np.ndarray, labels: Tensor | np.ndarray, head: str = "action"
+    ) -> float:
         """Fraction of clips whose predicted ``head`` class equals ``labels`` ``(N,)``."""
         labels = torch.as_tensor(np.asarray(labels), dtype=torch.int64)
         predicted = self.predict(positions, head)
         if labels.shape != predicted.shape:
-            raise ValueError(f"Evaluator.accuracy: labels {tuple(labels.shape)} do not match {tuple(predicted.shape)} clips")
+            raise ValueError(
+                f"Evaluator.accuracy: labels {tuple(labels.shape)} do not match {tuple(predicted.shape)} "
+                "clips"
+            )
         return float((predicted == labels).double().mean())
 
 
@@ -132,7 +144,7 @@ def _crop_batches(inputs: Tensor, labels: dict[str, Tensor], min_crop: int):
     def batches(epoch: int, generator: torch.Generator, batch_size: int):
         order = torch.randperm(n, generator=generator)
         for begin in range(0, n - batch_size + 1, batch_size):
-            index = order[begin:begin + batch_size]
+            index = order[begin : begin + batch_size]
             length = int(torch.randint(min(min_crop, n_frames), n_frames + 1, (1,), generator=generator))
             start = torch.randint(0, n_frames - length + 1, (batch_size,), generator=generator)
             frames = start[:, None] + torch.arange(length)
@@ -142,7 +154,9 @@ def _crop_batches(inputs: Tensor, labels: dict[str, Tensor], min_crop: int):
     return batches
 
 
-def _classification_loss(model: MotionClassifier, batch, step: int, coeffs: dict[str, float]) -> dict[str, Tensor]:
+def _classification_loss(
+    model: MotionClassifier, batch, step: int, coeffs: dict[str, float]
+) -> dict[str, Tensor]:
     inputs, labels = batch
     logits = model(inputs)
     terms = {f"ce_{name}": F.cross_entropy(logits[name], labels[name]) for name in logits}
@@ -178,18 +192,29 @@ def load_evaluator(
     if unknown:
         raise ValueError(f"load_evaluator: unknown label heads {sorted(unknown)}; use {HEADS}")
     positions = torch.as_tensor(np.asarray(positions), dtype=torch.float32)
-    label_tensors = {name: torch.as_tensor(np.asarray(value), dtype=torch.int64) for name, value in labels.items()}
+    label_tensors = {
+        name: torch.as_tensor(np.asarray(value), dtype=torch.int64) for name, value in labels.items()
+    }
     for name, value in label_tensors.items():
         if value.shape != positions.shape[:1]:
-            raise ValueError(f"load_evaluator: labels[{name!r}] has shape {tuple(value.shape)}, expected ({positions.shape[0]},)")
+            raise ValueError(
+                f"load_evaluator: labels[{name!r}] has shape {tuple(value.shape)}, expected "
+                f"({positions.shape[0]},)"
+            )
     features = body_frame_features(positions)
     standardizer = Standardizer(EVAL_FEATURES).fit(features)
     classes = {name: int(value.max()) + 1 for name, value in label_tensors.items()}
     classifier_cfg = ClassifierConfig(cfg.kind, EVAL_FEATURES, classes, cfg.hidden, cfg.feature_dim)
     torch.manual_seed(cfg.seed)
     evaluator = Evaluator(MotionClassifier(classifier_cfg), standardizer)
-    train_cfg = TrainConfig(steps=cfg.steps, batch_size=min(cfg.batch_size, positions.shape[0]), lr=cfg.lr,
-                            grad_clip=1.0, seed=cfg.seed, checkpoint_every=None)
+    train_cfg = TrainConfig(
+        steps=cfg.steps,
+        batch_size=min(cfg.batch_size, positions.shape[0]),
+        lr=cfg.lr,
+        grad_clip=1.0,
+        seed=cfg.seed,
+        checkpoint_every=None,
+    )
     batches = _crop_batches(standardizer.transform(features), label_tensors, cfg.min_crop)
     result = train_or_load(
         f"evaluator_{cfg.kind}",
@@ -198,8 +223,10 @@ def load_evaluator(
         lambda model, batch, step, coeffs: _classification_loss(model.classifier, batch, step, coeffs),
         batches,
         train_cfg,
-        data_config={"positions": data_fingerprint(positions),
-                     "labels": {k: data_fingerprint(v.numpy()) for k, v in label_tensors.items()}},
+        data_config={
+            "positions": data_fingerprint(positions),
+            "labels": {k: data_fingerprint(v.numpy()) for k, v in label_tensors.items()},
+        },
         progress=progress,
     )
     evaluator.requires_grad_(False)

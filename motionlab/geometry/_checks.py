@@ -25,7 +25,7 @@ def check_shape(x: object, trailing: tuple[int, ...], where: str, name: str) -> 
         raise TypeError(f"{where}: {name} must be a torch.Tensor, got {type(x).__name__}")
     if not x.is_floating_point():
         raise TypeError(f"{where}: {name} must have a floating-point dtype, got {x.dtype}")
-    if x.dim() < len(trailing) or tuple(x.shape[-len(trailing):]) != trailing:
+    if x.dim() < len(trailing) or tuple(x.shape[-len(trailing) :]) != trailing:
         raise ValueError(f"{where}: {name} must have shape {_shape_text(trailing)}, got {tuple(x.shape)}")
 
 
@@ -52,7 +52,9 @@ def check_finite(x: torch.Tensor, where: str, name: str) -> None:
         return
     bad = ~torch.isfinite(x.detach())
     if bool(bad.any()):
-        raise ValueError(f"{where}: {name} contains NaN or infinite values (first at index {_first_index(bad)})")
+        raise ValueError(
+            f"{where}: {name} contains NaN or infinite values (first at index {_first_index(bad)})"
+        )
 
 
 def check_positive_finite(values: torch.Tensor, where: str, what: str) -> None:
@@ -70,10 +72,13 @@ def check_positive_finite(values: torch.Tensor, where: str, what: str) -> None:
     bad = ~((values > 0) & (values < math.inf))
     if bool(bad.any()):
         index = _first_index(bad)
-        raise ValueError(f"{where}: {what} is zero or not finite at index {index} (value {values[index].item()})")
+        raise ValueError(
+            f"{where}: {what} is zero or not finite at index {index} (value {values[index].item()})"
+        )
 
 
 def check_none(bad: torch.Tensor, where: str, what: str) -> None:
-    """Raise ``ValueError`` ``"{where}: {what} at index ..."`` if any entry of the boolean mask ``bad`` is set."""
+    """Raise ``ValueError`` ``"{where}: {what} at index ..."`` if any entry of the boolean mask ``bad`` is
+    set."""
     if bool(bad.any()):
         raise ValueError(f"{where}: {what} at index {_first_index(bad)}")

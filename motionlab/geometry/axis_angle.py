@@ -28,7 +28,8 @@ def axis_angle_to_quat(rotvec: torch.Tensor) -> torch.Tensor:
 
 
 def quat_to_axis_angle(q: torch.Tensor) -> torch.Tensor:
-    """Rotation vectors ``(..., 3)`` with angle in ``[0, pi]`` of quaternions ``(..., 4)`` (any non-zero ``q``).
+    """Rotation vectors ``(..., 3)`` with angle in ``[0, pi]`` of quaternions ``(..., 4)`` (any non-zero
+    ``q``).
 
     With ``q`` flipped to ``w >= 0`` and ``s = |vec(q)|``: ``θ = 2 atan2(s, w)`` and ``r = θ / s · vec(q)``.
     At ``s = 0`` the factor ``θ / s`` is replaced by its limit ``2 / w``, so the identity has a finite

@@ -47,7 +47,9 @@ def quat_geodesic(q: torch.Tensor, r: torch.Tensor) -> torch.Tensor:
     r, _ = safely_scaled(r, "quat_geodesic", "|r|")
     dot = (q * r).sum(-1)
     q, r = promote_and_broadcast(q, r)
-    vec = q[..., :1] * r[..., 1:] - r[..., :1] * q[..., 1:] - torch.linalg.cross(q[..., 1:], r[..., 1:], dim=-1)
+    vec = (
+        q[..., :1] * r[..., 1:] - r[..., :1] * q[..., 1:] - torch.linalg.cross(q[..., 1:], r[..., 1:], dim=-1)
+    )
     sin_part = torch.linalg.vector_norm(vec, dim=-1)
     # |q* ⊗ r|^2 = |q|^2 |r|^2: zero exactly when q or r is zero
     check_positive_finite(dot * dot + sin_part * sin_part, "quat_geodesic", "|q| |r|")

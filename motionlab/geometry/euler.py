@@ -72,7 +72,8 @@ def _elementary(angle: torch.Tensor, axis: int) -> torch.Tensor:
 
 
 def euler_to_quat(angles: torch.Tensor, order: str) -> torch.Tensor:
-    """Unit quaternions ``(..., 4)`` of Euler angles ``(..., 3)`` (radians) in ``order`` (e.g. ``"XYZ"``, ``"zxz"``)."""
+    """Unit quaternions ``(..., 4)`` of Euler angles ``(..., 3)`` (radians) in ``order`` (e.g. ``"XYZ"``,
+    ``"zxz"``)."""
     axes, intrinsic = _parse_order(order, "euler_to_quat")
     check_shape(angles, (3,), "euler_to_quat", "angles")
     check_finite(angles, "euler_to_quat", "angles")

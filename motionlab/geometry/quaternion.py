@@ -73,7 +73,8 @@ def quat_normalize(q: torch.Tensor) -> torch.Tensor:
 
 
 def safely_scaled(q: torch.Tensor, where: str, what: str) -> tuple[torch.Tensor, torch.Tensor]:
-    """``(p, |p|^2)``: ``p`` ``(..., 4)`` a positive multiple of ``q`` whose squared norm ``(...)`` is safe to use.
+    """``(p, |p|^2)``: ``p`` ``(..., 4)`` a positive multiple of ``q`` whose squared norm ``(...)`` is safe to
+    use.
 
     Squares of the components of a tiny or huge ``q`` underflow or overflow (in float32 ``|q|^2`` is 0 below
     ``|q| ≈ 5e-23`` and inf above ``≈ 2e19``, and ``2 / |q|^2`` is inf below ``≈ 8e-20``). When every
@@ -154,7 +155,9 @@ def quat_from_two_vectors(a: torch.Tensor, b: torch.Tensor) -> torch.Tensor:
     check_positive_finite(norm_b[..., 0], "quat_from_two_vectors", "the norm of b")
     unit_a, unit_b = promote_and_broadcast(a / norm_a, b / norm_b)
     halfway = unit_a + unit_b
-    turned = torch.cat([(unit_a * halfway).sum(-1, keepdim=True), torch.linalg.cross(unit_a, halfway, dim=-1)], -1)
+    turned = torch.cat(
+        [(unit_a * halfway).sum(-1, keepdim=True), torch.linalg.cross(unit_a, halfway, dim=-1)], -1
+    )
 
     least_aligned = torch.nn.functional.one_hot(unit_a.abs().argmin(-1), 3).to(unit_a.dtype)
     axis = torch.linalg.cross(unit_a, least_aligned, dim=-1)

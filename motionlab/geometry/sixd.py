@@ -15,7 +15,8 @@ from motionlab.geometry._checks import check_finite, check_none, check_positive_
 
 
 def gram_schmidt(columns: torch.Tensor) -> torch.Tensor:
-    """Rotation matrices ``(..., 3, 3)`` from the first two columns of ``columns`` (``(..., 3, 2)`` or ``(..., 3, 3)``).
+    """Rotation matrices ``(..., 3, 3)`` from the first two columns of ``columns`` (``(..., 3, 2)`` or ``(...,
+    3, 3)``).
 
     ``b0 = c0 / |c0|``, ``b1 = normalize(c1 - (b0·c1) b0)``, ``b2 = b0 × b1``. A third input column is
     ignored: the result is always a proper rotation (``det = +1``), and equals classical Gram–Schmidt on
@@ -54,7 +55,8 @@ def matrix_to_sixd(matrix: torch.Tensor) -> torch.Tensor:
 
 
 def sixd_to_matrix(sixd: torch.Tensor) -> torch.Tensor:
-    """Rotation matrices ``(..., 3, 3)`` from 6D vectors ``(..., 6)`` by Gram–Schmidt (see :func:`gram_schmidt`)."""
+    """Rotation matrices ``(..., 3, 3)`` from 6D vectors ``(..., 6)`` by Gram–Schmidt (see
+    :func:`gram_schmidt`)."""
     check_shape(sixd, (6,), "sixd_to_matrix", "sixd")
     check_finite(sixd, "sixd_to_matrix", "sixd")
     return _orthonormal_frame(sixd[..., :3], sixd[..., 3:], "sixd_to_matrix")

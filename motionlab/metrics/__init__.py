@@ -31,8 +31,21 @@ from motionlab.metrics.fid import feature_statistics, fid, frechet_distance
 from motionlab.metrics.inception import inception_score, recognition_accuracy
 from motionlab.metrics.intervals import Interval, mean_ci, repeat_metric, repeat_seed
 from motionlab.metrics.modes import adjusted_rand_index, contingency_table, mode_homogeneity
-from motionlab.metrics.physical import FOOT_JOINTS, bone_length_error, bone_lengths, foot_skating, infer_foot_contacts
-from motionlab.metrics.trajectory import end_point_error, min_ade, min_fde, mmade, mmfde, multimodal_ground_truth
+from motionlab.metrics.physical import (
+    FOOT_JOINTS,
+    bone_length_error,
+    bone_lengths,
+    foot_skating,
+    infer_foot_contacts,
+)
+from motionlab.metrics.trajectory import (
+    end_point_error,
+    min_ade,
+    min_fde,
+    mmade,
+    mmfde,
+    multimodal_ground_truth,
+)
 
 __all__ = [
     "DIVERSITY_PAIRS",

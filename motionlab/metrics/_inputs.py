@@ -8,15 +8,14 @@ function and the argument, for example ``fid: a must be 2-D (N, D), got shape (5
 from __future__ import annotations
 
 from collections.abc import Sequence
-from typing import Union
 
 import numpy as np
 import torch
 
-ArrayLike = Union[np.ndarray, torch.Tensor, Sequence]
+ArrayLike = np.ndarray | torch.Tensor | Sequence
 """What the metrics accept: a NumPy array, a torch tensor, or a (nested) list of numbers."""
 
-RngLike = Union[np.random.Generator, int]
+RngLike = np.random.Generator | int
 """A NumPy generator, or a non-negative integer seed for one."""
 
 
@@ -60,7 +59,9 @@ def as_float_array(
     if ndim is not None and arr.ndim != ndim:
         raise ValueError(f"{func}: {name} must be {ndim}-D{hint}, got shape {arr.shape}")
     if min_ndim is not None and arr.ndim < min_ndim:
-        raise ValueError(f"{func}: {name} must have at least {min_ndim} dimensions{hint}, got shape {arr.shape}")
+        raise ValueError(
+            f"{func}: {name} must have at least {min_ndim} dimensions{hint}, got shape {arr.shape}"
+        )
     _check_not_empty(arr, name, func)
     finite = np.isfinite(arr)
     if not finite.all():
@@ -70,7 +71,8 @@ def as_float_array(
 
 
 def as_labels(x: ArrayLike, name: str, func: str, *, length: int | None = None) -> np.ndarray:
-    """``x`` as a non-empty 1-D array of labels (integers, booleans or strings), optionally of a given length."""
+    """``x`` as a non-empty 1-D array of labels (integers, booleans or strings), optionally of a given
+    length."""
     arr = _to_numpy(x, name, func)
     if arr.ndim != 1:
         raise ValueError(f"{func}: {name} must be 1-D (N,), got shape {arr.shape}")
@@ -91,7 +93,9 @@ def as_labels(x: ArrayLike, name: str, func: str, *, length: int | None = None) 
 def check_same_shape(a: np.ndarray, b: np.ndarray, names: tuple[str, str], func: str) -> None:
     """Raise when two arrays differ in shape."""
     if a.shape != b.shape:
-        raise ValueError(f"{func}: {names[0]} and {names[1]} must have the same shape, got {a.shape} and {b.shape}")
+        raise ValueError(
+            f"{func}: {names[0]} and {names[1]} must have the same shape, got {a.shape} and {b.shape}"
+        )
 
 
 def check_count(value: int, name: str, func: str, minimum: int = 1) -> int:
@@ -117,4 +121,6 @@ def as_rng(rng: RngLike, func: str) -> np.random.Generator:
         return rng
     if isinstance(rng, (int, np.integer)) and not isinstance(rng, bool) and rng >= 0:
         return np.random.default_rng(int(rng))
-    raise ValueError(f"{func}: rng must be a numpy.random.Generator or a non-negative integer seed, got {rng!r}")
+    raise ValueError(
+        f"{func}: rng must be a numpy.random.Generator or a non-negative integer seed, got {rng!r}"
+    )

@@ -1,4 +1,5 @@
-r"""Diversity metrics: APD (DLow), Diversity and Multimodality (Action2Motion), per-class APD and n-APD (ODMO).
+r"""Diversity metrics: APD (DLow), Diversity and Multimodality (Action2Motion), per-class APD and n-APD
+(ODMO).
 
 **APD** (average pairwise distance, Yuan & Kitani 2020, "DLow") of ``K`` samples :math:`x_1..x_K`, each a
 whole sequence flattened to one vector of ``T·D`` numbers:
@@ -50,7 +51,9 @@ def apd(samples: ArrayLike) -> float:
     return _apd(x.reshape(x.shape[0], -1))
 
 
-def _mean_pair_distance(features: np.ndarray, pool: np.ndarray, n_pairs: int, rng: np.random.Generator) -> float:
+def _mean_pair_distance(
+    features: np.ndarray, pool: np.ndarray, n_pairs: int, rng: np.random.Generator
+) -> float:
     first = features[rng.choice(pool, size=n_pairs, replace=True)]
     second = features[rng.choice(pool, size=n_pairs, replace=True)]
     return float(np.linalg.norm(first - second, axis=1).mean())
@@ -73,7 +76,8 @@ def diversity(features: ArrayLike, n_pairs: int, rng: RngLike) -> float:
 
 
 def multimodality(features: ArrayLike, labels: ArrayLike, n_pairs: int, rng: RngLike) -> float:
-    """Action2Motion multimodality: within-class diversity, ``n_pairs`` pairs per class, averaged over classes.
+    """Action2Motion multimodality: within-class diversity, ``n_pairs`` pairs per class, averaged over
+    classes.
 
     Args:
         features: classifier features ``(N, D)``.
@@ -89,8 +93,12 @@ def multimodality(features: ArrayLike, labels: ArrayLike, n_pairs: int, rng: Rng
     classes, codes, sizes = np.unique(y, return_inverse=True, return_counts=True)
     too_small = classes[sizes < 2]
     if too_small.size:
-        raise ValueError(f"{func}: every class needs at least 2 rows; classes {too_small.tolist()} have fewer")
-    per_class = [_mean_pair_distance(x, np.flatnonzero(codes == k), count, generator) for k in range(classes.size)]
+        raise ValueError(
+            f"{func}: every class needs at least 2 rows; classes {too_small.tolist()} have fewer"
+        )
+    per_class = [
+        _mean_pair_distance(x, np.flatnonzero(codes == k), count, generator) for k in range(classes.size)
+    ]
     return float(np.mean(per_class))
 
 
@@ -100,7 +108,9 @@ def _per_class_apd(x: np.ndarray, y: np.ndarray, name: str, func: str) -> dict[H
     for label in np.unique(y):
         rows = flat[y == label]
         if rows.shape[0] < 2:
-            raise ValueError(f"{func}: class {label.item()!r} of {name} has only 1 sequence; APD needs at least 2")
+            raise ValueError(
+                f"{func}: class {label.item()!r} of {name} has only 1 sequence; APD needs at least 2"
+            )
         result[label.item()] = _apd(rows)
     return result
 
@@ -117,7 +127,9 @@ def class_apd(sequences: ArrayLike, labels: ArrayLike) -> dict[Hashable, float]:
     return _per_class_apd(x, as_labels(labels, "labels", func, length=x.shape[0]), "sequences", func)
 
 
-def n_apd(generated: ArrayLike, generated_labels: ArrayLike, real: ArrayLike, real_labels: ArrayLike) -> float:
+def n_apd(
+    generated: ArrayLike, generated_labels: ArrayLike, real: ArrayLike, real_labels: ArrayLike
+) -> float:
     """ODMO's normalised APD: mean over classes of ``APD(generated of c) / APD(real of c)``.
 
     Both sets must contain the same classes, each with at least 2 sequences, and every real class must
@@ -128,16 +140,22 @@ def n_apd(generated: ArrayLike, generated_labels: ArrayLike, real: ArrayLike, re
     ref = as_float_array(real, "real", func, min_ndim=2, layout="(N, T, D)")
     if gen.shape[1:] != ref.shape[1:]:
         raise ValueError(
-            f"{func}: generated and real must share the per-sequence shape, got {gen.shape[1:]} and {ref.shape[1:]}"
+            f"{func}: generated and real must share the per-sequence shape, got {gen.shape[1:]} and "
+            f"{ref.shape[1:]}"
         )
     gen_labels = as_labels(generated_labels, "generated_labels", func, length=gen.shape[0])
     gen_apd = _per_class_apd(gen, gen_labels, "generated", func)
-    real_apd = _per_class_apd(ref, as_labels(real_labels, "real_labels", func, length=ref.shape[0]), "real", func)
+    real_apd = _per_class_apd(
+        ref, as_labels(real_labels, "real_labels", func, length=ref.shape[0]), "real", func
+    )
     if set(gen_apd) != set(real_apd):
         raise ValueError(
-            f"{func}: generated and real must contain the same classes, got {sorted(gen_apd)} and {sorted(real_apd)}"
+            f"{func}: generated and real must contain the same classes, got {sorted(gen_apd)} and "
+            f"{sorted(real_apd)}"
         )
     degenerate = [label for label, value in real_apd.items() if value == 0.0]
     if degenerate:
-        raise ValueError(f"{func}: real sequences of classes {degenerate} are all identical (APD 0); cannot normalise")
+        raise ValueError(
+            f"{func}: real sequences of classes {degenerate} are all identical (APD 0); cannot normalise"
+        )
     return float(np.mean([gen_apd[label] / real_apd[label] for label in real_apd]))

@@ -5,7 +5,8 @@ the Fréchet (2-Wasserstein) distance between the two Gaussians:
 
 .. math::
     \mathrm{FID} = \lVert \mu_1 - \mu_2 \rVert^2
-        + \operatorname{tr}\bigl(\Sigma_1 + \Sigma_2 - 2\,(\Sigma_1^{1/2} \Sigma_2 \Sigma_1^{1/2})^{1/2}\bigr).
+        + \operatorname{tr}\bigl(\Sigma_1 + \Sigma_2 - 2\,(\Sigma_1^{1/2} \Sigma_2
+        \Sigma_1^{1/2})^{1/2}\bigr).
 
 The common implementation takes ``scipy.linalg.sqrtm`` of the non-symmetric product
 :math:`\Sigma_1 \Sigma_2`, which has the same trace of square root but returns complex numbers or NaN
@@ -13,12 +14,13 @@ when a covariance is singular (fewer samples than dimensions, constant features)
 nuclear norm (sum of singular values), from ``numpy.linalg.svd``:
 
 .. math::
-    \operatorname{tr}(\Sigma_1^{1/2} \Sigma_2 \Sigma_1^{1/2})^{1/2} = \lVert \Sigma_2^{1/2} \Sigma_1^{1/2} \rVert_*
+    \operatorname{tr}(\Sigma_1^{1/2} \Sigma_2 \Sigma_1^{1/2})^{1/2} = \lVert \Sigma_2^{1/2} \Sigma_1^{1/2}
+    \rVert_*
         = \lVert F_1 F_2^\top \rVert_* \quad\text{for any factors } \Sigma_k = F_k^\top F_k,
 
-because :math:`M^\top M = \Sigma_1^{1/2} \Sigma_2 \Sigma_1^{1/2}` for :math:`M = \Sigma_2^{1/2} \Sigma_1^{1/2}`,
-and :math:`M` and :math:`F_1 F_2^\top` have the same singular values. Why not the eigenvalues of
-:math:`\Sigma_1^{1/2} \Sigma_2 \Sigma_1^{1/2}` (the textbook route): they are products of variances and
+because :math:`M^\top M = \Sigma_1^{1/2} \Sigma_2 \Sigma_1^{1/2}` for :math:`M = \Sigma_2^{1/2}
+\Sigma_1^{1/2}`, and :math:`M` and :math:`F_1 F_2^\top` have the same singular values. Why not the eigenvalues
+of :math:`\Sigma_1^{1/2} \Sigma_2 \Sigma_1^{1/2}` (the textbook route): they are products of variances and
 span twice as many decades, and an eigen-decomposition resolves them only to round-off of the largest. For
 256 features with variances from 100 down to 1e-6 the products run from 1e4 down to 1e-12, the round-off
 level is ``D · ε · 1e4 ≈ 6e-10``, and the square roots of the products below it (up to 2e-5 each) are real
@@ -104,7 +106,9 @@ def _check_covariance(sigma: np.ndarray, name: str) -> None:
         raise ValueError(f"frechet_distance: {name} is not symmetric (max |Σ - Σᵀ| = {asymmetry:.3g})")
     smallest = float(np.linalg.eigvalsh(0.5 * (sigma + sigma.T)).min())
     if smallest < -1e-8 * scale:
-        raise ValueError(f"frechet_distance: {name} is not positive semi-definite (eigenvalue {smallest:.3g})")
+        raise ValueError(
+            f"frechet_distance: {name} is not positive semi-definite (eigenvalue {smallest:.3g})"
+        )
 
 
 def frechet_distance(mu1: ArrayLike, sigma1: ArrayLike, mu2: ArrayLike, sigma2: ArrayLike) -> float:
@@ -151,7 +155,9 @@ def fid(a: ArrayLike, b: ArrayLike) -> float:
     x = as_float_array(a, "a", "fid", ndim=2, layout="(N, D)")
     y = as_float_array(b, "b", "fid", ndim=2, layout="(N, D)")
     if x.shape[1] != y.shape[1]:
-        raise ValueError(f"fid: a and b must have the same feature dimension D, got {x.shape[1]} and {y.shape[1]}")
+        raise ValueError(
+            f"fid: a and b must have the same feature dimension D, got {x.shape[1]} and {y.shape[1]}"
+        )
     m1, f1 = _covariance_factor(x, "a", "fid")
     m2, f2 = _covariance_factor(y, "b", "fid")
     return _distance(m1 - m2, float((f1 * f1).sum()), float((f2 * f2).sum()), _nuclear_norm(f1 @ f2.T))

@@ -79,5 +79,7 @@ def recognition_accuracy(logits_or_probs: ArrayLike, labels: ArrayLike) -> float
         raise ValueError(f"{func}: labels must be integer class indices, got dtype {target.dtype}")
     n_classes = scores.shape[1]
     if target.min() < 0 or target.max() >= n_classes:
-        raise ValueError(f"{func}: labels must lie in [0, {n_classes}), got values in [{target.min()}, {target.max()}]")
+        raise ValueError(
+            f"{func}: labels must lie in [0, {n_classes}), got values in [{target.min()}, {target.max()}]"
+        )
     return float(np.mean(scores.argmax(axis=1) == target))

@@ -4,7 +4,8 @@ A metric computed on one set of generated motions is itself random. Every chapte
 ``n_repeats`` sample sets of a fixed size, computes the metric on each, and reports the mean with the
 half-width of a Student-t confidence interval:
 
-.. math:: \bar v \pm t_{(1+c)/2,\;n-1}\, \frac{s}{\sqrt n}, \qquad s^2 = \frac{1}{n-1}\sum_r (v_r - \bar v)^2 .
+.. math:: \bar v \pm t_{(1+c)/2,\;n-1}\, \frac{s}{\sqrt n}, \qquad s^2 = \frac{1}{n-1}\sum_r (v_r - \bar v)^2
+.
 
 (ODMO's code uses the normal quantile with :math:`s/\sqrt{n-1}`; with 20 repeats the two differ by a few
 per cent. Student's t is the exact interval for normally distributed values.)
@@ -14,7 +15,7 @@ from __future__ import annotations
 
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass
-from typing import Any, Union
+from typing import Any
 
 import numpy as np
 import torch
@@ -22,7 +23,7 @@ from scipy import stats
 
 from motionlab.metrics._inputs import ArrayLike, as_float_array, check_count
 
-MetricValue = Union[float, Mapping[str, float]]
+MetricValue = float | Mapping[str, float]
 """What a repeated metric returns per sample set: one number, or several by name."""
 
 
@@ -34,7 +35,8 @@ def _check_confidence(confidence: float, func: str) -> float:
 
 
 def mean_ci(values: ArrayLike, confidence: float = 0.95) -> tuple[float, float]:
-    """``(mean, half_width)`` of the Student-t confidence interval of the mean of ``values`` ``(n,)``, ``n >= 2``."""
+    """``(mean, half_width)`` of the Student-t confidence interval of the mean of ``values`` ``(n,)``, ``n >=
+    2``."""
     func = "mean_ci"
     v = as_float_array(values, "values", func, ndim=1, layout="(n,)")
     if v.shape[0] < 2:
@@ -110,8 +112,12 @@ def repeat_metric(
     names = list(results[0])
     for r, result in enumerate(results):
         if not isinstance(result, Mapping) or list(result) != names:
-            raise ValueError(f"{func}: fn must return the same keys {names} on every repeat (repeat {r} differs)")
+            raise ValueError(
+                f"{func}: fn must return the same keys {names} on every repeat (repeat {r} differs)"
+            )
     return {
-        name: _interval([_number(res[name], f"fn[{name!r}] on repeat {r}") for r, res in enumerate(results)], level)
+        name: _interval(
+            [_number(res[name], f"fn[{name!r}] on repeat {r}") for r, res in enumerate(results)], level
+        )
         for name in names
     }

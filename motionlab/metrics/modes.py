@@ -1,4 +1,5 @@
-r"""Agreement between discovered modes and ground-truth sub-modes: mode homogeneity and the adjusted Rand index.
+r"""Agreement between discovered modes and ground-truth sub-modes: mode homogeneity and the adjusted Rand
+index.
 
 Both compare two labelings of the same ``N`` items: ``discovered`` (for example clusters found in a
 model's latent space) and ``truth`` (the data's sub-modes, or the sub-mode a classifier recognises in

@@ -53,7 +53,8 @@ def infer_foot_contacts(
     """Per-frame contact flags of the foot joints, ``(..., T, F)`` booleans (``F = len(feet)``).
 
     A foot is in contact on a frame when its height above its own lowest point in the clip is below
-    ``height_threshold`` (m) and its horizontal speed (central differences) is below ``speed_threshold`` (m/s).
+    ``height_threshold`` (m) and its horizontal speed (central differences) is below ``speed_threshold``
+    (m/s).
     """
     func = "infer_foot_contacts"
     x = _positions(positions, func, min_frames=2)
@@ -105,13 +106,17 @@ def foot_skating(
         flags = as_float_array(contacts, "contacts", func, ndim=x.ndim - 1, layout="(..., T, F)")
         expected = x.shape[:-2] + (len(indices),)
         if flags.shape != expected:
-            raise ValueError(f"{func}: contacts must have shape {expected} (frames x feet), got {flags.shape}")
+            raise ValueError(
+                f"{func}: contacts must have shape {expected} (frames x feet), got {flags.shape}"
+            )
         if not np.isin(flags, (0.0, 1.0)).all():
             raise ValueError(f"{func}: contacts must be booleans or 0/1")
         planted = flags.astype(bool)
     both_ends = planted[..., 1:, :] & planted[..., :-1, :]
     if not both_ends.any():
-        raise ValueError(f"{func}: no foot is in contact on two consecutive frames, so there is nothing to measure")
+        raise ValueError(
+            f"{func}: no foot is in contact on two consecutive frames, so there is nothing to measure"
+        )
     horizontal = x[..., indices, :2]
     speed = np.linalg.norm(np.diff(horizontal, axis=-3), axis=-1) * rate
     return float(speed[both_ends].mean())
@@ -123,8 +128,10 @@ def _parents(parents: ArrayLike | Sequence[int], n_joints: int, func: str) -> np
         raise ValueError(f"{func}: parents must be {n_joints} integers (one per joint), got {p.tolist()}")
     joints = np.arange(n_joints)
     if (p < -1).any() or (p >= n_joints).any() or (p == joints).any() or not (p == -1).any():
-        raise ValueError(f"{func}: parents must lie in [-1, {n_joints}), name no joint as its own parent, "
-                         f"and have a root (-1); got {p.tolist()}")
+        raise ValueError(
+            f"{func}: parents must lie in [-1, {n_joints}), name no joint as its own parent, "
+            f"and have a root (-1); got {p.tolist()}"
+        )
     return p
 
 
@@ -165,7 +172,9 @@ def bone_length_error(
     if ref.shape == (n_joints, 3):
         ref = np.linalg.norm(ref, axis=-1)
     elif ref.shape != (n_joints,):
-        raise ValueError(f"{func}: reference_offsets_or_lengths must be offsets ({n_joints}, 3) or lengths "
-                         f"({n_joints},), got {ref.shape}")
+        raise ValueError(
+            f"{func}: reference_offsets_or_lengths must be offsets ({n_joints}, 3) or lengths "
+            f"({n_joints},), got {ref.shape}"
+        )
     reference = ref[np.asarray(parents) >= 0]
     return float(np.abs(measured - reference).mean())

@@ -1,4 +1,5 @@
-r"""Accuracy of sampled futures and trajectories: best-of-K ADE/FDE, their multimodal versions, end-point error.
+r"""Accuracy of sampled futures and trajectories: best-of-K ADE/FDE, their multimodal versions, end-point
+error.
 
 Following DLow (Yuan & Kitani 2020), with ``K`` sampled futures :math:`\hat x^{(k)}` ``(K, T, D)`` and the
 true future :math:`x` ``(T, D)``:
@@ -30,7 +31,8 @@ from motionlab.metrics._inputs import ArrayLike, as_float_array, check_positive
 def _samples_and_targets(
     samples: ArrayLike, targets: ArrayLike, func: str, targets_name: str, batched: bool
 ) -> tuple[np.ndarray, np.ndarray]:
-    """``samples`` as ``(K, T, F)`` and targets as ``(M, T, F)`` (``M = 1`` when not batched), both flattened."""
+    """``samples`` as ``(K, T, F)`` and targets as ``(M, T, F)`` (``M = 1`` when not batched), both
+    flattened."""
     x = as_float_array(samples, "samples", func, min_ndim=3, layout="(K, T, D)")
     y = as_float_array(
         targets, targets_name, func, min_ndim=3 if batched else 2, layout="(M, T, D)" if batched else "(T, D)"
@@ -65,7 +67,8 @@ def min_ade(samples: ArrayLike, target: ArrayLike) -> float:
 
 
 def min_fde(samples: ArrayLike, target: ArrayLike) -> float:
-    """Best-of-K final displacement error: ``min_k ||samples[k, -1] - target[-1]||`` (shapes as :func:`min_ade`)."""
+    """Best-of-K final displacement error: ``min_k ||samples[k, -1] - target[-1]||`` (shapes as
+    :func:`min_ade`)."""
     x, y = _samples_and_targets(samples, target, "min_fde", "target", batched=False)
     return float(_frame_distances(x[:, -1:], y[:, -1:])[..., 0].min())
 
@@ -87,7 +90,8 @@ def multimodal_ground_truth(start_poses: ArrayLike, futures: ArrayLike, threshol
     ahead = as_float_array(futures, "futures", func, min_ndim=3, layout="(N, T, D)")
     if starts.shape[0] != ahead.shape[0]:
         raise ValueError(
-            f"{func}: start_poses and futures must have the same N, got {starts.shape[0]} and {ahead.shape[0]}"
+            f"{func}: start_poses and futures must have the same N, got {starts.shape[0]} and "
+            f"{ahead.shape[0]}"
         )
     radius = check_positive(threshold, "threshold", func)
     distances = cdist(starts.reshape(starts.shape[0], -1), starts.reshape(starts.shape[0], -1))
@@ -107,7 +111,8 @@ def mmade(samples: ArrayLike, gt_futures: ArrayLike) -> float:
 
 
 def mmfde(samples: ArrayLike, gt_futures: ArrayLike) -> float:
-    """Multimodal FDE of one window: mean over ground-truth futures of the best-of-K FDE (shapes as :func:`mmade`)."""
+    """Multimodal FDE of one window: mean over ground-truth futures of the best-of-K FDE (shapes as
+    :func:`mmade`)."""
     x, y = _samples_and_targets(samples, gt_futures, "mmfde", "gt_futures", batched=True)
     return float(_frame_distances(x[:, -1:], y[:, -1:])[..., 0].min(axis=1).mean())
 
@@ -116,8 +121,8 @@ def end_point_error(trajectories: ArrayLike, targets: ArrayLike) -> float:
     """ODMO's ``dist_e``: mean distance between each trajectory's last position and its requested end point.
 
     Args:
-        trajectories: root trajectories ``(N, T, C)`` with ``C`` coordinates (2 for the ground plane, 3 for space).
-        targets: requested end positions ``(N, C)``.
+        trajectories: root trajectories ``(N, T, C)`` with ``C`` coordinates (2 for the ground plane, 3 for
+        space). targets: requested end positions ``(N, C)``.
     """
     func = "end_point_error"
     paths = as_float_array(trajectories, "trajectories", func, ndim=3, layout="(N, T, C)")

@@ -48,7 +48,9 @@ class ClassifierConfig:
         if self.kind not in ("conv", "gru"):
             raise ValueError(f"ClassifierConfig.kind must be 'conv' or 'gru', got {self.kind!r}")
         if not self.classes or any(n < 2 for n in self.classes.values()):
-            raise ValueError(f"ClassifierConfig.classes needs at least one head with >= 2 classes, got {self.classes}")
+            raise ValueError(
+                f"ClassifierConfig.classes needs at least one head with >= 2 classes, got {self.classes}"
+            )
         if self.kernel_size % 2 != 1:
             raise ValueError(f"ClassifierConfig.kernel_size must be odd, got {self.kernel_size}")
 
@@ -75,8 +77,10 @@ class MotionClassifier(nn.Module):
 
     def _check(self, x: Tensor) -> Tensor:
         if x.dim() != 3 or x.shape[-1] != self.cfg.in_features or x.shape[1] < 1:
-            raise ValueError(f"MotionClassifier: expected frames (B, T, {self.cfg.in_features}) with T >= 1, "
-                             f"got {tuple(x.shape)}")
+            raise ValueError(
+                f"MotionClassifier: expected frames (B, T, {self.cfg.in_features}) with T >= 1, "
+                f"got {tuple(x.shape)}"
+            )
         return x
 
     def layer_activations(self, x: Tensor) -> list[Tensor]:

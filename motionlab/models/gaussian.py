@@ -28,10 +28,14 @@ def _check_tensor(x: object, where: str, name: str) -> torch.Tensor:
 
 def _check_same_shape(a: torch.Tensor, b: torch.Tensor, where: str, names: str) -> None:
     if a.shape != b.shape:
-        raise ValueError(f"{where}: {names} must have the same shape, got {tuple(a.shape)} and {tuple(b.shape)}")
+        raise ValueError(
+            f"{where}: {names} must have the same shape, got {tuple(a.shape)} and {tuple(b.shape)}"
+        )
 
 
-def _prior_tensor(value: torch.Tensor | float | None, like: torch.Tensor, where: str, name: str) -> torch.Tensor:
+def _prior_tensor(
+    value: torch.Tensor | float | None, like: torch.Tensor, where: str, name: str
+) -> torch.Tensor:
     """``value`` as a tensor broadcastable to ``like`` (``None`` means 0, the standard normal's value)."""
     if value is None:
         return torch.zeros((), dtype=like.dtype, device=like.device)
@@ -47,7 +51,9 @@ def _prior_tensor(value: torch.Tensor | float | None, like: torch.Tensor, where:
     return value
 
 
-def reparameterize(mu: torch.Tensor, logvar: torch.Tensor, generator: torch.Generator | None = None) -> torch.Tensor:
+def reparameterize(
+    mu: torch.Tensor, logvar: torch.Tensor, generator: torch.Generator | None = None
+) -> torch.Tensor:
     """Draw ``z = mu + sigma * eps`` with ``eps ~ N(0, I)``: a sample that gradients flow through.
 
     Args:

@@ -1,4 +1,5 @@
-"""Variational autoencoders for poses and clips: an MLP (C)VAE and a recurrent CVAE with an autoregressive decoder.
+"""Variational autoencoders for poses and clips: an MLP (C)VAE and a recurrent CVAE with an autoregressive
+decoder.
 
 Both models share one interface, so one loss function (:func:`elbo_loss`) trains either through
 :func:`motionlab.train.train_or_load`:
@@ -9,7 +10,8 @@ Both models share one interface, so one loss function (:func:`elbo_loss`) trains
 * ``sample(label, generator)``: decode draws from the prior p(z) = N(0, sigma_p^2 I).
 
 ``label`` is the class c of a conditional VAE (``(B,)`` int64, one-hot encoded inside) and must be ``None``
-for an unconditional one. Inputs are standardised features (see :class:`motionlab.data.datasets.Standardizer`).
+for an unconditional one. Inputs are standardised features (see
+:class:`motionlab.data.datasets.Standardizer`).
 
 With ``variational=False`` the MLP model is a plain autoencoder: the code is ``mu`` itself, no noise, no KL.
 """
@@ -37,9 +39,14 @@ class VAEOutput(NamedTuple):
     z: Tensor
 
 
-def _check_common(latent_dim: int, hidden: int, n_classes: int, obs_logvar: float, prior_logvar: float,
-                  owner: str) -> None:
-    for name, value, least in (("latent_dim", latent_dim, 1), ("hidden", hidden, 1), ("n_classes", n_classes, 0)):
+def _check_common(
+    latent_dim: int, hidden: int, n_classes: int, obs_logvar: float, prior_logvar: float, owner: str
+) -> None:
+    for name, value, least in (
+        ("latent_dim", latent_dim, 1),
+        ("hidden", hidden, 1),
+        ("n_classes", n_classes, 0),
+    ):
         if isinstance(value, bool) or not isinstance(value, int) or value < least:
             raise ValueError(f"{owner}.{name} must be an integer >= {least}, got {value!r}")
     for name, value in (("obs_logvar", obs_logvar), ("prior_logvar", prior_logvar)):
@@ -49,7 +56,8 @@ def _check_common(latent_dim: int, hidden: int, n_classes: int, obs_logvar: floa
 
 @dataclass(frozen=True)
 class VAEConfig:
-    """An MLP (conditional) VAE on inputs of a fixed shape (a pose ``(D,)`` or a clip ``(L, D)``, flattened inside).
+    """An MLP (conditional) VAE on inputs of a fixed shape (a pose ``(D,)`` or a clip ``(L, D)``, flattened
+    inside).
 
     Attributes:
         input_shape: shape of one input, e.g. ``(64,)`` or ``(60, 67)``.
@@ -73,11 +81,15 @@ class VAEConfig:
     def __post_init__(self) -> None:
         shape = tuple(self.input_shape)
         if not shape or any(isinstance(s, bool) or not isinstance(s, int) or s < 1 for s in shape):
-            raise ValueError(f"VAEConfig.input_shape must be a non-empty tuple of positive ints, got {self.input_shape!r}")
+            raise ValueError(
+                f"VAEConfig.input_shape must be a non-empty tuple of positive ints, got {self.input_shape!r}"
+            )
         object.__setattr__(self, "input_shape", shape)
         if isinstance(self.depth, bool) or not isinstance(self.depth, int) or self.depth < 1:
             raise ValueError(f"VAEConfig.depth must be an integer >= 1, got {self.depth!r}")
-        _check_common(self.latent_dim, self.hidden, self.n_classes, self.obs_logvar, self.prior_logvar, "VAEConfig")
+        _check_common(
+            self.latent_dim, self.hidden, self.n_classes, self.obs_logvar, self.prior_logvar, "VAEConfig"
+        )
 
     @property
     def input_size(self) -> int:
@@ -113,13 +125,21 @@ class RecurrentVAEConfig:
 
     def __post_init__(self) -> None:
         if not isinstance(self.frame_dropout, (int, float)) or not 0.0 <= self.frame_dropout < 1.0:
-            raise ValueError(f"RecurrentVAEConfig.frame_dropout must lie in [0, 1), got {self.frame_dropout!r}")
+            raise ValueError(
+                f"RecurrentVAEConfig.frame_dropout must lie in [0, 1), got {self.frame_dropout!r}"
+            )
         for name in ("n_features", "length"):
             value = getattr(self, name)
             if isinstance(value, bool) or not isinstance(value, int) or value < 1:
                 raise ValueError(f"RecurrentVAEConfig.{name} must be an integer >= 1, got {value!r}")
-        _check_common(self.latent_dim, self.hidden, self.n_classes, self.obs_logvar, self.prior_logvar,
-                      "RecurrentVAEConfig")
+        _check_common(
+            self.latent_dim,
+            self.hidden,
+            self.n_classes,
+            self.obs_logvar,
+            self.prior_logvar,
+            "RecurrentVAEConfig",
+        )
 
 
 def _check_finite(x: Tensor, where: str) -> Tensor:
@@ -162,21 +182,28 @@ class LatentVariableModel(nn.Module):
             raise ValueError(f"{where}: this model is conditional on {n_classes} classes; pass label (B,)")
         label = torch.as_tensor(label)
         if label.dim() != 1 or label.shape[0] != batch or label.is_floating_point():
-            raise ValueError(f"{where}: label must be an integer tensor of shape ({batch},), got {label.dtype} "
-                             f"{tuple(label.shape)}")
+            raise ValueError(
+                f"{where}: label must be an integer tensor of shape ({batch},), got {label.dtype} "
+                f"{tuple(label.shape)}"
+            )
         if batch and (int(label.min()) < 0 or int(label.max()) >= n_classes):
-            raise ValueError(f"{where}: label values must lie in [0, {n_classes}), got [{int(label.min())}, "
-                             f"{int(label.max())}]")
+            raise ValueError(
+                f"{where}: label values must lie in [0, {n_classes}), got [{int(label.min())}, "
+                f"{int(label.max())}]"
+            )
         return F.one_hot(label.long(), n_classes).float()
 
-    def forward(self, x: Tensor, label: Tensor | None = None, generator: torch.Generator | None = None) -> VAEOutput:
+    def forward(
+        self, x: Tensor, label: Tensor | None = None, generator: torch.Generator | None = None
+    ) -> VAEOutput:
         """Encode, draw ``z = mu + sigma * eps`` (an autoencoder uses ``mu``), decode."""
         mu, logvar = self.encode(x, label)
         z = mu if logvar is None else reparameterize(mu, logvar, generator)
         return VAEOutput(self.reconstruct(x, z, label), mu, logvar, z)
 
     def reconstruct(self, x: Tensor, z: Tensor, label: Tensor | None) -> Tensor:
-        """The likelihood mean of ``x`` given ``z`` (the recurrent model overrides it with teacher forcing)."""
+        """The likelihood mean of ``x`` given ``z`` (the recurrent model overrides it with teacher
+        forcing)."""
         return self.decode(z, label)
 
     def prior_sample(self, n: int, generator: torch.Generator | None = None) -> Tensor:
@@ -188,7 +215,8 @@ class LatentVariableModel(nn.Module):
 
     @torch.no_grad()
     def sample(self, label: Tensor | int, generator: torch.Generator | None = None) -> Tensor:
-        """Decode prior draws: ``label`` ``(B,)`` class ids for a CVAE, or the number of samples ``B`` otherwise."""
+        """Decode prior draws: ``label`` ``(B,)`` class ids for a CVAE, or the number of samples ``B``
+        otherwise."""
         was_training = self.training
         self.eval()
         try:
@@ -216,12 +244,15 @@ class MLPVAE(LatentVariableModel):
         if not isinstance(x, Tensor) or not x.is_floating_point():
             raise TypeError(f"{where}: x must be a floating-point tensor, got {type(x).__name__}")
         if tuple(x.shape[1:]) != self.cfg.input_shape:
-            raise ValueError(f"{where}: x must have shape (B, {', '.join(map(str, self.cfg.input_shape))}), "
-                             f"got {tuple(x.shape)}")
+            raise ValueError(
+                f"{where}: x must have shape (B, {', '.join(map(str, self.cfg.input_shape))}), "
+                f"got {tuple(x.shape)}"
+            )
         return _check_finite(x, where)
 
     def encode(self, x: Tensor, label: Tensor | None = None) -> tuple[Tensor, Tensor | None]:
-        """Posterior parameters ``mu``, ``logvar`` ``(B, latent_dim)`` (``logvar`` is ``None`` for an autoencoder)."""
+        """Posterior parameters ``mu``, ``logvar`` ``(B, latent_dim)`` (``logvar`` is ``None`` for an
+        autoencoder)."""
         x = self._check_input(x, "MLPVAE.encode")
         c = self.condition(label, x.shape[0], "MLPVAE.encode")
         h = x.flatten(1) if c is None else torch.cat([x.flatten(1), c], dim=-1)
@@ -234,7 +265,9 @@ class MLPVAE(LatentVariableModel):
     def decode(self, z: Tensor, label: Tensor | None = None) -> Tensor:
         """Likelihood mean ``(B, *input_shape)`` from codes ``z`` ``(B, latent_dim)``."""
         if z.dim() != 2 or z.shape[1] != self.cfg.latent_dim:
-            raise ValueError(f"MLPVAE.decode: z must have shape (B, {self.cfg.latent_dim}), got {tuple(z.shape)}")
+            raise ValueError(
+                f"MLPVAE.decode: z must have shape (B, {self.cfg.latent_dim}), got {tuple(z.shape)}"
+            )
         c = self.condition(label, z.shape[0], "MLPVAE.decode")
         h = z if c is None else torch.cat([z, c], dim=-1)
         return self.decoder(h).unflatten(1, self.cfg.input_shape)
@@ -264,11 +297,14 @@ class RecurrentVAE(LatentVariableModel):
         if not isinstance(x, Tensor) or not x.is_floating_point():
             raise TypeError(f"{where}: x must be a floating-point tensor, got {type(x).__name__}")
         if x.dim() != 3 or x.shape[1] < 1 or x.shape[2] != self.cfg.n_features:
-            raise ValueError(f"{where}: x must have shape (B, L, {self.cfg.n_features}) with L >= 1, got {tuple(x.shape)}")
+            raise ValueError(
+                f"{where}: x must have shape (B, L, {self.cfg.n_features}) with L >= 1, got {tuple(x.shape)}"
+            )
         return _check_finite(x, where)
 
     def encode(self, x: Tensor, label: Tensor | None = None) -> tuple[Tensor, Tensor]:
-        """Posterior parameters ``mu``, ``logvar`` ``(B, latent_dim)`` of clips ``x`` ``(B, L, n_features)``."""
+        """Posterior parameters ``mu``, ``logvar`` ``(B, latent_dim)`` of clips ``x`` ``(B, L,
+        n_features)``."""
         x = self._check_clip(x, "RecurrentVAE.encode")
         c = self.condition(label, x.shape[0], "RecurrentVAE.encode")
         h = x if c is None else torch.cat([x, c[:, None].expand(-1, x.shape[1], -1)], dim=-1)
@@ -277,7 +313,8 @@ class RecurrentVAE(LatentVariableModel):
         return mu, logvar
 
     def _context(self, z: Tensor, label: Tensor | None, where: str) -> tuple[Tensor, Tensor]:
-        """The per-frame context ``[z, c]`` ``(B, latent + n_classes)`` and the initial decoder state ``(1, B, hidden)``."""
+        """The per-frame context ``[z, c]`` ``(B, latent + n_classes)`` and the initial decoder state ``(1, B,
+        hidden)``."""
         if z.dim() != 2 or z.shape[1] != self.cfg.latent_dim:
             raise ValueError(f"{where}: z must have shape (B, {self.cfg.latent_dim}), got {tuple(z.shape)}")
         c = self.condition(label, z.shape[0], where)
@@ -320,8 +357,12 @@ class RecurrentVAE(LatentVariableModel):
         return torch.cat(frames, dim=1)
 
 
-def elbo_terms(model: LatentVariableModel, x: Tensor, label: Tensor | None = None,
-               generator: torch.Generator | None = None) -> dict[str, Tensor]:
+def elbo_terms(
+    model: LatentVariableModel,
+    x: Tensor,
+    label: Tensor | None = None,
+    generator: torch.Generator | None = None,
+) -> dict[str, Tensor]:
     """The negative ELBO's two terms for a batch, in nats per sample (means over the batch).
 
     ``recon`` = E_q[-log p(x | z)], one draw of z, summed over all of x's numbers;
@@ -337,9 +378,11 @@ def elbo_terms(model: LatentVariableModel, x: Tensor, label: Tensor | None = Non
     return {"recon": recon, "kl": kl_dims.sum(), "kl_per_dim": kl_dims}
 
 
-def elbo_loss(model: LatentVariableModel, batch: Tensor | tuple[Tensor, Tensor], step: int,
-              coeffs: dict[str, float]) -> dict[str, Tensor]:
-    """Loss function for :func:`motionlab.train.train`: ``recon + beta * kl`` (``beta`` from the schedules, default 1).
+def elbo_loss(
+    model: LatentVariableModel, batch: Tensor | tuple[Tensor, Tensor], step: int, coeffs: dict[str, float]
+) -> dict[str, Tensor]:
+    """Loss function for :func:`motionlab.train.train`: ``recon + beta * kl`` (``beta`` from the schedules,
+    default 1).
 
     ``batch`` is ``x`` for an unconditional model or ``(x, label)`` for a conditional one. For an autoencoder
     the loss is the reconstruction term alone.
@@ -353,14 +396,18 @@ def elbo_loss(model: LatentVariableModel, batch: Tensor | tuple[Tensor, Tensor],
 
 
 @torch.no_grad()
-def encode_all(model: LatentVariableModel, x: Tensor, label: Tensor | None = None,
-               chunk: int = 1024) -> tuple[Tensor, Tensor | None]:
-    """Posterior parameters of a whole data set, in eval mode and in chunks: ``mu``, ``logvar`` ``(N, latent_dim)``."""
+def encode_all(
+    model: LatentVariableModel, x: Tensor, label: Tensor | None = None, chunk: int = 1024
+) -> tuple[Tensor, Tensor | None]:
+    """Posterior parameters of a whole data set, in eval mode and in chunks: ``mu``, ``logvar`` ``(N,
+    latent_dim)``."""
     was_training = model.training
     model.eval()
     try:
-        parts = [model.encode(x[i:i + chunk], None if label is None else label[i:i + chunk])
-                 for i in range(0, x.shape[0], chunk)]
+        parts = [
+            model.encode(x[i : i + chunk], None if label is None else label[i : i + chunk])
+            for i in range(0, x.shape[0], chunk)
+        ]
     finally:
         model.train(was_training)
     mu = torch.cat([p[0] for p in parts])
@@ -369,9 +416,12 @@ def encode_all(model: LatentVariableModel, x: Tensor, label: Tensor | None = Non
 
 
 def interpolate_codes(z0: Tensor, z1: Tensor, t: Tensor | float) -> Tensor:
-    """Straight-line interpolation ``(1 - t) z0 + t z1``: codes ``(D,)`` and ``t`` scalar or ``(K,)`` -> ``(K, D)``."""
+    """Straight-line interpolation ``(1 - t) z0 + t z1``: codes ``(D,)`` and ``t`` scalar or ``(K,)`` -> ``(K,
+    D)``."""
     if z0.shape != z1.shape or z0.dim() != 1:
-        raise ValueError(f"interpolate_codes: z0 and z1 must be 1-D codes of one size, got {tuple(z0.shape)} and "
-                         f"{tuple(z1.shape)}")
+        raise ValueError(
+            f"interpolate_codes: z0 and z1 must be 1-D codes of one size, got {tuple(z0.shape)} and "
+            f"{tuple(z1.shape)}"
+        )
     t = torch.as_tensor(t, dtype=z0.dtype).reshape(-1, 1)
     return (1 - t) * z0 + t * z1

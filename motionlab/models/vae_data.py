@@ -59,15 +59,19 @@ class ClipCodec:
     length: int
 
     def to_positions(self, features: Tensor) -> Tensor:
-        """Positions ``(..., L, 22, 3)`` of standardised windows ``(..., L, 67)``; each starts at the origin facing +x."""
+        """Positions ``(..., L, 22, 3)`` of standardised windows ``(..., L, 67)``; each starts at the origin
+        facing +x."""
         if not isinstance(features, Tensor) or features.dim() < 2 or features.shape[-2] != self.length:
             shape = tuple(features.shape) if isinstance(features, Tensor) else type(features).__name__
-            raise ValueError(f"ClipCodec.to_positions: features must be (..., {self.length}, 67), got {shape}")
+            raise ValueError(
+                f"ClipCodec.to_positions: features must be (..., {self.length}, 67), got {shape}"
+            )
         return from_moglow(self.standardizer.inverse(features.detach()))
 
 
-def clip_windows(train: MotionClips, others: tuple[MotionClips, ...], length: int,
-                 stride: int) -> tuple[ClipCodec, WindowDataset, tuple[WindowDataset, ...]]:
+def clip_windows(
+    train: MotionClips, others: tuple[MotionClips, ...], length: int, stride: int
+) -> tuple[ClipCodec, WindowDataset, tuple[WindowDataset, ...]]:
     """Standardised MoGlow windows of the training clips and of other splits (train statistics).
 
     Returns the codec, the training windows and the other splits' windows, each a
@@ -77,5 +81,7 @@ def clip_windows(train: MotionClips, others: tuple[MotionClips, ...], length: in
     raw = motion_windows(train, rep, length, stride)
     standardizer = Standardizer(rep.dim).fit(raw.features)
     train_windows = raw.with_features(standardizer.transform(raw.features))
-    other_windows = tuple(motion_windows(clips, rep, length, stride, standardizer=standardizer) for clips in others)
+    other_windows = tuple(
+        motion_windows(clips, rep, length, stride, standardizer=standardizer) for clips in others
+    )
     return ClipCodec(standardizer, length), train_windows, other_windows

@@ -1,4 +1,5 @@
-"""Chapter 03's runs: settings per profile, training through the cache, and the measurements the chapter reports.
+"""Chapter 03's runs: settings per profile, training through the cache, and the measurements the chapter
+reports.
 
 Every model trains through :func:`motionlab.train.train_or_load` with the same optimiser settings; the
 pose models on standardised pose vectors, the clip CVAEs on standardised 2-second MoGlow windows.
@@ -84,16 +85,27 @@ def chapter_settings() -> ChapterSettings:
 
 def pose_vae_config(settings: ChapterSettings, variational: bool = True, prior_var: float = 1.0) -> VAEConfig:
     """An unconditional pose (V)AE on 64-number pose vectors; ``prior_var`` is sigma_p^2."""
-    return VAEConfig((POSE_FEATURES,), latent_dim=settings.pose_latent, hidden=settings.pose_hidden,
-                     variational=variational, obs_logvar=math.log(settings.pose_obs_var),
-                     prior_logvar=math.log(prior_var))
+    return VAEConfig(
+        (POSE_FEATURES,),
+        latent_dim=settings.pose_latent,
+        hidden=settings.pose_hidden,
+        variational=variational,
+        obs_logvar=math.log(settings.pose_obs_var),
+        prior_logvar=math.log(prior_var),
+    )
 
 
 def clip_cvae_config(settings: ChapterSettings, n_actions: int, prior_var: float = 1.0) -> VAEConfig:
-    """The action-conditioned clip VAE: windows ``(clip_length, 67)``, sigma_x^2 = 67 / 2 (ODMO's weighting)."""
-    return VAEConfig((settings.clip_length, CLIP_FEATURES), latent_dim=settings.clip_latent,
-                     hidden=settings.clip_hidden, n_classes=n_actions,
-                     obs_logvar=math.log(CLIP_FEATURES / 2), prior_logvar=math.log(prior_var))
+    """The action-conditioned clip VAE: windows ``(clip_length, 67)``, sigma_x^2 = 67 / 2 (ODMO's
+    weighting)."""
+    return VAEConfig(
+        (settings.clip_length, CLIP_FEATURES),
+        latent_dim=settings.clip_latent,
+        hidden=settings.clip_hidden,
+        n_classes=n_actions,
+        obs_logvar=math.log(CLIP_FEATURES / 2),
+        prior_logvar=math.log(prior_var),
+    )
 
 
 def kl_weight(steps: int, anneal: bool) -> KLAnneal | Constant:
@@ -101,8 +113,17 @@ def kl_weight(steps: int, anneal: bool) -> KLAnneal | Constant:
     return KLAnneal(max_value=1.0, warmup=0, anneal=max(1, steps // 2)) if anneal else Constant(1.0)
 
 
-def train_vae(name: str, cfg: VAEConfig, x: Tensor, label: Tensor | None, steps: int, anneal: bool,
-              settings: ChapterSettings, seed: int = 0, progress: bool | None = None) -> tuple[MLPVAE, TrainResult]:
+def train_vae(
+    name: str,
+    cfg: VAEConfig,
+    x: Tensor,
+    label: Tensor | None,
+    steps: int,
+    anneal: bool,
+    settings: ChapterSettings,
+    seed: int = 0,
+    progress: bool | None = None,
+) -> tuple[MLPVAE, TrainResult]:
     """Build an :class:`MLPVAE` from ``cfg`` (initialised from ``seed``) and train or load it.
 
     Args:
@@ -113,10 +134,21 @@ def train_vae(name: str, cfg: VAEConfig, x: Tensor, label: Tensor | None, steps:
     torch.manual_seed(seed)
     model = MLPVAE(cfg)
     data = TensorBatches((x,) if label is None else (x, label))
-    train_cfg = TrainConfig(steps=steps, batch_size=settings.batch_size, lr=settings.lr, grad_clip=1.0,
-                            seed=seed, schedules={"beta": kl_weight(steps, anneal)})
-    fingerprint = {"x": data_fingerprint(x), "label": None if label is None else data_fingerprint(label.float())}
-    result = train_or_load(name, cfg, model, elbo_loss, data, train_cfg, data_config=fingerprint, progress=progress)
+    train_cfg = TrainConfig(
+        steps=steps,
+        batch_size=settings.batch_size,
+        lr=settings.lr,
+        grad_clip=1.0,
+        seed=seed,
+        schedules={"beta": kl_weight(steps, anneal)},
+    )
+    fingerprint = {
+        "x": data_fingerprint(x),
+        "label": None if label is None else data_fingerprint(label.float()),
+    }
+    result = train_or_load(
+        name, cfg, model, elbo_loss, data, train_cfg, data_config=fingerprint, progress=progress
+    )
     return model, result
 
 
@@ -156,7 +188,8 @@ def latent_summary(mu: Tensor, logvar: Tensor, prior_logvar: float = 0.0) -> Lat
 
 
 def plausibility(positions: Tensor | np.ndarray, offsets: np.ndarray, parents: np.ndarray) -> float:
-    """Mean bone-length error (m) of poses ``(N, 22, 3)``, each against the closer of the body types ``(K, 22, 3)``."""
+    """Mean bone-length error (m) of poses ``(N, 22, 3)``, each against the closer of the body types ``(K, 22,
+    3)``."""
     positions = np.asarray(positions, dtype=np.float64)
     if positions.ndim != 3:
         raise ValueError(f"plausibility: positions must be poses (N, 22, 3), got shape {positions.shape}")
@@ -164,12 +197,21 @@ def plausibility(positions: Tensor | np.ndarray, offsets: np.ndarray, parents: n
     return float(np.min(errors, axis=1).mean())
 
 
-def sample_clip_metrics(model: MLPVAE, codec: ClipCodec, evaluator: Evaluator, reference_features: Tensor,
-                        settings: ChapterSettings, seed: int, latent_std: float | None = None) -> dict[str, Interval]:
-    """Accuracy, FID, Diversity, Multimodality and IS of CVAE samples: mean ± 95% CI over repeated sample sets.
+def sample_clip_metrics(
+    model: MLPVAE,
+    codec: ClipCodec,
+    evaluator: Evaluator,
+    reference_features: Tensor,
+    settings: ChapterSettings,
+    seed: int,
+    latent_std: float | None = None,
+) -> dict[str, Interval]:
+    """Accuracy, FID, Diversity, Multimodality and IS of CVAE samples: mean ± 95% CI over repeated sample
+    sets.
 
     Each repeat draws ``settings.per_action`` clips of every action with codes z ~ N(0, s^2 I), where s is the
-    prior's standard deviation, or ``latent_std`` when given (to show what sampling from the wrong prior does).
+    prior's standard deviation, or ``latent_std`` when given (to show what sampling from the wrong prior
+    does).
     """
     n_actions = model.cfg.n_classes
     labels = torch.arange(n_actions).repeat_interleave(settings.per_action)
@@ -188,19 +230,32 @@ def sample_clip_metrics(model: MLPVAE, codec: ClipCodec, evaluator: Evaluator, r
     return repeat_metric(measure, draw, settings.n_repeats, seed)
 
 
-def real_window_metrics(test_positions: Tensor, test_action: Tensor, evaluator: Evaluator,
-                        reference_features: Tensor, settings: ChapterSettings, seed: int) -> dict[str, Interval]:
-    """The real-data row for 2-second windows: random held-out windows, ``per_action`` of each action per repeat."""
+def real_window_metrics(
+    test_positions: Tensor,
+    test_action: Tensor,
+    evaluator: Evaluator,
+    reference_features: Tensor,
+    settings: ChapterSettings,
+    seed: int,
+) -> dict[str, Interval]:
+    """The real-data row for 2-second windows: random held-out windows, ``per_action`` of each action per
+    repeat."""
     test_action = torch.as_tensor(test_action)
     by_action = [torch.nonzero(test_action == a)[:, 0] for a in range(int(test_action.max()) + 1)]
 
     def draw(generator: torch.Generator) -> tuple[Tensor, np.random.Generator]:
-        index = torch.cat([rows[torch.randperm(rows.numel(), generator=generator)[:settings.per_action]]
-                           for rows in by_action])
+        index = torch.cat(
+            [
+                rows[torch.randperm(rows.numel(), generator=generator)[: settings.per_action]]
+                for rows in by_action
+            ]
+        )
         return index, np.random.default_rng(generator.initial_seed())
 
     def measure(sample: tuple[Tensor, np.random.Generator]) -> dict[str, float]:
         index, rng = sample
-        return sample_metrics(evaluator, test_positions[index], test_action[index].numpy(), reference_features, rng)
+        return sample_metrics(
+            evaluator, test_positions[index], test_action[index].numpy(), reference_features, rng
+        )
 
     return repeat_metric(measure, draw, settings.n_repeats, seed)

@@ -16,14 +16,14 @@ from __future__ import annotations
 
 from collections.abc import Callable, Iterable, Iterator
 from dataclasses import dataclass
-from typing import Any, Union
+from typing import Any
 
 import numpy as np
 import torch
 from torch import Tensor
 from torch.utils.data import DataLoader, RandomSampler, SubsetRandomSampler, WeightedRandomSampler
 
-BatchSource = Union[DataLoader, Callable[[int, torch.Generator, int], Iterable[Any]]]
+BatchSource = DataLoader | Callable[[int, torch.Generator, int], Iterable[Any]]
 
 _RANDOM_SAMPLERS = (RandomSampler, SubsetRandomSampler, WeightedRandomSampler)
 
@@ -38,18 +38,26 @@ def check_source(source: Any, batch_size: int, what: str = "data") -> None:
     """Raise a clear error when ``source`` cannot give reproducible batches of ``batch_size``."""
     if isinstance(source, DataLoader):
         if source.batch_size != batch_size:
-            raise ValueError(f"{what}: DataLoader batch_size {source.batch_size} differs from TrainConfig.batch_size "
-                             f"{batch_size}")
+            raise ValueError(
+                f"{what}: DataLoader batch_size {source.batch_size} differs from TrainConfig.batch_size "
+                f"{batch_size}"
+            )
         sampler = source.batch_sampler.sampler if source.batch_sampler is not None else source.sampler
         if isinstance(sampler, _RANDOM_SAMPLERS) and sampler.generator is None:
-            raise ValueError(f"{what}: the DataLoader shuffles without a generator; build it with "
-                             "generator=torch.Generator() so the loop can seed every epoch")
+            raise ValueError(
+                f"{what}: the DataLoader shuffles without a generator; build it with "
+                "generator=torch.Generator() so the loop can seed every epoch"
+            )
     elif not callable(source):
-        raise TypeError(f"{what} must be a DataLoader or a callable batches(epoch, generator, batch_size), "
-                        f"got {type(source).__name__}")
+        raise TypeError(
+            f"{what} must be a DataLoader or a callable batches(epoch, generator, batch_size), "
+            f"got {type(source).__name__}"
+        )
 
 
-def epoch_batches(source: BatchSource, seed: int, epoch: int, batch_size: int, stream: int = 0) -> Iterator[Any]:
+def epoch_batches(
+    source: BatchSource, seed: int, epoch: int, batch_size: int, stream: int = 0
+) -> Iterator[Any]:
     """An iterator over the batches of ``epoch``, in the order fixed by ``(seed, epoch, stream)``."""
     generator_seed = epoch_seed(seed, epoch, stream)
     if isinstance(source, DataLoader):
@@ -80,22 +88,29 @@ class TensorBatches:
             raise TypeError("TensorBatches needs one or more tensors")
         sizes = {t.shape[0] if t.dim() else None for t in tensors}
         if len(sizes) != 1 or None in sizes:
-            raise ValueError(f"TensorBatches: tensors must share their first dimension, got sizes {sorted(map(str, sizes))}")
+            raise ValueError(
+                "TensorBatches: tensors must share their first dimension, got sizes "
+                f"{sorted(map(str, sizes))}"
+            )
         object.__setattr__(self, "tensors", tensors)
 
     def __len__(self) -> int:
         """Number of samples."""
         return int(self.tensors[0].shape[0])
 
-    def __call__(self, epoch: int, generator: torch.Generator, batch_size: int) -> Iterator[Tensor | tuple[Tensor, ...]]:
+    def __call__(
+        self, epoch: int, generator: torch.Generator, batch_size: int
+    ) -> Iterator[Tensor | tuple[Tensor, ...]]:
         if batch_size < 1:
             raise ValueError(f"batch_size must be >= 1, got {batch_size}")
         n = len(self)
         if self.drop_last and n < batch_size:
-            raise ValueError(f"TensorBatches: {n} samples cannot fill one batch of {batch_size} with drop_last=True")
+            raise ValueError(
+                f"TensorBatches: {n} samples cannot fill one batch of {batch_size} with drop_last=True"
+            )
         order = torch.randperm(n, generator=generator) if self.shuffle else torch.arange(n)
         stop = n - n % batch_size if self.drop_last else n
         for begin in range(0, stop, batch_size):
-            index = order[begin:begin + batch_size]
+            index = order[begin : begin + batch_size]
             batch = tuple(t[index] for t in self.tensors)
             yield batch[0] if len(batch) == 1 else batch

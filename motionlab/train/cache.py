@@ -11,10 +11,10 @@ from __future__ import annotations
 
 import math
 import warnings
-from collections.abc import Iterable
+from collections.abc import Callable, Iterable
 from dataclasses import replace
 from pathlib import Path
-from typing import Any, Callable, TypeVar
+from typing import Any, TypeVar
 
 import torch
 from torch import nn
@@ -29,7 +29,9 @@ from motionlab.train.train_config import TrainConfig
 M = TypeVar("M", bound=nn.Module)
 
 
-def run_identity(model_config: Any, train_config: TrainConfig, data_config: Any | None = None) -> dict[str, Any]:
+def run_identity(
+    model_config: Any, train_config: TrainConfig, data_config: Any | None = None
+) -> dict[str, Any]:
     """The hashed description of a training run (model config, training config, data config)."""
     if not isinstance(train_config, TrainConfig):
         raise TypeError(f"train_config must be a TrainConfig, got {type(train_config).__name__}")
@@ -56,7 +58,9 @@ def build_seeded(factory: Callable[[], M], seed: int) -> M:
         return factory()
 
 
-def is_cached(name: str, model_config: Any, train_config: TrainConfig, data_config: Any | None = None) -> bool:
+def is_cached(
+    name: str, model_config: Any, train_config: TrainConfig, data_config: Any | None = None
+) -> bool:
     """Whether :func:`train_or_load` with these arguments would find a cache entry (and not train)."""
     return checkpoint_path(name, run_identity(model_config, train_config, data_config)).exists()
 
@@ -74,8 +78,10 @@ def _cached_result(name: str, identity: dict[str, Any], model: nn.Module) -> Tra
             raise ValueError("a metric is not finite")
     except (KeyError, TypeError, ValueError, AttributeError) as exc:
         model.load_state_dict(backup)
-        warnings.warn(f"ignoring cache entry for {name!r} (retraining): its history or metrics are malformed: {exc}",
-                      stacklevel=3)
+        warnings.warn(
+            f"ignoring cache entry for {name!r} (retraining): its history or metrics are malformed: {exc}",
+            stacklevel=3,
+        )
         return None
     return TrainResult(history, metrics, loaded_from_cache=True, path=checkpoint_path(name, identity))
 
@@ -93,7 +99,8 @@ def train_or_load(
     progress: bool | None = None,
     callbacks: Iterable[Callback] = (),
 ) -> TrainResult:
-    """Load the cached weights of this run into ``model``, or train it (resuming an interrupted run) and cache it.
+    """Load the cached weights of this run into ``model``, or train it (resuming an interrupted run) and cache
+    it.
 
     Args:
         name: a simple identifier of the run, e.g. ``"mcell_vae"``.
@@ -113,8 +120,19 @@ def train_or_load(
         model.eval()
         return cached
     resume = ResumeFile(resume_path(name, identity), identity)
-    result = train(model, loss_fn, data, train_config, val_data=val_data, progress=progress,
-                   callbacks=callbacks, resume=resume, desc=name)
-    path = save_checkpoint(name, identity, model, extra={"history": result.history.to_dict(), "metrics": result.metrics})
+    result = train(
+        model,
+        loss_fn,
+        data,
+        train_config,
+        val_data=val_data,
+        progress=progress,
+        callbacks=callbacks,
+        resume=resume,
+        desc=name,
+    )
+    path = save_checkpoint(
+        name, identity, model, extra={"history": result.history.to_dict(), "metrics": result.metrics}
+    )
     resume.remove()
     return replace(result, path=path)

@@ -62,7 +62,9 @@ TRAIN_STREAM, VALIDATION_STREAM = 0, 1
 class NonFiniteLossError(RuntimeError):
     """A loss term (or the gradient norm) became NaN or infinite; ``term`` and ``step`` say which and when."""
 
-    def __init__(self, term: str, step: int, value: float, terms: dict[str, float], during: str = "training") -> None:
+    def __init__(
+        self, term: str, step: int, value: float, terms: dict[str, float], during: str = "training"
+    ) -> None:
         listing = ", ".join(f"{name}={number:.6g}" for name, number in terms.items())
         what = "the gradient norm" if term == "grad_norm" else f"loss term {term!r}"
         consequence = "; stopped before the weights were updated" if during == "training" else ""
@@ -99,12 +101,16 @@ def loss_terms(out: Any, step: int, during: str = "training") -> dict[str, float
     term (named terms are checked before the total, so a NaN in ``"kl"`` is reported as ``"kl"``).
     """
     if not isinstance(out, dict) or "loss" not in out:
-        raise TypeError(f"{during}: loss_fn must return a dict with a 'loss' entry, got {type(out).__name__} "
-                        f"{list(out) if isinstance(out, dict) else ''}")
+        raise TypeError(
+            f"{during}: loss_fn must return a dict with a 'loss' entry, got {type(out).__name__} "
+            f"{list(out) if isinstance(out, dict) else ''}"
+        )
     for name, value in out.items():
         if not isinstance(value, Tensor) or value.numel() != 1:
             shape = tuple(value.shape) if isinstance(value, Tensor) else type(value).__name__
-            raise TypeError(f"{during}: loss term {name!r} at step {step} must be a one-element tensor, got {shape}")
+            raise TypeError(
+                f"{during}: loss term {name!r} at step {step} must be a one-element tensor, got {shape}"
+            )
     names = list(out)
     values = torch.stack([out[name].detach().reshape(()).double() for name in names]).tolist()
     terms = dict(zip(names, values))
@@ -149,8 +155,9 @@ class _Trainer:
         self.optimizer = self._new_optimizer()
 
     def _new_optimizer(self) -> torch.optim.AdamW:
-        return torch.optim.AdamW(self.params, lr=self.cfg.lr, betas=tuple(self.cfg.betas),
-                                 weight_decay=self.cfg.weight_decay)
+        return torch.optim.AdamW(
+            self.params, lr=self.cfg.lr, betas=tuple(self.cfg.betas), weight_decay=self.cfg.weight_decay
+        )
 
     # --- state -----------------------------------------------------------------------------------------
     def state(self) -> dict[str, Any]:
@@ -241,8 +248,12 @@ class _Trainer:
         with rng_isolated(), torch.no_grad():
             self.model.eval()
             try:
-                for batch in epoch_batches(self.val_data, self.cfg.seed, 0, self.cfg.batch_size, VALIDATION_STREAM):
-                    for name, value in loss_terms(self.loss_fn(self.model, batch, step, coeffs), step, "validation").items():
+                for batch in epoch_batches(
+                    self.val_data, self.cfg.seed, 0, self.cfg.batch_size, VALIDATION_STREAM
+                ):
+                    for name, value in loss_terms(
+                        self.loss_fn(self.model, batch, step, coeffs), step, "validation"
+                    ).items():
                         sums[name] = sums.get(name, 0.0) + value
                     count += 1
             finally:
@@ -256,7 +267,9 @@ class _Trainer:
         bar.update(1)
         if step % self.cfg.log_every == 0:
             window = min(self.cfg.log_every, len(self.history))
-            bar.set_postfix({k: f"{sum(v[-window:]) / window:.4g}" for k, v in self.history.terms.items()}, refresh=False)
+            bar.set_postfix(
+                {k: f"{sum(v[-window:]) / window:.4g}" for k, v in self.history.terms.items()}, refresh=False
+            )
         try:
             if self.val_data is not None and self.cfg.val_every and step % self.cfg.val_every == 0:
                 self.validate()
@@ -269,7 +282,11 @@ class _Trainer:
             raise
         if interrupt.requested:
             self.save()
-            where = f"state saved to {self.resume.path}; call again to resume" if self.resume else "no resume file"
+            where = (
+                f"state saved to {self.resume.path}; call again to resume"
+                if self.resume
+                else "no resume file"
+            )
             raise KeyboardInterrupt(f"training interrupted after step {step} ({where})")
 
     def run_epochs(self, bar: tqdm, interrupt: DeferredInterrupt) -> None:
@@ -278,11 +295,15 @@ class _Trainer:
             # Building the epoch's iterator and skipping the batches a saved state already used must not move
             # the global RNGs, so that a resumed run draws exactly what an uninterrupted one draws.
             with rng_isolated():
-                batches = epoch_batches(self.data, self.cfg.seed, pos.epoch, self.cfg.batch_size, TRAIN_STREAM)
+                batches = epoch_batches(
+                    self.data, self.cfg.seed, pos.epoch, self.cfg.batch_size, TRAIN_STREAM
+                )
                 skipped = sum(1 for _ in itertools.islice(batches, pos.batch_index))
             if skipped < pos.batch_index:
-                raise ValueError(f"the batch source gave {skipped} batches in epoch {pos.epoch}, but the saved "
-                                 f"state had used {pos.batch_index}: it is not deterministic")
+                raise ValueError(
+                    f"the batch source gave {skipped} batches in epoch {pos.epoch}, but the saved "
+                    f"state had used {pos.batch_index}: it is not deterministic"
+                )
             for batch in batches:
                 self.train_step(batch)
                 self.after_step(bar, interrupt)
@@ -303,10 +324,18 @@ class _Trainer:
             self.saved_step = self.position.step if resumed else -1
             resumed_from = self.position.step if resumed else None
             self.model.train()
-            with tqdm(total=self.total_steps(), initial=self.position.step, disable=not progress, desc=desc,
-                      mininterval=1.0, dynamic_ncols=True) as bar:
+            with tqdm(
+                total=self.total_steps(),
+                initial=self.position.step,
+                disable=not progress,
+                desc=desc,
+                mininterval=1.0,
+                dynamic_ncols=True,
+            ) as bar:
                 self.run_epochs(bar, interrupt)
-            if self.val_data is not None and (not self.history.val_step or self.history.val_step[-1] != self.position.step):
+            if self.val_data is not None and (
+                not self.history.val_step or self.history.val_step[-1] != self.position.step
+            ):
                 self.validate()
         self.model.eval()
         metrics: dict[str, float] = {

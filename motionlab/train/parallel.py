@@ -68,10 +68,11 @@ def _exit_with_parent(parent: int) -> None:
 
 
 def _start_worker(parent: int) -> None:
-    """Worker start-up. Ctrl-C (SIGINT, which Jupyter sends to the kernel's whole process group, and again when
-    it shuts the kernel down) is for the notebook, not for idle workers; a training run still catches it at a
-    step boundary (:func:`~motionlab.train.train_or_load` installs its own handler while it runs). And the
-    worker ends with ``parent``, the process that started it, however that one ends (:func:`_exit_with_parent`)."""
+    """Worker start-up. Ctrl-C (SIGINT, which Jupyter sends to the kernel's whole process group, and again
+    when it shuts the kernel down) is for the notebook, not for idle workers; a training run still catches it
+    at a step boundary (:func:`~motionlab.train.train_or_load` installs its own handler while it runs). And
+    the worker ends with ``parent``, the process that started it, however that one ends
+    (:func:`_exit_with_parent`)."""
     signal.signal(signal.SIGINT, signal.SIG_IGN)
     threading.Thread(target=_exit_with_parent, args=(parent,), name="exit-with-parent", daemon=True).start()
 
@@ -80,8 +81,12 @@ def worker_pool(processes: int = 2) -> ProcessPoolExecutor:
     """A pool of ``processes`` fresh (``spawn``) worker processes that end with this process; submit work with
     :func:`submit`."""
     _check_processes(processes, "worker_pool")
-    return ProcessPoolExecutor(max_workers=processes, mp_context=multiprocessing.get_context("spawn"),
-                               initializer=_start_worker, initargs=(os.getpid(),))
+    return ProcessPoolExecutor(
+        max_workers=processes,
+        mp_context=multiprocessing.get_context("spawn"),
+        initializer=_start_worker,
+        initargs=(os.getpid(),),
+    )
 
 
 def shared_pool(processes: int = 2) -> ProcessPoolExecutor:
@@ -98,7 +103,8 @@ def shared_pool(processes: int = 2) -> ProcessPoolExecutor:
 
 
 def close_shared_pools() -> None:
-    """Shut the shared pools down: calls still waiting are cancelled, the workers exit after their current one."""
+    """Shut the shared pools down: calls still waiting are cancelled, the workers exit after their current
+    one."""
     while _shared_pools:
         _shared_pools.popitem()[1].shutdown(cancel_futures=True)
 
@@ -122,7 +128,9 @@ def submit(pool: ProcessPoolExecutor, function: Callable[..., R], *arguments: An
     return pool.submit(_in_worker, function, arguments, _package_environment())
 
 
-def run_in_workers(function: Callable[..., R], calls: Sequence[tuple[Any, ...]], processes: int = 2) -> list[R]:
+def run_in_workers(
+    function: Callable[..., R], calls: Sequence[tuple[Any, ...]], processes: int = 2
+) -> list[R]:
     """``[function(*args) for args in calls]``, ``processes`` at a time in worker processes (the
     :func:`shared_pool`), each call set up as in a fresh worker.
 
@@ -187,22 +195,30 @@ def run_chains(chains: Sequence[Sequence[Step]], processes: int = 2) -> list[lis
             waiting.cancel()
         raise
     if failed:
-        if any(isinstance(error, BrokenProcessPool) for error in failed.values()):  # a worker died (e.g. killed)
+        if any(
+            isinstance(error, BrokenProcessPool) for error in failed.values()
+        ):  # a worker died (e.g. killed)
             _drop_broken_pool(processes)
         raise failed[min(failed)]  # the first failed call in the order given, whichever failed first in time
     return results
 
 
-def run_paired(before: dict[K, Step], after: dict[K, Step], processes: int = 2) -> tuple[dict[K, Any], dict[K, Any]]:
+def run_paired(
+    before: dict[K, Step], after: dict[K, Step], processes: int = 2
+) -> tuple[dict[K, Any], dict[K, Any]]:
     """For every key of ``after``: its ``before`` call, if it has one, then its ``after`` call, as chains of
     :func:`run_chains` (e.g. train a model if it is not cached yet, then measure it).
 
     Returns the results of the ``before`` calls and of the ``after`` calls, keyed like the calls.
     """
     keys = list(after)
-    outcomes = run_chains([[before[key], after[key]] if key in before else [after[key]] for key in keys], processes)
-    return ({key: outcome[0] for key, outcome in zip(keys, outcomes) if key in before},
-            {key: outcome[-1] for key, outcome in zip(keys, outcomes)})
+    outcomes = run_chains(
+        [[before[key], after[key]] if key in before else [after[key]] for key in keys], processes
+    )
+    return (
+        {key: outcome[0] for key, outcome in zip(keys, outcomes) if key in before},
+        {key: outcome[-1] for key, outcome in zip(keys, outcomes)},
+    )
 
 
 class InBackground:

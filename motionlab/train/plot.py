@@ -1,4 +1,5 @@
-"""The end-of-training figure: loss terms per step, validation points, schedule coefficients on a twin axis."""
+"""The end-of-training figure: loss terms per step, validation points, schedule coefficients on a twin
+axis."""
 
 from __future__ import annotations
 
@@ -38,7 +39,9 @@ def plot_history(history: History, logy: bool = False, title: str | None = None)
         colours[name] = line.get_color()
         ax.plot(steps, values, lw=0.5, alpha=0.3, color=line.get_color())
     for name, values in history.val_terms.items():
-        ax.plot(history.val_step, values, ls="--", marker="o", ms=3, color=colours.get(name), label=f"val {name}")
+        ax.plot(
+            history.val_step, values, ls="--", marker="o", ms=3, color=colours.get(name), label=f"val {name}"
+        )
     ax.set_xlabel("step")
     ax.set_ylabel("loss terms")
     if logy:

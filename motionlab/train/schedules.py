@@ -1,4 +1,5 @@
-"""Coefficient schedules: a loss weight, a teacher-forcing ratio or a drop probability as a function of the step.
+"""Coefficient schedules: a loss weight, a teacher-forcing ratio or a drop probability as a function of the
+step.
 
 Every schedule is a small frozen dataclass, validated when built, called with the 0-based optimiser step::
 
@@ -81,7 +82,9 @@ class PiecewiseLinear:
         try:
             points = tuple((at, value) for at, value in self.points)
         except (TypeError, ValueError) as exc:
-            raise ValueError(f"PiecewiseLinear.points must be (step, value) pairs, got {self.points!r}") from exc
+            raise ValueError(
+                f"PiecewiseLinear.points must be (step, value) pairs, got {self.points!r}"
+            ) from exc
         if not points:
             raise ValueError("PiecewiseLinear.points must not be empty")
         for index, (at, value) in enumerate(points):
@@ -89,7 +92,9 @@ class PiecewiseLinear:
             _check_finite("PiecewiseLinear", f"points[{index}] value", value)
         for index in range(1, len(points)):
             if points[index][0] < points[index - 1][0]:
-                raise ValueError(f"PiecewiseLinear.points steps must be non-decreasing, point {index} goes back")
+                raise ValueError(
+                    f"PiecewiseLinear.points steps must be non-decreasing, point {index} goes back"
+                )
             if index >= 2 and points[index][0] == points[index - 2][0]:
                 raise ValueError(f"PiecewiseLinear.points: more than two points at step {points[index][0]}")
         object.__setattr__(self, "points", tuple((at, float(value)) for at, value in points))
@@ -149,8 +154,8 @@ class KLAnneal:
                 = c                                   s >= C + D
 
     where ``c = cooldown_value`` (``0 <= c <= m``). Without ``cooldown_start`` the hold lasts forever.
-    ``A = 0`` or ``D = 0`` make the change a jump at ``W`` or ``C``. The cool-down lowers the weight at the end
-    of training so the last steps favour reconstruction; it must start after the anneal ends.
+    ``A = 0`` or ``D = 0`` make the change a jump at ``W`` or ``C``. The cool-down lowers the weight at the
+    end of training so the last steps favour reconstruction; it must start after the anneal ends.
     """
 
     max_value: float
@@ -170,7 +175,8 @@ class KLAnneal:
         _check_finite("KLAnneal", "cooldown_value", self.cooldown_value)
         if not 0 <= self.cooldown_value <= self.max_value:
             raise ValueError(
-                f"KLAnneal.cooldown_value must lie in [0, max_value={self.max_value}], got {self.cooldown_value}"
+                f"KLAnneal.cooldown_value must lie in [0, max_value={self.max_value}], got "
+                f"{self.cooldown_value}"
             )
         if self.cooldown_start is not None:
             _check_count("KLAnneal", "cooldown_start", self.cooldown_start)
@@ -186,6 +192,8 @@ class KLAnneal:
             (self.warmup + self.anneal, self.max_value),
         )
         if self.cooldown_start is not None:
-            points += ((self.cooldown_start, self.max_value),
-                       (self.cooldown_start + self.cooldown, self.cooldown_value))
+            points += (
+                (self.cooldown_start, self.max_value),
+                (self.cooldown_start + self.cooldown, self.cooldown_value),
+            )
         return _interpolate(points, step)

@@ -30,7 +30,13 @@ def rng_state() -> dict[str, Any]:
     version, internal, gauss_next = random.getstate()
     return {
         "torch": torch.get_rng_state(),
-        "numpy": (kind, torch.from_numpy(keys.astype(np.int64)), int(pos), int(has_gauss), float(cached_gaussian)),
+        "numpy": (
+            kind,
+            torch.from_numpy(keys.astype(np.int64)),
+            int(pos),
+            int(has_gauss),
+            float(cached_gaussian),
+        ),
         "python": (version, torch.tensor(internal, dtype=torch.int64), gauss_next),
     }
 
@@ -91,7 +97,9 @@ class ResumeFile:
             warnings.warn(f"ignoring resume file {self.path.name}: unknown format", stacklevel=2)
             return None
         if payload.get("identity") != self.identity:
-            warnings.warn(f"ignoring resume file {self.path.name}: it belongs to another configuration", stacklevel=2)
+            warnings.warn(
+                f"ignoring resume file {self.path.name}: it belongs to another configuration", stacklevel=2
+            )
             return None
         return payload["state"]
 

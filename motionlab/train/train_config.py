@@ -19,13 +19,16 @@ def _check_positive_int(name: str, value: Any, allow_none: bool = False) -> None
     if value is None and allow_none:
         return
     if not _is_int(value) or value < 1:
-        raise ValueError(f"TrainConfig.{name} must be a positive int{' or None' if allow_none else ''}, got {value!r}")
+        raise ValueError(
+            f"TrainConfig.{name} must be a positive int{' or None' if allow_none else ''}, got {value!r}"
+        )
 
 
 def _check_schedule(name: str, schedule: Any) -> None:
     if not (dataclasses.is_dataclass(schedule) and not isinstance(schedule, type) and callable(schedule)):
         raise TypeError(
-            f"TrainConfig.{name} must be a schedule dataclass from motionlab.train.schedules (or one like them), "
+            f"TrainConfig.{name} must be a schedule dataclass from motionlab.train.schedules (or one "
+            "like them), "
             f"got {type(schedule).__name__}"
         )
 
@@ -74,7 +77,10 @@ class TrainConfig:
 
     def __post_init__(self) -> None:
         if (self.steps is None) == (self.epochs is None):
-            raise ValueError(f"TrainConfig: set exactly one of steps and epochs, got steps={self.steps}, epochs={self.epochs}")
+            raise ValueError(
+                f"TrainConfig: set exactly one of steps and epochs, got steps={self.steps}, "
+                f"epochs={self.epochs}"
+            )
         _check_positive_int("steps", self.steps, allow_none=True)
         _check_positive_int("epochs", self.epochs, allow_none=True)
         _check_positive_int("batch_size", self.batch_size)
@@ -85,16 +91,28 @@ class TrainConfig:
             raise ValueError(f"TrainConfig.seed must be a non-negative int, got {self.seed!r}")
         if not isinstance(self.lr, (int, float)) or not math.isfinite(self.lr) or self.lr <= 0:
             raise ValueError(f"TrainConfig.lr must be a finite positive number, got {self.lr!r}")
-        if not isinstance(self.weight_decay, (int, float)) or not math.isfinite(self.weight_decay) or self.weight_decay < 0:
-            raise ValueError(f"TrainConfig.weight_decay must be a finite number >= 0, got {self.weight_decay!r}")
+        if (
+            not isinstance(self.weight_decay, (int, float))
+            or not math.isfinite(self.weight_decay)
+            or self.weight_decay < 0
+        ):
+            raise ValueError(
+                f"TrainConfig.weight_decay must be a finite number >= 0, got {self.weight_decay!r}"
+            )
         if len(self.betas) != 2 or not all(isinstance(b, (int, float)) and 0 <= b < 1 for b in self.betas):
             raise ValueError(f"TrainConfig.betas must be two numbers in [0, 1), got {self.betas!r}")
         if self.grad_clip is not None and (
-            not isinstance(self.grad_clip, (int, float)) or not math.isfinite(self.grad_clip) or self.grad_clip <= 0
+            not isinstance(self.grad_clip, (int, float))
+            or not math.isfinite(self.grad_clip)
+            or self.grad_clip <= 0
         ):
-            raise ValueError(f"TrainConfig.grad_clip must be a finite positive number or None, got {self.grad_clip!r}")
+            raise ValueError(
+                f"TrainConfig.grad_clip must be a finite positive number or None, got {self.grad_clip!r}"
+            )
         if not isinstance(self.schedules, dict):
-            raise TypeError(f"TrainConfig.schedules must be a dict name -> schedule, got {type(self.schedules).__name__}")
+            raise TypeError(
+                f"TrainConfig.schedules must be a dict name -> schedule, got {type(self.schedules).__name__}"
+            )
         for name, schedule in self.schedules.items():
             if not isinstance(name, str) or not name:
                 raise ValueError(f"TrainConfig.schedules: names must be non-empty strings, got {name!r}")

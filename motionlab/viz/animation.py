@@ -104,19 +104,30 @@ def build_animation(
     fig.subplots_adjust(left=0, right=1, bottom=0, top=1 - 0.09 * headings, wspace=0)
     points = [np.concatenate([padded[i] for i in group], axis=1) for group in groups]  # (T, K, 3) per panel
     centres = [np.mean([padded[i][:, 0, :2] for i in group], axis=0) for group in groups] if follow else None
-    scenes = [Scene.following(p, c) for p, c in zip(points, centres)] if follow else [Scene.around(p) for p in points]
+    scenes = (
+        [Scene.following(p, c) for p, c in zip(points, centres)]
+        if follow
+        else [Scene.around(p) for p in points]
+    )
     extent = common_extent(scenes)  # every panel at one scale
     panels = []
     for k, (group, scene) in enumerate(zip(groups, scenes)):
         ax = fig.add_subplot(1, len(groups), k + 1, projection="3d")
         scene = scene.with_extent(extent)
         grid = setup_axes(ax, scene, elev=elev, azim=azim)
-        figures = [draw_stick_figure(ax, padded[i][0], parent_index, colors[i],
-                                     label=None if labels is None else labels[i]) for i in group]
+        figures = [
+            draw_stick_figure(
+                ax, padded[i][0], parent_index, colors[i], label=None if labels is None else labels[i]
+            )
+            for i in group
+        ]
         if labels is not None and layout == "side":
             ax.set_title(labels[group[0]], fontsize=9)
-        panels.append(_Panel(ax, grid, scene, figures, [padded[i] for i in group],
-                             None if centres is None else centres[k]))
+        panels.append(
+            _Panel(
+                ax, grid, scene, figures, [padded[i] for i in group], None if centres is None else centres[k]
+            )
+        )
     if layout == "overlay" and labels is not None:
         panels[0].ax.legend(loc="upper left", fontsize=8, frameon=False)
     clock = fig.text(0.02, 0.02, "", fontsize=8, color="0.3")
@@ -170,8 +181,19 @@ def animate(
         ``IPython.display.HTML`` with ``ceil(T / step)`` embedded frames (T the longest motion).
     """
     anim = build_animation(
-        motions, parents, fps, step=step, layout=layout, follow=follow, colors=colors, labels=labels,
-        panel_size=panel_size, dpi=dpi, elev=elev, azim=azim, title=title,
+        motions,
+        parents,
+        fps,
+        step=step,
+        layout=layout,
+        follow=follow,
+        colors=colors,
+        labels=labels,
+        panel_size=panel_size,
+        dpi=dpi,
+        elev=elev,
+        azim=azim,
+        title=title,
     )
     html = anim.to_jshtml(fps=fps / step, default_mode="loop")
     return HTML(html)
@@ -194,6 +216,12 @@ def compare_animation(
     both figures in one scene instead. Other arguments as in :func:`animate`.
     """
     return animate(
-        [real, generated], parents, fps, step=step, layout=layout, follow=follow,
-        colors=(REAL_COLOR, GENERATED_COLOR), labels=labels,
+        [real, generated],
+        parents,
+        fps,
+        step=step,
+        layout=layout,
+        follow=follow,
+        colors=(REAL_COLOR, GENERATED_COLOR),
+        labels=labels,
     )

@@ -8,12 +8,11 @@ raises ``ValueError`` naming the function, the argument and the shape it got, fo
 from __future__ import annotations
 
 from collections.abc import Sequence
-from typing import Union
 
 import numpy as np
 import torch
 
-ArrayLike = Union[np.ndarray, torch.Tensor]
+ArrayLike = np.ndarray | torch.Tensor
 """Joint positions as a NumPy array or a torch tensor."""
 
 
@@ -37,7 +36,9 @@ def as_sequence(positions: ArrayLike, name: str, func: str) -> np.ndarray:
     if array.ndim == 2:
         array = array[None]
     if array.ndim != 3 or array.shape[-1] != 3 or array.shape[0] == 0 or array.shape[1] == 0:
-        raise ValueError(f"{func}: {name} must have shape (T, J, 3) or (J, 3), got {tuple(np.shape(positions))}")
+        raise ValueError(
+            f"{func}: {name} must have shape (T, J, 3) or (J, 3), got {tuple(np.shape(positions))}"
+        )
     return array
 
 
@@ -45,8 +46,10 @@ def as_pose(pose: ArrayLike, name: str, func: str) -> np.ndarray:
     """One pose ``(J, 3)`` (J >= 1)."""
     array = to_numpy(pose, name, func)
     if array.ndim != 2 or array.shape[-1] != 3 or array.shape[0] == 0:
-        raise ValueError(f"{func}: {name} must have shape (J, 3) (one pose; use filmstrip or animate for "
-                         f"a sequence), got {tuple(array.shape)}")
+        raise ValueError(
+            f"{func}: {name} must have shape (J, 3) (one pose; use filmstrip or animate for "
+            f"a sequence), got {tuple(array.shape)}"
+        )
     return array
 
 
@@ -62,8 +65,10 @@ def as_sequence_list(motions: ArrayLike | Sequence[ArrayLike], func: str) -> lis
         elif ndim in (2, 3):
             items = [motions]
         else:
-            raise ValueError(f"{func}: expected positions (T, J, 3), (N, T, J, 3) or a list of (T, J, 3), "
-                             f"got shape {tuple(motions.shape)}")
+            raise ValueError(
+                f"{func}: expected positions (T, J, 3), (N, T, J, 3) or a list of (T, J, 3), "
+                f"got shape {tuple(motions.shape)}"
+            )
     else:
         items = list(motions)
     if not items:
@@ -72,7 +77,9 @@ def as_sequence_list(motions: ArrayLike | Sequence[ArrayLike], func: str) -> lis
     joints = out[0].shape[1]
     for i, m in enumerate(out):
         if m.shape[1] != joints:
-            raise ValueError(f"{func}: motion {i} must have shape (T, {joints}, 3) like motion 0, got {m.shape}")
+            raise ValueError(
+                f"{func}: motion {i} must have shape (T, {joints}, 3) like motion 0, got {m.shape}"
+            )
     return out
 
 
@@ -80,7 +87,9 @@ def as_parents(parents: Sequence[int] | ArrayLike, num_joints: int, func: str) -
     """Parent indices ``(J,)``: ``-1`` for roots, otherwise another joint's index."""
     values = parents.tolist() if isinstance(parents, (np.ndarray, torch.Tensor)) else list(parents)
     if len(values) != num_joints:
-        raise ValueError(f"{func}: parents has {len(values)} entries but the positions have {num_joints} joints")
+        raise ValueError(
+            f"{func}: parents has {len(values)} entries but the positions have {num_joints} joints"
+        )
     for j, p in enumerate(values):
         if isinstance(p, bool) or not isinstance(p, (int, np.integer)) or not -1 <= p < num_joints or p == j:
             raise ValueError(f"{func}: parents[{j}] must be -1 or the index of another joint, got {p!r}")

@@ -48,12 +48,20 @@ def plot_root_paths(
         _, ax = plt.subplots(figsize=(4.5, 4.5), layout="constrained")
     for i, (path, color) in enumerate(zip(paths, colors)):
         xy = path[:, root, :2]
-        ax.plot(xy[:, 0], xy[:, 1], color=color, alpha=alpha, linewidth=1.5,
-                label=None if labels is None else labels[i])
-        ax.plot(*xy[0], marker="o", color=color, markersize=5, linestyle="none",
-                label="start" if i == 0 else None)
-        ax.plot(*xy[-1], marker="x", color=color, markersize=6, linestyle="none",
-                label="end" if i == 0 else None)
+        ax.plot(
+            xy[:, 0],
+            xy[:, 1],
+            color=color,
+            alpha=alpha,
+            linewidth=1.5,
+            label=None if labels is None else labels[i],
+        )
+        ax.plot(
+            *xy[0], marker="o", color=color, markersize=5, linestyle="none", label="start" if i == 0 else None
+        )
+        ax.plot(
+            *xy[-1], marker="x", color=color, markersize=6, linestyle="none", label="end" if i == 0 else None
+        )
     ax.set_aspect("equal", adjustable="datalim")
     ax.set_xlabel("x (forward)")
     ax.set_ylabel("y (left)")

@@ -14,7 +14,14 @@ import numpy as np
 import torch
 from matplotlib.figure import Figure
 
-from motionlab.geometry import euler_to_quat, interpolation_paths, quat_apply, quat_geodesic, quat_nlerp, quat_slerp
+from motionlab.geometry import (
+    euler_to_quat,
+    interpolation_paths,
+    quat_apply,
+    quat_geodesic,
+    quat_nlerp,
+    quat_slerp,
+)
 
 _FRAME_COLORS = ("tab:red", "tab:green", "tab:blue")
 _PATH_STYLES = {"slerp": dict(color="tab:blue", marker="o"), "nlerp": dict(color="tab:orange", marker="x")}
@@ -57,7 +64,9 @@ def plot_interpolation(q0: torch.Tensor, q1: torch.Tensor, t: float, n: int = 21
     for name in ("slerp", "nlerp"):
         trace = quat_apply(getattr(paths, name), forward).numpy()
         ax.plot(*trace.T, linestyle="-", markersize=4, label=name, **_PATH_STYLES[name])
-        ax.scatter(*quat_apply(at_t[name], forward).numpy(), s=90, color=_PATH_STYLES[name]["color"], edgecolor="k")
+        ax.scatter(
+            *quat_apply(at_t[name], forward).numpy(), s=90, color=_PATH_STYLES[name]["color"], edgecolor="k"
+        )
     _draw_frame(ax, q0, length=0.6, alpha=0.35)
     _draw_frame(ax, q1, length=0.6, alpha=0.35)
     _draw_frame(ax, at_t["slerp"])
@@ -86,6 +95,8 @@ def show_interpolation(
 
     Each orientation is intrinsic yaw (about z), pitch (new y), roll (new x), Euler order ``"ZYX"``.
     """
-    angles = torch.tensor([[yaw0, pitch0, roll0], [yaw1, pitch1, roll1]], dtype=torch.float64) * (math.pi / 180)
+    angles = torch.tensor([[yaw0, pitch0, roll0], [yaw1, pitch1, roll1]], dtype=torch.float64) * (
+        math.pi / 180
+    )
     q0, q1 = euler_to_quat(angles, "ZYX")
     return plot_interpolation(q0, q1, t)

@@ -58,8 +58,9 @@ class Scene:
         return Scene._box(flat.min(axis=0), flat.max(axis=0), margin, min_fraction)
 
     @staticmethod
-    def following(points: np.ndarray, centres: np.ndarray, margin: float = 0.05,
-                  min_fraction: float = 0.3) -> Scene:
+    def following(
+        points: np.ndarray, centres: np.ndarray, margin: float = 0.05, min_fraction: float = 0.3
+    ) -> Scene:
         """A box that moves with the motion: centred on ``centres[t]`` ``(T, 2)`` at frame t, just large
         enough to hold every frame's ``points[t]`` ``(T, K, 3)``. Returned centred on ``centres[0]``."""
         reach = np.abs(points[..., :2] - centres[:, None]).reshape(-1, 2).max(axis=0)
@@ -124,7 +125,7 @@ def setup_axes(ax: Axes3D, scene: Scene, elev: float = 15.0, azim: float = -60.0
     ax.set_box_aspect(tuple(scene.extent), zoom=1.1)
     ax.view_init(elev=elev, azim=azim)
     ax.set_axis_off()
-    line, = ax.plot([], [], [], color="0.8", linewidth=0.6, zorder=0)
+    (line,) = ax.plot([], [], [], color="0.8", linewidth=0.6, zorder=0)
     grid = FloorGrid(line=line, step=_grid_spacing(float(scene.extent[:2].max())))
     show_scene(ax, grid, scene)
     return grid
@@ -160,12 +161,22 @@ def _bone_index(parents: np.ndarray) -> np.ndarray:
 
 
 def draw_stick_figure(
-    ax: Axes3D, pose: np.ndarray, parents: np.ndarray, color: str, linewidth: float = 2.0,
-    marker_size: float = 2.5, label: str | None = None, alpha: float = 1.0,
+    ax: Axes3D,
+    pose: np.ndarray,
+    parents: np.ndarray,
+    color: str,
+    linewidth: float = 2.0,
+    marker_size: float = 2.5,
+    label: str | None = None,
+    alpha: float = 1.0,
 ) -> StickFigure:
     """Draw a checked pose ``(J, 3)`` with checked ``parents`` on ``ax`` (no scene setup)."""
-    bones, = ax.plot([], [], [], color=color, linewidth=linewidth, solid_capstyle="round", label=label, alpha=alpha)
-    joints, = ax.plot([], [], [], linestyle="none", marker="o", markersize=marker_size, color=color, alpha=alpha)
+    (bones,) = ax.plot(
+        [], [], [], color=color, linewidth=linewidth, solid_capstyle="round", label=label, alpha=alpha
+    )
+    (joints,) = ax.plot(
+        [], [], [], linestyle="none", marker="o", markersize=marker_size, color=color, alpha=alpha
+    )
     figure = StickFigure(bones=bones, joints=joints, bone_index=_bone_index(parents))
     figure.set_pose(pose)
     return figure

@@ -93,7 +93,8 @@ class ClipSummary:
     moving_until: float | None
 
     def describe(self) -> str:
-        """The measurements as a short phrase, e.g. ``"1.31 m/s, stride 1.45 m, 1.8 steps/s, pelvis +0.02/-0.03 m"``."""
+        """The measurements as a short phrase, e.g. ``"1.31 m/s, stride 1.45 m, 1.8 steps/s, pelvis
+        +0.02/-0.03 m"``."""
         parts = [f"{self.speed:.2f} m/s"]
         if self.stride is not None and self.step_rate is not None:
             parts += [f"stride {self.stride:.2f} m", f"{self.step_rate:.1f} steps/s"]
@@ -103,8 +104,9 @@ class ClipSummary:
         return ", ".join(parts)
 
 
-def _check_clip(positions: np.ndarray, contacts: np.ndarray, fps: float, feet: Sequence[int]) -> tuple[
-        np.ndarray, np.ndarray, float, list[int]]:
+def _check_clip(
+    positions: np.ndarray, contacts: np.ndarray, fps: float, feet: Sequence[int]
+) -> tuple[np.ndarray, np.ndarray, float, list[int]]:
     func = "summarise_clip"
     positions = np.asarray(positions, dtype=np.float64)
     contacts = np.asarray(contacts)
@@ -114,10 +116,14 @@ def _check_clip(positions: np.ndarray, contacts: np.ndarray, fps: float, feet: S
         raise ValueError(f"{func}: positions contain NaN or infinite values")
     feet = [int(j) for j in feet]
     if not feet or min(feet) < 0 or max(feet) >= positions.shape[1] or len(set(feet)) != len(feet):
-        raise ValueError(f"{func}: feet must be distinct joint indices in [0, {positions.shape[1]}), got {feet}")
+        raise ValueError(
+            f"{func}: feet must be distinct joint indices in [0, {positions.shape[1]}), got {feet}"
+        )
     if contacts.shape != (positions.shape[0], len(feet)):
-        raise ValueError(f"{func}: contacts must have shape (T, F) = {(positions.shape[0], len(feet))} "
-                         f"(frames x feet), got {contacts.shape}")
+        raise ValueError(
+            f"{func}: contacts must have shape (T, F) = {(positions.shape[0], len(feet))} "
+            f"(frames x feet), got {contacts.shape}"
+        )
     if contacts.dtype != bool:
         raise ValueError(f"{func}: contacts must be booleans, got dtype {contacts.dtype}")
     fps = float(fps)
@@ -132,8 +138,9 @@ def _first_moving(displacement: np.ndarray) -> int | None:
     return int(moving[0]) if moving.size else None
 
 
-def summarise_clip(positions: np.ndarray, contacts: np.ndarray, fps: float,
-                   feet: Sequence[int] = FOOT_JOINTS) -> ClipSummary:
+def summarise_clip(
+    positions: np.ndarray, contacts: np.ndarray, fps: float, feet: Sequence[int] = FOOT_JOINTS
+) -> ClipSummary:
     """Measure one clip: speed, stride, step rate, pelvis rise and drop, and when it moves.
 
     Args:
@@ -174,7 +181,8 @@ def summarise_clip(positions: np.ndarray, contacts: np.ndarray, fps: float,
 
 @lru_cache(maxsize=8)
 def _clip_set(seed: int) -> MotionSet:
-    """``generate(seed, n_per_mode=2)``: one clip per mode and body type (cached: the widget asks repeatedly)."""
+    """``generate(seed, n_per_mode=2)``: one clip per mode and body type (cached: the widget asks
+    repeatedly)."""
     return generate(seed=seed, n_per_mode=len(BODY_TYPES))
 
 
@@ -220,9 +228,10 @@ def plot_clip_overview(clip: BrowsedClip) -> Figure:
     time = np.arange(clip.positions.shape[0]) / clip.fps
     for column, joint in enumerate(FOOT_JOINTS):
         height = clip.positions[:, joint, 2]
-        line, = feet_ax.plot(time, height, linewidth=1.2, label=JOINT_NAMES[joint])
-        feet_ax.fill_between(time, 0, height, where=clip.contacts[:, column], color=line.get_color(), alpha=0.25,
-                             linewidth=0)
+        (line,) = feet_ax.plot(time, height, linewidth=1.2, label=JOINT_NAMES[joint])
+        feet_ax.fill_between(
+            time, 0, height, where=clip.contacts[:, column], color=line.get_color(), alpha=0.25, linewidth=0
+        )
     feet_ax.set(xlabel="time (s)", ylabel="height (m)", title="foot joints; shaded while planted")
     feet_ax.legend(fontsize=8, ncols=2, frameon=False)
     return fig

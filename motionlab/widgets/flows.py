@@ -10,8 +10,9 @@ from matplotlib.figure import Figure
 from motionlab.models.flows.toy import GridDensity, ToyFlow
 
 
-def show_toy_temperature(flow: ToyFlow, grid: GridDensity, temperature: float, n: int = 1500,
-                         seed: int = 0) -> Figure:
+def show_toy_temperature(
+    flow: ToyFlow, grid: GridDensity, temperature: float, n: int = 1500, seed: int = 0
+) -> Figure:
     """Widget callback: ``n`` samples of ``flow`` at ``temperature`` (seeded) on top of its density ``grid``.
 
     Returns the figure (inside a widget's output area the inline backend shows it).
@@ -20,8 +21,14 @@ def show_toy_temperature(flow: ToyFlow, grid: GridDensity, temperature: float, n
     fig, ax = plt.subplots(figsize=(5.0, 4.2))
     extent = (grid.x[0], grid.x[-1], grid.y[0], grid.y[-1])
     ax.imshow(grid.density, origin="lower", extent=extent, cmap="Blues", aspect="equal")
-    ax.scatter(samples[:, 0], samples[:, 1], s=3, color="tab:orange", alpha=0.6,
-               label=f"samples, T = {temperature:.2f}")
+    ax.scatter(
+        samples[:, 0],
+        samples[:, 1],
+        s=3,
+        color="tab:orange",
+        alpha=0.6,
+        label=f"samples, T = {temperature:.2f}",
+    )
     inside = np.abs(samples).max(axis=1) <= max(abs(grid.x[0]), abs(grid.x[-1]))
     ax.set_xlim(extent[0], extent[1])
     ax.set_ylim(extent[2], extent[3])

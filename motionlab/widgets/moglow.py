@@ -35,12 +35,15 @@ STAND_SPEED = 0.3
 
 
 def steering_control(library: MoGlowFeatures, speed: float, turn: float, frames: int) -> tuple[Tensor, int]:
-    """A control ``(frames, 3)`` for ``speed`` (m/s) and ``turn`` (degrees/s), and the library clip it came from.
+    """A control ``(frames, 3)`` for ``speed`` (m/s) and ``turn`` (degrees/s), and the library clip it came
+    from.
 
     ``library`` holds recorded clips in physical units ``(N, T, ·)``; frame 0 of each (no control) is skipped.
     """
     if not (math.isfinite(speed) and math.isfinite(turn)) or speed < 0:
-        raise ValueError(f"steering_control: speed must be finite and >= 0 and turn finite, got {speed!r}, {turn!r}")
+        raise ValueError(
+            f"steering_control: speed must be finite and >= 0 and turn finite, got {speed!r}, {turn!r}"
+        )
     recorded = library.control[:, 1:]
     mean_speed = recorded[..., 0].mean(dim=1) * FPS
     if speed < STAND_SPEED:
@@ -58,8 +61,16 @@ def steering_control(library: MoGlowFeatures, speed: float, turn: float, frames:
     return splice_controls(pieces, blend)[:frames], index
 
 
-def steer(model: AutoregressiveModel, scalers: Scalers, library: MoGlowFeatures, speed: float, turn: float,
-          temperature: float, seconds: float = 4.0, sample_seed: int = 0) -> GeneratedMotion:
+def steer(
+    model: AutoregressiveModel,
+    scalers: Scalers,
+    library: MoGlowFeatures,
+    speed: float,
+    turn: float,
+    temperature: float,
+    seconds: float = 4.0,
+    sample_seed: int = 0,
+) -> GeneratedMotion:
     """Generate ``seconds`` of motion for ``speed`` (m/s), ``turn`` (degrees/s, positive to the left) and
     ``temperature``, seeded with the first frames of the library clip the control came from.
 
@@ -67,17 +78,29 @@ def steer(model: AutoregressiveModel, scalers: Scalers, library: MoGlowFeatures,
     """
     control, index = steering_control(library, speed, turn, round(seconds * FPS))
     seed = seed_features(library, [index], model.cfg.history)
-    return generate_motion(model, scalers, control[None], seed, temperature, torch.Generator().manual_seed(sample_seed))
+    return generate_motion(
+        model, scalers, control[None], seed, temperature, torch.Generator().manual_seed(sample_seed)
+    )
 
 
-def show_steering(model: AutoregressiveModel, scalers: Scalers, library: MoGlowFeatures, speed: float, turn: float,
-                  temperature: float) -> Figure:
+def show_steering(
+    model: AutoregressiveModel,
+    scalers: Scalers,
+    library: MoGlowFeatures,
+    speed: float,
+    turn: float,
+    temperature: float,
+) -> Figure:
     """Widget callback: :func:`steer`, then the path from above with the toes' trails, and six keyframes."""
     motion = steer(model, scalers, library, speed, turn, temperature)
     positions = motion.positions[0].numpy()
     fig, ax = plt.subplots(figsize=(4.5, 4.0))
-    plot_root_paths(positions[None], ax, labels=["pelvis"],
-                    title=f"{speed:.1f} m/s, {turn:.0f} deg/s, temperature {temperature:.2f}")
+    plot_root_paths(
+        positions[None],
+        ax,
+        labels=["pelvis"],
+        title=f"{speed:.1f} m/s, {turn:.0f} deg/s, temperature {temperature:.2f}",
+    )
     for joint, color, label in ((10, "tab:blue", "left toe"), (11, "tab:red", "right toe")):
         ax.plot(positions[:, joint, 0], positions[:, joint, 1], color=color, lw=0.8, alpha=0.7, label=label)
     ax.legend(fontsize=8)

@@ -15,8 +15,9 @@ from torch import Tensor
 from motionlab.viz import animate
 
 
-def sample_motions(model: torch.nn.Module, action: int, body: int, n_frames: int, seed: int,
-                   n_samples: int = 3) -> Tensor:
+def sample_motions(
+    model: torch.nn.Module, action: int, body: int, n_frames: int, seed: int, n_samples: int = 3
+) -> Tensor:
     """Joint positions ``(n_samples, n_frames, 22, 3)`` of new samples of one action and body type.
 
     Args:
@@ -37,15 +38,25 @@ def sample_motions(model: torch.nn.Module, action: int, body: int, n_frames: int
         return model.codec.positions(poses, bodies)
 
 
-def motion_cell_widget(model: torch.nn.Module, action_names: Sequence[str], body_names: Sequence[str],
-                       fps: int = 30, step: int = 3, max_frames: int = 300) -> widgets.VBox:
+def motion_cell_widget(
+    model: torch.nn.Module,
+    action_names: Sequence[str],
+    body_names: Sequence[str],
+    fps: int = 30,
+    step: int = 3,
+    max_frames: int = 300,
+) -> widgets.VBox:
     """Controls (action, body type, length, seed, number of samples) and a player of the samples.
 
     The player is rendered once for the initial values when the widget is built (so it shows something
     without interaction), and again whenever "sample" is pressed. ``step`` shows every ``step``-th frame.
     """
-    action = widgets.Dropdown(options=[(name, i) for i, name in enumerate(action_names)], value=0, description="action")
-    body = widgets.Dropdown(options=[(name, i) for i, name in enumerate(body_names)], value=0, description="body")
+    action = widgets.Dropdown(
+        options=[(name, i) for i, name in enumerate(action_names)], value=0, description="action"
+    )
+    body = widgets.Dropdown(
+        options=[(name, i) for i, name in enumerate(body_names)], value=0, description="body"
+    )
     length = widgets.IntSlider(value=90, min=30, max=max_frames, step=30, description="frames")
     seed = widgets.BoundedIntText(value=0, min=0, max=2**31 - 1, description="seed")
     count = widgets.IntSlider(value=3, min=1, max=4, description="samples")
@@ -54,8 +65,14 @@ def motion_cell_widget(model: torch.nn.Module, action_names: Sequence[str], body
 
     def show(_: object = None) -> None:
         positions = sample_motions(model, action.value, body.value, length.value, seed.value, count.value)
-        player = animate(list(positions), model.codec.parents, fps=fps, step=step, layout="side",
-                         labels=[f"seed {seed.value}, sample {i + 1}" for i in range(count.value)])
+        player = animate(
+            list(positions),
+            model.codec.parents,
+            fps=fps,
+            step=step,
+            layout="side",
+            labels=[f"seed {seed.value}, sample {i + 1}" for i in range(count.value)],
+        )
         output.outputs = ()
         output.append_display_data(player)
 

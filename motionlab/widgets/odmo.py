@@ -1,4 +1,5 @@
-"""Chapter 08's widgets: sample a discovered mode, slide between two modes, send several styles to one end point.
+"""Chapter 08's widgets: sample a discovered mode, slide between two modes, send several styles to one end
+point.
 
 Each callback is a plain function of a trained :class:`~motionlab.models.odmo.sampler.ODMOSampler` and the
 widget values that returns a matplotlib ``Figure``; the ``*_widget`` builders only wire ipywidgets to them.
@@ -26,36 +27,66 @@ def _check_mode(sampler: ODMOSampler, action: int, mode: int) -> None:
         raise ValueError(f"action {action} has discovered modes 0..{n_modes - 1}, got {mode}")
 
 
-def mode_sample_figure(sampler: ODMOSampler, parents: Sequence[int], action: int, mode: int, seed: int,
-                       fps: int = 30) -> Figure:
+def mode_sample_figure(
+    sampler: ODMOSampler, parents: Sequence[int], action: int, mode: int, seed: int, fps: int = 30
+) -> Figure:
     """Filmstrip of one clip drawn from discovered ``mode`` of ``action`` (seeded)."""
     _check_mode(sampler, action, mode)
     clip = sampler.sample(action, 1, np.random.default_rng(seed), mode=mode)
-    return filmstrip(clip.positions[0].numpy(), parents, n_frames=6, fps=fps, color=GENERATED_COLOR,
-                     title=f"action {action}, discovered mode {mode}, seed {seed}")
+    return filmstrip(
+        clip.positions[0].numpy(),
+        parents,
+        n_frames=6,
+        fps=fps,
+        color=GENERATED_COLOR,
+        title=f"action {action}, discovered mode {mode}, seed {seed}",
+    )
 
 
-def interpolation_figure(sampler: ODMOSampler, parents: Sequence[int], action: int, mode_a: int, mode_b: int,
-                         weight: float, fps: int = 30) -> Figure:
-    """Filmstrip of the clip whose code lies ``weight`` of the way from mode ``mode_a``'s centre to ``mode_b``'s."""
+def interpolation_figure(
+    sampler: ODMOSampler,
+    parents: Sequence[int],
+    action: int,
+    mode_a: int,
+    mode_b: int,
+    weight: float,
+    fps: int = 30,
+) -> Figure:
+    """Filmstrip of the clip whose code lies ``weight`` of the way from mode ``mode_a``'s centre to
+    ``mode_b``'s."""
     _check_mode(sampler, action, mode_a)
     _check_mode(sampler, action, mode_b)
     if not 0.0 <= weight <= 1.0:
         raise ValueError(f"interpolation_figure: weight must lie in [0, 1], got {weight}")
     clip = mode_interpolation(sampler, action, mode_a, mode_b, np.array([weight]))
-    return filmstrip(clip.positions[0].numpy(), parents, n_frames=6, fps=fps, color=GENERATED_COLOR,
-                     title=f"action {action}: {1 - weight:.2f} x mode {mode_a} + {weight:.2f} x mode {mode_b}")
+    return filmstrip(
+        clip.positions[0].numpy(),
+        parents,
+        n_frames=6,
+        fps=fps,
+        color=GENERATED_COLOR,
+        title=f"action {action}: {1 - weight:.2f} x mode {mode_a} + {weight:.2f} x mode {mode_b}",
+    )
 
 
-def end_point_figure(sampler: ODMOSampler, action: int, x: float, y: float, seed: int, per_mode: int = 2) -> Figure:
-    """Top-down root paths of ``per_mode`` clips of every discovered mode of ``action``, all sent to ``(x, y)``
-    metres from the start (the character starts at the origin facing +x); the target is the black star."""
+def end_point_figure(
+    sampler: ODMOSampler, action: int, x: float, y: float, seed: int, per_mode: int = 2
+) -> Figure:
+    """Top-down root paths of ``per_mode`` clips of every discovered mode of ``action``, all sent to ``(x,
+    y)`` metres from the start (the character starts at the origin facing +x); the target is the black
+    star."""
     clips = styles_to_end_point(sampler, action, np.array([x, y, 0.0]), np.random.default_rng(seed), per_mode)
     fig = Figure(figsize=(5, 4), layout="constrained")
     ax = fig.add_subplot()
     labels = [f"mode {m}" for m in clips.mode]
     colors = [f"C{m % 10}" for m in clips.mode]
-    plot_root_paths(clips.positions.numpy(), ax, labels=labels, colors=colors, title=f"action {action} to ({x:.1f}, {y:.1f}) m")
+    plot_root_paths(
+        clips.positions.numpy(),
+        ax,
+        labels=labels,
+        colors=colors,
+        title=f"action {action} to ({x:.1f}, {y:.1f}) m",
+    )
     ax.plot([x], [y], marker="*", color="black", markersize=14, linestyle="none")
     handles, names = ax.get_legend_handles_labels()
     unique = dict(zip(names, handles))
@@ -65,60 +96,85 @@ def end_point_figure(sampler: ODMOSampler, action: int, x: float, y: float, seed
 
 def _shown(callback):
     """``callback`` as an ``interactive_output`` target: display its figure once, then release it."""
+
     def show(**values) -> None:
         fig = callback(**values)
         display(fig)
         plt.close(fig)
+
     return show
 
 
 def _action_dropdown(action_names: Sequence[str]) -> widgets.Dropdown:
-    return widgets.Dropdown(options=[(name, i) for i, name in enumerate(action_names)], value=0, description="action")
+    return widgets.Dropdown(
+        options=[(name, i) for i, name in enumerate(action_names)], value=0, description="action"
+    )
 
 
 def _mode_slider(sampler: ODMOSampler, action: int, description: str, value: int = 0) -> widgets.IntSlider:
     n_modes = sampler.modes.classes[action].n_modes
-    return widgets.IntSlider(value=min(value, n_modes - 1), min=0, max=n_modes - 1, description=description,
-                             continuous_update=False)
+    return widgets.IntSlider(
+        value=min(value, n_modes - 1),
+        min=0,
+        max=n_modes - 1,
+        description=description,
+        continuous_update=False,
+    )
 
 
 def _follow_action(action: widgets.Dropdown, sampler: ODMOSampler, *sliders: widgets.IntSlider) -> None:
     """Keep each mode slider's range to the chosen action's discovered modes."""
+
     def update(change: dict) -> None:
         for slider in sliders:
             slider.max = sampler.modes.classes[change["new"]].n_modes - 1
+
     action.observe(update, names="value")
 
 
-def mode_sampler_widget(sampler: ODMOSampler, parents: Sequence[int], action_names: Sequence[str]) -> widgets.VBox:
+def mode_sampler_widget(
+    sampler: ODMOSampler, parents: Sequence[int], action_names: Sequence[str]
+) -> widgets.VBox:
     """Pick an action and one of its discovered modes, and draw a clip from it."""
     action = _action_dropdown(action_names)
     mode = _mode_slider(sampler, 0, "mode")
     seed = widgets.IntSlider(value=0, min=0, max=20, description="seed", continuous_update=False)
     _follow_action(action, sampler, mode)
-    out = widgets.interactive_output(_shown(partial(mode_sample_figure, sampler, parents)),
-                                     {"action": action, "mode": mode, "seed": seed})
+    out = widgets.interactive_output(
+        _shown(partial(mode_sample_figure, sampler, parents)), {"action": action, "mode": mode, "seed": seed}
+    )
     return widgets.VBox([widgets.HBox([action, mode, seed]), out])
 
 
-def interpolation_widget(sampler: ODMOSampler, parents: Sequence[int], action_names: Sequence[str]) -> widgets.VBox:
+def interpolation_widget(
+    sampler: ODMOSampler, parents: Sequence[int], action_names: Sequence[str]
+) -> widgets.VBox:
     """Slide a code between the centres of two discovered modes of one action."""
     action = _action_dropdown(action_names)
     mode_a = _mode_slider(sampler, 0, "from mode", 0)
     mode_b = _mode_slider(sampler, 0, "to mode", 1)
-    weight = widgets.FloatSlider(value=0.5, min=0.0, max=1.0, step=0.1, description="weight", continuous_update=False)
+    weight = widgets.FloatSlider(
+        value=0.5, min=0.0, max=1.0, step=0.1, description="weight", continuous_update=False
+    )
     _follow_action(action, sampler, mode_a, mode_b)
-    out = widgets.interactive_output(_shown(partial(interpolation_figure, sampler, parents)),
-                                     {"action": action, "mode_a": mode_a, "mode_b": mode_b, "weight": weight})
+    out = widgets.interactive_output(
+        _shown(partial(interpolation_figure, sampler, parents)),
+        {"action": action, "mode_a": mode_a, "mode_b": mode_b, "weight": weight},
+    )
     return widgets.VBox([widgets.HBox([action, mode_a, mode_b, weight]), out])
 
 
 def end_point_widget(sampler: ODMOSampler, action_names: Sequence[str]) -> widgets.VBox:
     """Set an end point and watch clips of every discovered mode of an action walk to it."""
     action = _action_dropdown(action_names)
-    x = widgets.FloatSlider(value=4.0, min=-2.0, max=12.0, step=0.5, description="x (m)", continuous_update=False)
-    y = widgets.FloatSlider(value=1.0, min=-4.0, max=4.0, step=0.5, description="y (m)", continuous_update=False)
+    x = widgets.FloatSlider(
+        value=4.0, min=-2.0, max=12.0, step=0.5, description="x (m)", continuous_update=False
+    )
+    y = widgets.FloatSlider(
+        value=1.0, min=-4.0, max=4.0, step=0.5, description="y (m)", continuous_update=False
+    )
     seed = widgets.IntSlider(value=0, min=0, max=20, description="seed", continuous_update=False)
-    out = widgets.interactive_output(_shown(partial(end_point_figure, sampler)),
-                                     {"action": action, "x": x, "y": y, "seed": seed})
+    out = widgets.interactive_output(
+        _shown(partial(end_point_figure, sampler)), {"action": action, "x": x, "y": y, "seed": seed}
+    )
     return widgets.VBox([widgets.HBox([action, x, y, seed]), out])

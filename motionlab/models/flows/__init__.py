@@ -14,7 +14,15 @@ from motionlab.models.flows.base import FlowLayer, FlowSequence, check_cond, che
 from motionlab.models.flows.checks import autograd_logdet, logdet_error, perturb_parameters_, roundtrip_error
 from motionlab.models.flows.coupling import AffineCoupling, affine_forward, affine_inverse
 from motionlab.models.flows.gaussian import DiagonalGaussian
-from motionlab.models.flows.glow import Glow, GlowConfig, GlowLevel, GlowStep, Squeeze, squeeze_time, unsqueeze_time
+from motionlab.models.flows.glow import (
+    Glow,
+    GlowConfig,
+    GlowLevel,
+    GlowStep,
+    Squeeze,
+    squeeze_time,
+    unsqueeze_time,
+)
 from motionlab.models.flows.invconv import InvertibleConv1x1
 from motionlab.models.flows.prior import StandardNormal
 from motionlab.models.flows.toy import ToyFlow, ToyFlowConfig, grid_density, toy_nll_loss, two_moons

@@ -43,10 +43,13 @@ class ActNorm(FlowLayer):
 
     @torch.no_grad()
     def initialize(self, x: Tensor) -> None:
-        """Set bias and scale so that ``x`` ``(batch, C, time)`` maps to zero mean, unit variance per channel."""
+        """Set bias and scale so that ``x`` ``(batch, C, time)`` maps to zero mean, unit variance per
+        channel."""
         check_sequence(x, "x", "ActNorm.initialize", self.channels)
         if x.shape[0] * x.shape[2] < 2:
-            raise ValueError(f"ActNorm.initialize: needs at least 2 values per channel, got shape {tuple(x.shape)}")
+            raise ValueError(
+                f"ActNorm.initialize: needs at least 2 values per channel, got shape {tuple(x.shape)}"
+            )
         flat = x.transpose(0, 1).reshape(self.channels, -1).double()
         self.bias.copy_(-flat.mean(dim=1))
         self.log_scale.copy_(-torch.log(flat.std(dim=1, correction=0) + self.eps))

@@ -34,7 +34,9 @@ def check_sequence(x: Tensor, name: str, where: str, channels: int | None = None
         raise ValueError(f"{where}: {name} must have shape (batch, channels, time), got {tuple(x.shape)}")
     if channels is not None and x.shape[1] != channels:
         raise ValueError(f"{where}: {name} must have {channels} channels (dim 1), got shape {tuple(x.shape)}")
-    if not bool(torch.isfinite(x.sum())):  # one cheap pass; scan element-wise only when it fails (or overflows)
+    if not bool(
+        torch.isfinite(x.sum())
+    ):  # one cheap pass; scan element-wise only when it fails (or overflows)
         finite = torch.isfinite(x)
         if not bool(finite.all()):
             index = tuple(int(i) for i in torch.nonzero(~finite)[0])
@@ -50,14 +52,17 @@ def check_cond(cond: Tensor | None, x: Tensor, cond_channels: int, where: str) -
     """
     if cond_channels == 0:
         if cond is not None:
-            raise ValueError(f"{where}: this layer was built without conditioning (cond_channels=0) but got cond")
+            raise ValueError(
+                f"{where}: this layer was built without conditioning (cond_channels=0) but got cond"
+            )
         return None
     if cond is None:
         raise ValueError(f"{where}: this layer needs cond of shape (batch, {cond_channels}, time), got None")
     check_sequence(cond, "cond", where, cond_channels)
     if cond.shape[0] != x.shape[0] or cond.shape[2] != x.shape[2]:
-        raise ValueError(f"{where}: cond {tuple(cond.shape)} must share batch and time with the input "
-                         f"{tuple(x.shape)}")
+        raise ValueError(
+            f"{where}: cond {tuple(cond.shape)} must share batch and time with the input {tuple(x.shape)}"
+        )
     return cond
 
 

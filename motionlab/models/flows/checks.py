@@ -23,7 +23,7 @@ def autograd_logdet(layer: FlowLayer, x: Tensor, cond: Tensor | None = None) -> 
     """
     values = []
     for b in range(x.shape[0]):
-        row_cond = None if cond is None else cond[b:b + 1]
+        row_cond = None if cond is None else cond[b : b + 1]
 
         def flat_forward(row: Tensor, row_cond: Tensor | None = row_cond) -> Tensor:
             return layer(row[None], row_cond)[0].reshape(-1)
@@ -50,7 +50,8 @@ def roundtrip_error(layer: FlowLayer, x: Tensor, cond: Tensor | None = None) -> 
 
 @torch.no_grad()
 def perturb_parameters_(module: nn.Module, std: float, generator: torch.Generator) -> nn.Module:
-    """Add ``N(0, std**2)`` noise to every parameter of ``module`` in place (draws from ``generator``); return it."""
+    """Add ``N(0, std**2)`` noise to every parameter of ``module`` in place (draws from ``generator``); return
+    it."""
     for parameter in module.parameters():
         noise = torch.randn(parameter.shape, generator=generator, dtype=torch.float64)
         parameter.add_((std * noise).to(parameter.dtype))

@@ -67,8 +67,14 @@ class AffineCoupling(FlowLayer):
     it reads ``x_a`` and ``cond`` stacked along channels.
     """
 
-    def __init__(self, channels: int, cond_channels: int = 0, hidden: int = 64, kernel_size: int = 3,
-                 scale_offset: float = SCALE_OFFSET) -> None:
+    def __init__(
+        self,
+        channels: int,
+        cond_channels: int = 0,
+        hidden: int = 64,
+        kernel_size: int = 3,
+        scale_offset: float = SCALE_OFFSET,
+    ) -> None:
         super().__init__()
         if isinstance(channels, bool) or not isinstance(channels, int) or channels < 2:
             raise ValueError(f"AffineCoupling: channels must be an int >= 2, got {channels!r}")
@@ -84,13 +90,17 @@ class AffineCoupling(FlowLayer):
         self.scale_offset = float(scale_offset)
         pad = kernel_size // 2
         self.net = nn.Sequential(
-            nn.Conv1d(self.n_a + cond_channels, hidden, kernel_size, padding=pad), nn.ReLU(),
-            nn.Conv1d(hidden, hidden, 1), nn.ReLU(),
+            nn.Conv1d(self.n_a + cond_channels, hidden, kernel_size, padding=pad),
+            nn.ReLU(),
+            nn.Conv1d(hidden, hidden, 1),
+            nn.ReLU(),
             zero_init(nn.Conv1d(hidden, 2 * self.n_b, kernel_size, padding=pad)),
         )
 
     def extra_repr(self) -> str:
-        return f"channels={self.channels}, cond_channels={self.cond_channels}, scale_offset={self.scale_offset}"
+        return (
+            f"channels={self.channels}, cond_channels={self.cond_channels}, scale_offset={self.scale_offset}"
+        )
 
     def _params(self, x_a: Tensor, cond: Tensor | None) -> Tensor:
         return self.net(x_a if cond is None else torch.cat([x_a, cond], dim=1))
@@ -98,12 +108,12 @@ class AffineCoupling(FlowLayer):
     def forward(self, x: Tensor, cond: Tensor | None = None) -> tuple[Tensor, Tensor]:
         check_sequence(x, "x", "AffineCoupling.forward", self.channels)
         cond = check_cond(cond, x, self.cond_channels, "AffineCoupling.forward")
-        x_a, x_b = x[:, :self.n_a], x[:, self.n_a:]
+        x_a, x_b = x[:, : self.n_a], x[:, self.n_a :]
         y_b, logdet = affine_forward(x_b, self._params(x_a, cond), self.scale_offset)
         return torch.cat([x_a, y_b], dim=1), logdet
 
     def inverse(self, y: Tensor, cond: Tensor | None = None) -> Tensor:
         check_sequence(y, "y", "AffineCoupling.inverse", self.channels)
         cond = check_cond(cond, y, self.cond_channels, "AffineCoupling.inverse")
-        y_a, y_b = y[:, :self.n_a], y[:, self.n_a:]
+        y_a, y_b = y[:, : self.n_a], y[:, self.n_a :]
         return torch.cat([y_a, affine_inverse(y_b, self._params(y_a, cond), self.scale_offset)], dim=1)

@@ -35,11 +35,14 @@ class DiagonalGaussian(nn.Module):
 
     @torch.no_grad()
     def fit(self, x: Tensor) -> DiagonalGaussian:
-        """Maximum-likelihood mean and (population) std per channel from ``x`` ``(batch, C, T)``; returns self."""
+        """Maximum-likelihood mean and (population) std per channel from ``x`` ``(batch, C, T)``; returns
+        self."""
         check_sequence(x, "x", "DiagonalGaussian.fit", self.channels)
         flat = x.transpose(0, 1).reshape(self.channels, -1).double()
         if flat.shape[1] < 2:
-            raise ValueError(f"DiagonalGaussian.fit: needs at least 2 values per channel, got shape {tuple(x.shape)}")
+            raise ValueError(
+                f"DiagonalGaussian.fit: needs at least 2 values per channel, got shape {tuple(x.shape)}"
+            )
         self.mean.copy_(flat.mean(dim=1))
         self.std.copy_(flat.std(dim=1, correction=0).clamp(min=self.min_std))
         return self

@@ -22,7 +22,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import torch
-from torch import Tensor, nn
+from torch import Tensor
 
 from motionlab.models.flows.actnorm import ActNorm
 from motionlab.models.flows.base import FlowLayer, FlowSequence, check_cond, check_sequence
@@ -32,7 +32,8 @@ from motionlab.models.flows.prior import StandardNormal, check_temperature
 
 
 def squeeze_time(x: Tensor) -> Tensor:
-    """``(batch, C, T) -> (batch, 2C, T/2)``: frames ``2t, 2t+1`` of channel ``c`` become channels ``2c, 2c+1``."""
+    """``(batch, C, T) -> (batch, 2C, T/2)``: frames ``2t, 2t+1`` of channel ``c`` become channels ``2c,
+    2c+1``."""
     batch, channels, time = x.shape
     if time % 2:
         raise ValueError(f"squeeze_time: the time axis must have even length, got shape {tuple(x.shape)}")
@@ -43,7 +44,9 @@ def unsqueeze_time(x: Tensor) -> Tensor:
     """Undo :func:`squeeze_time`: ``(batch, 2C, T/2) -> (batch, C, T)``."""
     batch, channels, time = x.shape
     if channels % 2:
-        raise ValueError(f"unsqueeze_time: the channel axis must have even length, got shape {tuple(x.shape)}")
+        raise ValueError(
+            f"unsqueeze_time: the channel axis must have even length, got shape {tuple(x.shape)}"
+        )
     return x.reshape(batch, channels // 2, 2, time).transpose(2, 3).reshape(batch, channels // 2, 2 * time)
 
 
@@ -68,8 +71,13 @@ class GlowStep(FlowSequence):
     """
 
     def __init__(self, channels: int, cond_channels: int = 0, hidden: int = 64, kernel_size: int = 3) -> None:
-        super().__init__([ActNorm(channels), InvertibleConv1x1(channels),
-                          AffineCoupling(channels, cond_channels, hidden, kernel_size)])
+        super().__init__(
+            [
+                ActNorm(channels),
+                InvertibleConv1x1(channels),
+                AffineCoupling(channels, cond_channels, hidden, kernel_size),
+            ]
+        )
 
 
 class GlowLevel(FlowLayer):
@@ -83,15 +91,25 @@ class GlowLevel(FlowLayer):
             conditioning; ``None`` for the last level, which keeps all channels.
     """
 
-    def __init__(self, channels: int, cond_channels: int, n_steps: int, hidden: int, kernel_size: int,
-                 inner: GlowLevel | None = None) -> None:
+    def __init__(
+        self,
+        channels: int,
+        cond_channels: int,
+        n_steps: int,
+        hidden: int,
+        kernel_size: int,
+        inner: GlowLevel | None = None,
+    ) -> None:
         super().__init__()
         if inner is not None and (inner.channels != channels or inner.cond_channels != 2 * cond_channels):
-            raise ValueError(f"GlowLevel: inner level must take {channels} channels and {2 * cond_channels} "
-                             f"cond channels, got {inner.channels} and {inner.cond_channels}")
+            raise ValueError(
+                f"GlowLevel: inner level must take {channels} channels and {2 * cond_channels} "
+                f"cond channels, got {inner.channels} and {inner.cond_channels}"
+            )
         self.channels, self.cond_channels = channels, cond_channels
-        self.steps = FlowSequence(GlowStep(2 * channels, 2 * cond_channels, hidden, kernel_size)
-                                  for _ in range(n_steps))
+        self.steps = FlowSequence(
+            GlowStep(2 * channels, 2 * cond_channels, hidden, kernel_size) for _ in range(n_steps)
+        )
         self.inner = inner
 
     def forward(self, x: Tensor, cond: Tensor | None = None) -> tuple[Tensor, Tensor]:
@@ -100,8 +118,8 @@ class GlowLevel(FlowLayer):
         cond = None if cond is None else squeeze_time(cond)
         h, logdet = self.steps(squeeze_time(x), cond)
         if self.inner is not None:
-            kept, inner_logdet = self.inner(h[:, self.channels:], cond)
-            h = torch.cat([h[:, :self.channels], kept], dim=1)
+            kept, inner_logdet = self.inner(h[:, self.channels :], cond)
+            h = torch.cat([h[:, : self.channels], kept], dim=1)
             logdet = logdet + inner_logdet
         return unsqueeze_time(h), logdet
 
@@ -111,7 +129,7 @@ class GlowLevel(FlowLayer):
         cond = None if cond is None else squeeze_time(cond)
         h = squeeze_time(y)
         if self.inner is not None:
-            h = torch.cat([h[:, :self.channels], self.inner.inverse(h[:, self.channels:], cond)], dim=1)
+            h = torch.cat([h[:, : self.channels], self.inner.inverse(h[:, self.channels :], cond)], dim=1)
         return unsqueeze_time(self.steps.inverse(h, cond))
 
 
@@ -144,8 +162,10 @@ class GlowConfig:
                 raise ValueError(f"GlowConfig.{name} must be a positive int, got {value!r}")
         if not isinstance(self.cond_channels, int) or self.cond_channels < 0:
             raise ValueError(f"GlowConfig.cond_channels must be an int >= 0, got {self.cond_channels!r}")
-        if self.length % 2 ** self.levels:
-            raise ValueError(f"GlowConfig: length {self.length} must be divisible by 2**levels = {2 ** self.levels}")
+        if self.length % 2**self.levels:
+            raise ValueError(
+                f"GlowConfig: length {self.length} must be divisible by 2**levels = {2**self.levels}"
+            )
         if self.kernel_size % 2 == 0:
             raise ValueError(f"GlowConfig.kernel_size must be odd, got {self.kernel_size}")
 
@@ -162,15 +182,23 @@ class Glow(FlowLayer):
         self.cfg = cfg
         level: GlowLevel | None = None
         for depth in reversed(range(cfg.levels)):
-            level = GlowLevel(cfg.channels, cfg.cond_channels * 2 ** depth, cfg.steps_per_level, cfg.hidden,
-                              cfg.kernel_size, inner=level)
+            level = GlowLevel(
+                cfg.channels,
+                cfg.cond_channels * 2**depth,
+                cfg.steps_per_level,
+                cfg.hidden,
+                cfg.kernel_size,
+                inner=level,
+            )
         self.flow = level
         self.prior = StandardNormal()
 
     def _check(self, x: Tensor, cond: Tensor | None, where: str) -> Tensor | None:
         check_sequence(x, "x", where, self.cfg.channels)
         if x.shape[2] != self.cfg.length:
-            raise ValueError(f"{where}: sequences must have {self.cfg.length} frames, got shape {tuple(x.shape)}")
+            raise ValueError(
+                f"{where}: sequences must have {self.cfg.length} frames, got shape {tuple(x.shape)}"
+            )
         return check_cond(cond, x, self.cfg.cond_channels, where)
 
     def forward(self, x: Tensor, cond: Tensor | None = None) -> tuple[Tensor, Tensor]:
@@ -187,15 +215,23 @@ class Glow(FlowLayer):
         return self.prior.log_prob(z) + logdet
 
     @torch.no_grad()
-    def sample(self, cond: Tensor | None = None, n: int | None = None, temperature: float = 1.0,
-               generator: torch.Generator | None = None) -> Tensor:
-        """Sequences ``(batch, C, T)`` drawn at ``temperature``: one per row of ``cond``, or ``n`` without it."""
+    def sample(
+        self,
+        cond: Tensor | None = None,
+        n: int | None = None,
+        temperature: float = 1.0,
+        generator: torch.Generator | None = None,
+    ) -> Tensor:
+        """Sequences ``(batch, C, T)`` drawn at ``temperature``: one per row of ``cond``, or ``n`` without
+        it."""
         temperature = check_temperature(temperature, "Glow.sample")
         if cond is not None:
             check_sequence(cond, "cond", "Glow.sample", self.cfg.cond_channels)
             n = cond.shape[0]
         if n is None or n < 1:
-            raise ValueError(f"Glow.sample: give cond (batch, {self.cfg.cond_channels}, {self.cfg.length}) or n >= 1")
+            raise ValueError(
+                f"Glow.sample: give cond (batch, {self.cfg.cond_channels}, {self.cfg.length}) or n >= 1"
+            )
         dtype = next(self.parameters()).dtype
         z = self.prior.sample((n, self.cfg.channels, self.cfg.length), temperature, generator, dtype)
         return self.inverse(z, cond)

@@ -77,13 +77,14 @@ class InvertibleConv1x1(FlowLayer):
         return torch.linalg.inv(self.weight(torch.float64)).to(self.log_s.dtype)
 
     def matrices(self) -> tuple[Tensor, Tensor | None]:
-        """``(W, W^{-1})``, both ``(C, C)``: cached while the parameters are unchanged when autograd is off (the
-        inverse costs an LU solve in float64); with autograd on, ``(W, None)`` freshly built."""
+        """``(W, W^{-1})``, both ``(C, C)``: cached while the parameters are unchanged when autograd is off
+        (the inverse costs an LU solve in float64); with autograd on, ``(W, None)`` freshly built."""
         if torch.is_grad_enabled():
             self._cache = None
             return self.weight(), None
         key = tuple(p._version for p in (self.lower, self.upper, self.log_s)) + tuple(
-            p.data_ptr() for p in (self.lower, self.upper, self.log_s))
+            p.data_ptr() for p in (self.lower, self.upper, self.log_s)
+        )
         if self._cache is None or self._cache[0] != key:
             self._cache = (key, self.weight().detach(), self.inverse_weight().detach())
         return self._cache[1], self._cache[2]

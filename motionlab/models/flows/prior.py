@@ -32,12 +32,19 @@ class StandardNormal:
     def log_prob(self, z: Tensor) -> Tensor:
         """``log N(z; 0, I)`` per batch element, ``(batch,)``."""
         if not isinstance(z, Tensor) or not z.is_floating_point() or z.dim() < 1:
-            raise ValueError(f"StandardNormal.log_prob: z must be a floating tensor (batch, ...), got {z!r:.60}")
+            raise ValueError(
+                f"StandardNormal.log_prob: z must be a floating tensor (batch, ...), got {z!r:.60}"
+            )
         flat = z.reshape(z.shape[0], -1)
         return -0.5 * (flat.pow(2).sum(dim=1) + flat.shape[1] * LOG_2PI)
 
-    def sample(self, shape: tuple[int, ...], temperature: float = 1.0, generator: torch.Generator | None = None,
-               dtype: torch.dtype = torch.float32) -> Tensor:
+    def sample(
+        self,
+        shape: tuple[int, ...],
+        temperature: float = 1.0,
+        generator: torch.Generator | None = None,
+        dtype: torch.dtype = torch.float32,
+    ) -> Tensor:
         """``temperature * eps`` with ``eps ~ N(0, I)`` of ``shape``, drawn from ``generator``."""
         temperature = check_temperature(temperature, "StandardNormal.sample")
         return temperature * torch.randn(shape, generator=generator, dtype=dtype)

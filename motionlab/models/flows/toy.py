@@ -60,7 +60,12 @@ class ToyFlowConfig:
 
 
 def _check_points(points: Tensor, where: str) -> Tensor:
-    if not isinstance(points, Tensor) or not points.is_floating_point() or points.dim() != 2 or points.shape[1] != 2:
+    if (
+        not isinstance(points, Tensor)
+        or not points.is_floating_point()
+        or points.dim() != 2
+        or points.shape[1] != 2
+    ):
         shape = tuple(points.shape) if isinstance(points, Tensor) else type(points).__name__
         raise ValueError(f"{where}: points must be a floating tensor (n, 2), got {shape}")
     if not bool(torch.isfinite(points).all()):
@@ -93,7 +98,8 @@ class ToyFlow(nn.Module):
 
 
 def toy_nll_loss(model: ToyFlow, batch: Tensor, step: int, coeffs: dict[str, float]) -> dict[str, Tensor]:
-    """Training loss for :func:`motionlab.train.train_or_load`: mean negative log-likelihood in nats per point."""
+    """Training loss for :func:`motionlab.train.train_or_load`: mean negative log-likelihood in nats per
+    point."""
     nll = -model.log_prob(batch).mean()
     return {"loss": nll, "nll": nll.detach()}
 
@@ -110,8 +116,11 @@ class GridDensity(NamedTuple):
 
 
 @torch.no_grad()
-def grid_density(model: ToyFlow, extent: float = 4.0, resolution: int = 300, chunk: int = 20_000) -> GridDensity:
-    """Evaluate ``model``'s density at the centres of ``resolution**2`` cells covering ``[-extent, extent]**2``."""
+def grid_density(
+    model: ToyFlow, extent: float = 4.0, resolution: int = 300, chunk: int = 20_000
+) -> GridDensity:
+    """Evaluate ``model``'s density at the centres of ``resolution**2`` cells covering ``[-extent,
+    extent]**2``."""
     if not math.isfinite(extent) or extent <= 0:
         raise ValueError(f"grid_density: extent must be finite and > 0, got {extent!r}")
     if isinstance(resolution, bool) or not isinstance(resolution, int) or resolution < 2:

@@ -38,9 +38,21 @@ from motionlab.models.moglow.generate import (
     seed_features,
     splice_controls,
 )
-from motionlab.models.moglow.measures import control_mismatch, gait_speed, joint_speed, speed_ratio, support_foot_slide
+from motionlab.models.moglow.measures import (
+    control_mismatch,
+    gait_speed,
+    joint_speed,
+    speed_ratio,
+    support_foot_slide,
+)
 from motionlab.models.moglow.model import MoGlow
-from motionlab.models.moglow.training import PreparedData, data_identity, held_out_nll, nll_per_frame_loss, prepare_data
+from motionlab.models.moglow.training import (
+    PreparedData,
+    data_identity,
+    held_out_nll,
+    nll_per_frame_loss,
+    prepare_data,
+)
 
 __all__ = [
     "LOCOMOTION",

@@ -1,4 +1,5 @@
-"""The autoregressive conditioning shared by MoGlow and its baseline, its dropout, and a generic sampling loop.
+"""The autoregressive conditioning shared by MoGlow and its baseline, its dropout, and a generic sampling
+loop.
 
 The loop, :func:`autoregressive_sample`, runs any one-frame ``step`` function (the baseline's); MoGlow has
 its own loop, arranged for speed (:mod:`.sampler`), which builds the same conditioning.
@@ -33,9 +34,11 @@ FrameStep = Callable[[int, Tensor, Any], tuple[Tensor, Any]]
 """``step(t, cond_t (B, cond_dim), state) -> (pose_t (B, P), state)``: generated frame ``t`` (0-based)."""
 
 
-def check_pose_control(pose: Tensor, control: Tensor, pose_dim: int, control_dim: int, min_frames: int,
-                       where: str) -> None:
-    """Raise ``ValueError`` unless ``pose`` ``(B, T, P)`` and ``control`` ``(B, T', C)`` are finite and sized right.
+def check_pose_control(
+    pose: Tensor, control: Tensor, pose_dim: int, control_dim: int, min_frames: int, where: str
+) -> None:
+    """Raise ``ValueError`` unless ``pose`` ``(B, T, P)`` and ``control`` ``(B, T', C)`` are finite and sized
+    right.
 
     ``T >= min_frames`` is required of ``pose``; ``control`` must match its batch (frame counts are
     checked by the callers, which differ in what they need).
@@ -43,24 +46,36 @@ def check_pose_control(pose: Tensor, control: Tensor, pose_dim: int, control_dim
     for name, x, size in (("pose", pose, pose_dim), ("control", control, control_dim)):
         if not isinstance(x, Tensor) or not x.is_floating_point() or x.dim() != 3 or x.shape[2] != size:
             shape = tuple(x.shape) if isinstance(x, Tensor) else type(x).__name__
-            raise ValueError(f"{where}: {name} must be a floating tensor (batch, frames, {size}), got {shape}")
+            raise ValueError(
+                f"{where}: {name} must be a floating tensor (batch, frames, {size}), got {shape}"
+            )
         if not bool(torch.isfinite(x).all()):
             raise ValueError(f"{where}: {name} contains NaN or inf")
     if pose.shape[0] != control.shape[0]:
-        raise ValueError(f"{where}: pose and control must have the same batch size, got {pose.shape[0]} and "
-                         f"{control.shape[0]}")
+        raise ValueError(
+            f"{where}: pose and control must have the same batch size, got {pose.shape[0]} and "
+            f"{control.shape[0]}"
+        )
     if pose.shape[1] < min_frames:
         raise ValueError(f"{where}: pose needs at least {min_frames} frames, got {pose.shape[1]}")
 
 
-def history_keep_mask(batch: int, frames: int, history: int, dropout: float,
-                      generator: torch.Generator | None = None) -> Tensor:
-    """Bernoulli keep flags ``(batch, frames, history)`` (1 keep, 0 drop), each dropped with prob. ``dropout``."""
+def history_keep_mask(
+    batch: int, frames: int, history: int, dropout: float, generator: torch.Generator | None = None
+) -> Tensor:
+    """Bernoulli keep flags ``(batch, frames, history)`` (1 keep, 0 drop), each dropped with prob.
+    ``dropout``."""
     return (torch.rand(batch, frames, history, generator=generator) >= dropout).float()
 
 
-def sampling_setup(cfg: Any, control: Tensor, seed_pose: Tensor, temperature: float,
-                   generator: torch.Generator | None, where: str) -> tuple[Tensor | None, Tensor]:
+def sampling_setup(
+    cfg: Any,
+    control: Tensor,
+    seed_pose: Tensor,
+    temperature: float,
+    generator: torch.Generator | None,
+    where: str,
+) -> tuple[Tensor | None, Tensor]:
     """Checks and first draws shared by the models' ``sample``: ``(keep, noise)``.
 
     ``cfg`` has ``pose_dim``, ``control_dim``, ``history`` and ``dropout``. ``keep`` are the history dropout
@@ -71,8 +86,10 @@ def sampling_setup(cfg: Any, control: Tensor, seed_pose: Tensor, temperature: fl
     history = cfg.history
     check_pose_control(seed_pose, control, cfg.pose_dim, cfg.control_dim, history, where)
     if seed_pose.shape[1] != history or control.shape[1] <= history:
-        raise ValueError(f"{where}: seed_pose must have tau={history} frames and control more than that, "
-                         f"got {tuple(seed_pose.shape)} and {tuple(control.shape)}")
+        raise ValueError(
+            f"{where}: seed_pose must have tau={history} frames and control more than that, "
+            f"got {tuple(seed_pose.shape)} and {tuple(control.shape)}"
+        )
     batch, frames = control.shape[0], control.shape[1] - history
     keep = None
     if cfg.dropout > 0:
@@ -81,7 +98,9 @@ def sampling_setup(cfg: Any, control: Tensor, seed_pose: Tensor, temperature: fl
     return keep, noise
 
 
-def autoregressive_conditioning(pose: Tensor, control: Tensor, history: int, keep: Tensor | None = None) -> Tensor:
+def autoregressive_conditioning(
+    pose: Tensor, control: Tensor, history: int, keep: Tensor | None = None
+) -> Tensor:
     """Conditioning ``(B, T - tau, cond_dim)`` for predicting frames ``tau .. T-1`` of a sequence.
 
     Args:
@@ -96,11 +115,13 @@ def autoregressive_conditioning(pose: Tensor, control: Tensor, history: int, kee
     batch, frames, _ = pose.shape
     if frames <= history:
         raise ValueError(f"autoregressive_conditioning: needs more than tau={history} frames, got {frames}")
-    past = pose.unfold(1, history, 1)[:, :frames - history].transpose(2, 3)  # (B, T - tau, tau, P)
+    past = pose.unfold(1, history, 1)[:, : frames - history].transpose(2, 3)  # (B, T - tau, tau, P)
     if keep is not None:
         if keep.shape != (batch, frames - history, history):
-            raise ValueError(f"autoregressive_conditioning: keep must be {(batch, frames - history, history)}, "
-                             f"got {tuple(keep.shape)}")
+            raise ValueError(
+                f"autoregressive_conditioning: keep must be {(batch, frames - history, history)}, "
+                f"got {tuple(keep.shape)}"
+            )
         past = past * keep[..., None].to(past)
     controls = control.unfold(1, history + 1, 1).transpose(2, 3)  # (B, T - tau, tau + 1, C)
     return torch.cat([past.flatten(2), controls.flatten(2)], dim=2)
@@ -112,8 +133,9 @@ def frame_conditioning(past: Tensor, controls: Tensor) -> Tensor:
     return torch.cat([past.flatten(1), controls.flatten(1)], dim=1)
 
 
-def autoregressive_sample(step: FrameStep, control: Tensor, seed_pose: Tensor, state: Any = None,
-                          keep: Tensor | None = None) -> Tensor:
+def autoregressive_sample(
+    step: FrameStep, control: Tensor, seed_pose: Tensor, state: Any = None, keep: Tensor | None = None
+) -> Tensor:
     """Generate frame by frame: ``(B, N, P)`` poses for controls ``(B, tau + N, C)`` after ``tau`` seed poses.
 
     Args:
@@ -130,12 +152,14 @@ def autoregressive_sample(step: FrameStep, control: Tensor, seed_pose: Tensor, s
     history = seed_pose.shape[1]
     frames = control.shape[1] - history
     if keep is not None and keep.shape != (seed_pose.shape[0], frames, history):
-        raise ValueError(f"autoregressive_sample: keep must be {(seed_pose.shape[0], frames, history)}, "
-                         f"got {tuple(keep.shape)}")
+        raise ValueError(
+            f"autoregressive_sample: keep must be {(seed_pose.shape[0], frames, history)}, "
+            f"got {tuple(keep.shape)}"
+        )
     past, poses = seed_pose, []
     for t in range(frames):
         visible = past if keep is None else past * keep[:, t, :, None]
-        pose_t, state = step(t, frame_conditioning(visible, control[:, t:t + history + 1]), state)
+        pose_t, state = step(t, frame_conditioning(visible, control[:, t : t + history + 1]), state)
         poses.append(pose_t)
         past = torch.cat([past[:, 1:], pose_t[:, None]], dim=1)
     return check_generated(torch.stack(poses, dim=1), "autoregressive_sample")
@@ -146,6 +170,8 @@ def check_generated(generated: Tensor, where: str) -> Tensor:
     (a model can diverge on inputs far from its training data)."""
     finite = torch.isfinite(generated).all(dim=(0, 2))
     if not bool(finite.all()):
-        raise ValueError(f"{where}: generation diverged: non-finite poses from generated frame "
-                         f"{int(torch.nonzero(~finite)[0])} of {generated.shape[1]}")
+        raise ValueError(
+            f"{where}: generation diverged: non-finite poses from generated frame "
+            f"{int(torch.nonzero(~finite)[0])} of {generated.shape[1]}"
+        )
     return generated

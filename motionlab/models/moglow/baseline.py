@@ -45,7 +45,9 @@ class GaussianAR(nn.Module):
         """
         correction, raw = self.out(hidden).chunk(2, dim=-1)
         scale = torch.exp(self.linear.log_scale)
-        return self.linear.mean(cond) + scale * correction, (self.linear.log_scale + raw).clamp(*LOG_STD_RANGE)
+        return self.linear.mean(cond) + scale * correction, (self.linear.log_scale + raw).clamp(
+            *LOG_STD_RANGE
+        )
 
     def initialize(self, pose: Tensor, control: Tensor, seed: int = 0) -> float:
         """Fit the linear predictor (:mod:`.linear`) to training windows; returns its RMS residual."""
@@ -54,29 +56,45 @@ class GaussianAR(nn.Module):
     def forward(self, pose: Tensor, control: Tensor, generator: torch.Generator | None = None) -> Tensor:
         """Log-likelihood ``(B,)`` (nats) of frames ``tau .. T-1``, as :meth:`MoGlow.forward` (history dropout
         flags drawn from ``generator``)."""
-        check_pose_control(pose, control, self.cfg.pose_dim, self.cfg.control_dim, self.cfg.history + 1,
-                           "GaussianAR.forward")
+        check_pose_control(
+            pose, control, self.cfg.pose_dim, self.cfg.control_dim, self.cfg.history + 1, "GaussianAR.forward"
+        )
         if control.shape[1] != pose.shape[1]:
-            raise ValueError(f"GaussianAR.forward: pose and control must have the same frames, got {pose.shape[1]} "
-                             f"and {control.shape[1]}")
+            raise ValueError(
+                f"GaussianAR.forward: pose and control must have the same frames, got {pose.shape[1]} "
+                f"and {control.shape[1]}"
+            )
         batch, frames, _ = pose.shape
         keep = None
         if self.cfg.dropout > 0:
-            keep = history_keep_mask(batch, frames - self.cfg.history, self.cfg.history, self.cfg.dropout, generator)
+            keep = history_keep_mask(
+                batch, frames - self.cfg.history, self.cfg.history, self.cfg.dropout, generator
+            )
         cond = autoregressive_conditioning(pose, control, self.cfg.history, keep)
         hidden, _ = self.lstm(cond)
         mean, log_std = self._distribution(cond, hidden)
-        target = pose[:, self.cfg.history:]
-        per_value = -0.5 * ((target - mean) * torch.exp(-log_std)).pow(2) - log_std - 0.5 * math.log(2 * math.pi)
+        target = pose[:, self.cfg.history :]
+        per_value = (
+            -0.5 * ((target - mean) * torch.exp(-log_std)).pow(2) - log_std - 0.5 * math.log(2 * math.pi)
+        )
         return per_value.sum(dim=(1, 2))
 
     @torch.no_grad()
-    def sample(self, control: Tensor, seed_pose: Tensor, temperature: float = 1.0,
-               generator: torch.Generator | None = None) -> Tensor:
+    def sample(
+        self,
+        control: Tensor,
+        seed_pose: Tensor,
+        temperature: float = 1.0,
+        generator: torch.Generator | None = None,
+    ) -> Tensor:
         """Generate poses ``(B, N, P)`` frame by frame, as :meth:`MoGlow.sample`."""
-        keep, noise = sampling_setup(self.cfg, control, seed_pose, temperature, generator, "GaussianAR.sample")
+        keep, noise = sampling_setup(
+            self.cfg, control, seed_pose, temperature, generator, "GaussianAR.sample"
+        )
 
-        def step(t: int, cond: Tensor, state: tuple[Tensor, Tensor] | None) -> tuple[Tensor, tuple[Tensor, Tensor]]:
+        def step(
+            t: int, cond: Tensor, state: tuple[Tensor, Tensor] | None
+        ) -> tuple[Tensor, tuple[Tensor, Tensor]]:
             hidden, state = self.lstm(cond[:, None], state)
             mean, log_std = self._distribution(cond, hidden[:, 0])
             return mean + torch.exp(log_std) * noise[:, t], state

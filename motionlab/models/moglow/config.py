@@ -1,4 +1,5 @@
-"""Configurations of MoGlow and of its Gaussian autoregressive baseline (frozen, hashed into the cache key)."""
+"""Configurations of MoGlow and of its Gaussian autoregressive baseline (frozen, hashed into the cache
+key)."""
 
 from __future__ import annotations
 
@@ -48,7 +49,9 @@ class MoGlowConfig:
         for name in ("pose_dim", "control_dim", "history", "steps", "hidden", "cond_features"):
             _check_positive("MoGlowConfig", name, getattr(self, name))
         if self.pose_dim < 2:
-            raise ValueError(f"MoGlowConfig.pose_dim must be >= 2 for a coupling to split it, got {self.pose_dim}")
+            raise ValueError(
+                f"MoGlowConfig.pose_dim must be >= 2 for a coupling to split it, got {self.pose_dim}"
+            )
         _check_dropout("MoGlowConfig", self.dropout)
 
     @property

@@ -11,7 +11,9 @@ different: the conditioning of frame ``t`` contains the pose generated at ``t - 
 frame at a time (:mod:`.sampler`), from the weights that :meth:`LSTMAffineCoupling.frame_weights` hands out.
 """
 
-from typing import NamedTuple  # TorchScript reads FrameCoupling's annotations: no ``from __future__ import annotations``
+from typing import (
+    NamedTuple,
+)  # TorchScript reads FrameCoupling's annotations: no ``from __future__ import annotations``
 
 import torch
 from torch import Tensor, nn
@@ -25,20 +27,20 @@ class FrameCoupling(NamedTuple):
     and ``C_b`` transformed channels, ``C_c`` conditioning features).
 
     For one frame, the LSTM's gates are ``x_a @ lstm_input_a.T + cond @ lstm_input_cond.T + h @ lstm_hidden.T
-    + lstm_bias`` and the shift and raw scale are ``h' @ out_hidden + x_a @ out_input_a + cond @ out_input_cond
-    + out_bias`` (``h'`` the updated LSTM output), the sigmoid's offset being folded into ``out_bias``: the
-    layer's arithmetic, rearranged so that a generator can compute the conditioning's parts of all
-    couplings at once. The tensors are copies (a snapshot of the weights), contiguous.
+    + lstm_bias`` and the shift and raw scale are ``h' @ out_hidden + x_a @ out_input_a + cond @
+    out_input_cond + out_bias`` (``h'`` the updated LSTM output), the sigmoid's offset being folded into
+    ``out_bias``: the layer's arithmetic, rearranged so that a generator can compute the conditioning's parts
+    of all couplings at once. The tensors are copies (a snapshot of the weights), contiguous.
     """
 
-    lstm_input_a: Tensor     # (4H, C_a)
+    lstm_input_a: Tensor  # (4H, C_a)
     lstm_input_cond: Tensor  # (4H, C_c)
-    lstm_hidden: Tensor      # (4H, H)
-    lstm_bias: Tensor        # (4H,)
-    out_hidden: Tensor       # (H, 2 C_b)
-    out_input_a: Tensor      # (C_a, 2 C_b)
-    out_input_cond: Tensor   # (C_c, 2 C_b)
-    out_bias: Tensor         # (2 C_b,)
+    lstm_hidden: Tensor  # (4H, H)
+    lstm_bias: Tensor  # (4H,)
+    out_hidden: Tensor  # (H, 2 C_b)
+    out_input_a: Tensor  # (C_a, 2 C_b)
+    out_input_cond: Tensor  # (C_c, 2 C_b)
+    out_bias: Tensor  # (2 C_b,)
 
 
 class LSTMAffineCoupling(FlowLayer):
@@ -55,12 +57,16 @@ class LSTMAffineCoupling(FlowLayer):
     linear relations between the halves from the first steps of training, before the LSTM has learned).
     """
 
-    def __init__(self, channels: int, cond_channels: int, hidden: int, scale_offset: float = SCALE_OFFSET) -> None:
+    def __init__(
+        self, channels: int, cond_channels: int, hidden: int, scale_offset: float = SCALE_OFFSET
+    ) -> None:
         super().__init__()
         if isinstance(channels, bool) or not isinstance(channels, int) or channels < 2:
             raise ValueError(f"LSTMAffineCoupling: channels must be an int >= 2, got {channels!r}")
         if not isinstance(cond_channels, int) or cond_channels < 1:
-            raise ValueError(f"LSTMAffineCoupling: cond_channels must be a positive int, got {cond_channels!r}")
+            raise ValueError(
+                f"LSTMAffineCoupling: cond_channels must be a positive int, got {cond_channels!r}"
+            )
         self.channels, self.cond_channels, self.hidden = channels, cond_channels, hidden
         self.n_a = channels // 2
         self.scale_offset = float(scale_offset)
@@ -71,7 +77,8 @@ class LSTMAffineCoupling(FlowLayer):
         return f"channels={self.channels}, cond_channels={self.cond_channels}, hidden={self.hidden}"
 
     def _params(self, x_a: Tensor, cond: Tensor) -> Tensor:
-        """Shift and raw scale ``(B, 2 * C_b, T)`` from ``x_a`` ``(B, C_a, T)`` and ``cond`` ``(B, C_c, T)``."""
+        """Shift and raw scale ``(B, 2 * C_b, T)`` from ``x_a`` ``(B, C_a, T)`` and ``cond`` ``(B, C_c,
+        T)``."""
         inputs = torch.cat([x_a, cond], dim=1).transpose(1, 2)
         output, _ = self.lstm(inputs)
         return self.out(torch.cat([output, inputs], dim=2)).transpose(1, 2)
@@ -79,24 +86,34 @@ class LSTMAffineCoupling(FlowLayer):
     def forward(self, x: Tensor, cond: Tensor | None = None) -> tuple[Tensor, Tensor]:
         check_sequence(x, "x", "LSTMAffineCoupling.forward", self.channels)
         cond = check_cond(cond, x, self.cond_channels, "LSTMAffineCoupling.forward")
-        x_a, x_b = x[:, :self.n_a], x[:, self.n_a:]
+        x_a, x_b = x[:, : self.n_a], x[:, self.n_a :]
         y_b, logdet = affine_forward(x_b, self._params(x_a, cond), self.scale_offset)
         return torch.cat([x_a, y_b], dim=1), logdet
 
     def inverse(self, y: Tensor, cond: Tensor | None = None) -> Tensor:
         check_sequence(y, "y", "LSTMAffineCoupling.inverse", self.channels)
         cond = check_cond(cond, y, self.cond_channels, "LSTMAffineCoupling.inverse")
-        y_a, y_b = y[:, :self.n_a], y[:, self.n_a:]
+        y_a, y_b = y[:, : self.n_a], y[:, self.n_a :]
         return torch.cat([y_a, affine_inverse(y_b, self._params(y_a, cond), self.scale_offset)], dim=1)
 
     def frame_weights(self) -> FrameCoupling:
-        """This coupling's weights split by what they read, for generating one frame at a time (:mod:`.sampler`)."""
+        """This coupling's weights split by what they read, for generating one frame at a time
+        (:mod:`.sampler`)."""
         n_a, hidden = self.n_a, self.hidden
         lstm_input = self.lstm.weight_ih_l0.detach()
         out_weight = self.out.weight.detach().T
         out_bias = self.out.bias.detach().clone()
-        out_bias[out_bias.shape[0] // 2:] += self.scale_offset  # the sigmoid's offset, folded into the raw-scale bias
-        parts = (lstm_input[:, :n_a], lstm_input[:, n_a:], self.lstm.weight_hh_l0.detach(),
-                 (self.lstm.bias_ih_l0 + self.lstm.bias_hh_l0).detach(), out_weight[:hidden],
-                 out_weight[hidden:hidden + n_a], out_weight[hidden + n_a:], out_bias)
+        out_bias[out_bias.shape[0] // 2 :] += (
+            self.scale_offset
+        )  # the sigmoid's offset, folded into the raw-scale bias
+        parts = (
+            lstm_input[:, :n_a],
+            lstm_input[:, n_a:],
+            self.lstm.weight_hh_l0.detach(),
+            (self.lstm.bias_ih_l0 + self.lstm.bias_hh_l0).detach(),
+            out_weight[:hidden],
+            out_weight[hidden : hidden + n_a],
+            out_weight[hidden + n_a :],
+            out_bias,
+        )
         return FrameCoupling(*(part.clone(memory_format=torch.contiguous_format) for part in parts))

@@ -57,8 +57,9 @@ class MoGlowDataConfig:
 
     def __post_init__(self) -> None:
         if not self.actions or not all(isinstance(a, str) for a in self.actions):
-            raise ValueError(f"MoGlowDataConfig.actions must be a non-empty tuple of action names, "
-                             f"got {self.actions!r}")
+            raise ValueError(
+                f"MoGlowDataConfig.actions must be a non-empty tuple of action names, got {self.actions!r}"
+            )
 
 
 def select_actions(data: MotionSet, actions: Sequence[str]) -> MotionSet:
@@ -71,15 +72,19 @@ def select_actions(data: MotionSet, actions: Sequence[str]) -> MotionSet:
     return data.subset(np.isin(data.action, wanted))
 
 
-def augment_clips(positions: Tensor, rotations: Tensor, mirror: bool, reverse_time: bool) -> tuple[Tensor, Tensor]:
+def augment_clips(
+    positions: Tensor, rotations: Tensor, mirror: bool, reverse_time: bool
+) -> tuple[Tensor, Tensor]:
     """Stack the augmented copies of clips ``(N, T, J, 3)`` / ``(N, T, J, 4)`` along the first axis.
 
     Order: the originals, then (with ``mirror``) the mirrored clips; then (with ``reverse_time``) all of
     those again played backwards. Returns ``(positions, rotations)`` with 1, 2 or 4 times ``N`` clips.
     """
     if positions.dim() != 4 or rotations.dim() != 4 or positions.shape[:3] != rotations.shape[:3]:
-        raise ValueError(f"augment_clips: positions (N, T, J, 3) and rotations (N, T, J, 4) must share (N, T, J), "
-                         f"got {tuple(positions.shape)} and {tuple(rotations.shape)}")
+        raise ValueError(
+            f"augment_clips: positions (N, T, J, 3) and rotations (N, T, J, 4) must share (N, T, J), "
+            f"got {tuple(positions.shape)} and {tuple(rotations.shape)}"
+        )
     if mirror:
         positions = torch.cat([positions, mirror_positions(positions)])
         rotations = torch.cat([rotations, mirror_rotations(rotations)])
@@ -90,13 +95,17 @@ def augment_clips(positions: Tensor, rotations: Tensor, mirror: bool, reverse_ti
 
 
 def moglow_features(positions: Tensor, rotations: Tensor) -> MoGlowFeatures:
-    """Pose ``(..., T, 64)`` and control ``(..., T, 3)`` of clips ``(..., T, 22, 3)`` / ``(..., T, 22, 4)``."""
+    """Pose ``(..., T, 64)`` and control ``(..., T, 3)`` of clips ``(..., T, 22, 3)`` / ``(..., T, 22,
+    4)``."""
     features = to_moglow(positions, rotations[..., 0, :])
-    return MoGlowFeatures(_REPRESENTATION.select(features, "pose"), _REPRESENTATION.select(features, "control"))
+    return MoGlowFeatures(
+        _REPRESENTATION.select(features, "pose"), _REPRESENTATION.select(features, "control")
+    )
 
 
 def clip_features(data: MotionSet, cfg: MoGlowDataConfig, augment: bool) -> MoGlowFeatures:
-    """Raw features of the clips of ``cfg.actions`` in ``data`` (augmented as ``cfg`` says when ``augment``)."""
+    """Raw features of the clips of ``cfg.actions`` in ``data`` (augmented as ``cfg`` says when
+    ``augment``)."""
     clips = select_actions(data, cfg.actions)
     positions, rotations = torch.from_numpy(clips.positions), torch.from_numpy(clips.rotations)
     if augment:
@@ -113,8 +122,10 @@ class Scalers(NamedTuple):
 
 def fit_scalers(train: MoGlowFeatures) -> Scalers:
     """Standardisers fitted on every frame of the training features."""
-    return Scalers(Standardizer(train.pose.shape[-1]).fit(train.pose),
-                   Standardizer(train.control.shape[-1]).fit(train.control))
+    return Scalers(
+        Standardizer(train.pose.shape[-1]).fit(train.pose),
+        Standardizer(train.control.shape[-1]).fit(train.control),
+    )
 
 
 def standardize(features: MoGlowFeatures, scalers: Scalers) -> MoGlowFeatures:
@@ -129,7 +140,9 @@ def sequence_windows(features: MoGlowFeatures, length: int, stride: int, first: 
     """
     n_frames = features.pose.shape[1]
     if length < 1 or stride < 1 or first < 0 or first + length > n_frames:
-        raise ValueError(f"sequence_windows: need length >= 1, stride >= 1 and first + length <= {n_frames} frames, "
-                         f"got length={length}, stride={stride}, first={first}")
+        raise ValueError(
+            f"sequence_windows: need length >= 1, stride >= 1 and first + length <= {n_frames} frames, "
+            f"got length={length}, stride={stride}, first={first}"
+        )
     starts = range(first, n_frames - length + 1, stride)
-    return MoGlowFeatures(*(torch.cat([x[:, s:s + length] for s in starts]) for x in features))
+    return MoGlowFeatures(*(torch.cat([x[:, s : s + length] for s in starts]) for x in features))

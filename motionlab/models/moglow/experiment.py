@@ -22,8 +22,15 @@ from motionlab.models.moglow.data import MoGlowDataConfig, MoGlowFeatures, clip_
 from motionlab.models.moglow.generate import seed_features, splice_controls
 from motionlab.models.moglow.model import MoGlow
 from motionlab.models.moglow.training import PreparedData, data_identity, nll_per_frame_loss, prepare_data
-from motionlab.train import (PiecewiseLinear, TensorBatches, TrainConfig, TrainResult, build_seeded, is_cached,
-                             train_or_load)
+from motionlab.train import (
+    PiecewiseLinear,
+    TensorBatches,
+    TrainConfig,
+    TrainResult,
+    build_seeded,
+    is_cached,
+    train_or_load,
+)
 from motionlab.train.parallel import run_in_workers
 
 #: Walk and jog as in the paper, plus wave: the only action of our data set that stands in place, so
@@ -40,8 +47,12 @@ DROPOUT_RATES = (0.0, 0.5, 0.95)
 
 def moglow_config(dropout: float) -> MoGlowConfig:
     """The chapter's MoGlow for the active profile (tiny in the quick profile)."""
-    return MoGlowConfig(steps=config.choose(quick=2, full=4), hidden=config.choose(quick=8, full=64),
-                        cond_features=config.choose(quick=8, full=64), dropout=dropout)
+    return MoGlowConfig(
+        steps=config.choose(quick=2, full=4),
+        hidden=config.choose(quick=8, full=64),
+        cond_features=config.choose(quick=8, full=64),
+        dropout=dropout,
+    )
 
 
 def baseline_config(dropout: float = 0.0) -> GaussianARConfig:
@@ -50,8 +61,13 @@ def baseline_config(dropout: float = 0.0) -> GaussianARConfig:
 
 
 def _train_config(steps: int, lr: float) -> TrainConfig:
-    return TrainConfig(steps=steps, batch_size=32, lr=lr, grad_clip=5.0,
-                       lr_schedule=PiecewiseLinear(((0, 1.0), (steps, 0.05))))
+    return TrainConfig(
+        steps=steps,
+        batch_size=32,
+        lr=lr,
+        grad_clip=5.0,
+        lr_schedule=PiecewiseLinear(((0, 1.0), (steps, 0.05))),
+    )
 
 
 def moglow_train_config() -> TrainConfig:
@@ -77,17 +93,32 @@ class Trained(NamedTuple):
     linear_rms: float
 
 
-def _train(name: str, model_class: type[MoGlow] | type[GaussianAR], cfg, data: PreparedData, train_cfg: TrainConfig,
-           progress: bool | None) -> Trained:
+def _train(
+    name: str,
+    model_class: type[MoGlow] | type[GaussianAR],
+    cfg,
+    data: PreparedData,
+    train_cfg: TrainConfig,
+    progress: bool | None,
+) -> Trained:
     model = build_seeded(lambda: model_class(cfg), train_cfg.seed)
     linear_rms = model.initialize(data.train.pose, data.train.control)
-    result = train_or_load(name, cfg, model, nll_per_frame_loss, TensorBatches((data.train.pose, data.train.control)),
-                           train_cfg, data_config=data_identity(DATA, WINDOW, STRIDE), progress=progress)
+    result = train_or_load(
+        name,
+        cfg,
+        model,
+        nll_per_frame_loss,
+        TensorBatches((data.train.pose, data.train.control)),
+        train_cfg,
+        data_config=data_identity(DATA, WINDOW, STRIDE),
+        progress=progress,
+    )
     return Trained(model, result, linear_rms)
 
 
 def train_moglow(data: PreparedData, dropout: float, progress: bool | None = None) -> Trained:
-    """Fit the linear predictor, then train (or load) the chapter's MoGlow with history dropout ``dropout``."""
+    """Fit the linear predictor, then train (or load) the chapter's MoGlow with history dropout
+    ``dropout``."""
     cfg = moglow_config(dropout)
     return _train("moglow", MoGlow, cfg, data, moglow_train_config(), progress)
 
@@ -106,8 +137,9 @@ def _train_in_worker(dropout: float | None, data: PreparedData) -> None:
         train_moglow(data, dropout, progress=False)
 
 
-def train_all(data: PreparedData, processes: int = 2,
-              progress: bool | None = None) -> tuple[dict[float, Trained], Trained]:
+def train_all(
+    data: PreparedData, processes: int = 2, progress: bool | None = None
+) -> tuple[dict[float, Trained], Trained]:
     """MoGlow at every rate of :data:`DROPOUT_RATES` and the Gaussian baseline, ``processes`` runs at a time.
 
     The runs train in worker processes (:mod:`motionlab.train.parallel`), one thread each, then every model
@@ -115,7 +147,11 @@ def train_all(data: PreparedData, processes: int = 2,
     Returns ``({rate: Trained}, baseline)``.
     """
     identity = data_identity(DATA, WINDOW, STRIDE)
-    pending = [rate for rate in DROPOUT_RATES if not is_cached("moglow", moglow_config(rate), moglow_train_config(), identity)]
+    pending = [
+        rate
+        for rate in DROPOUT_RATES
+        if not is_cached("moglow", moglow_config(rate), moglow_train_config(), identity)
+    ]
     if not is_cached("moglow_gaussian_ar", baseline_config(), baseline_train_config(), identity):
         pending.append(None)
     run_in_workers(_train_in_worker, [(rate, data) for rate in pending], processes)
@@ -140,30 +176,43 @@ class ControlTest(NamedTuple):
     pieces: tuple[tuple[int, int], ...]
 
 
-def control_test(clips: MoGlowFeatures, action: np.ndarray, action_names: Sequence[str], n: int, history: int,
-                 blend: int = 15, fps: int = 30) -> ControlTest:
+def control_test(
+    clips: MoGlowFeatures,
+    action: np.ndarray,
+    action_names: Sequence[str],
+    n: int,
+    history: int,
+    blend: int = 15,
+    fps: int = 30,
+) -> ControlTest:
     """``n`` commands spliced from held-out recorded controls: walk, stand (a wave clip), jog, stand.
 
     Args:
-        clips: raw features of held-out clips ``(M, T, ·)`` (e.g. ``clip_features(test, DATA, augment=False)``).
-        action: the action id of each clip ``(M,)``; ``action_names`` maps ids to names.
+        clips: raw features of held-out clips ``(M, T, ·)`` (e.g. ``clip_features(test, DATA,
+        augment=False)``). action: the action id of each clip ``(M,)``; ``action_names`` maps ids to names.
         n: how many commands (clip ``k * count // n`` of each action for command ``k``).
         history: frames of the seed (taken from the walk clip, right before its piece of control).
     """
     names = [str(a) for a in action_names]
-    by_action = {name: np.flatnonzero(np.asarray(action) == names.index(name)) for name in ("walk", "jog", "wave")}
+    by_action = {
+        name: np.flatnonzero(np.asarray(action) == names.index(name)) for name in ("walk", "jog", "wave")
+    }
     if any(len(ids) == 0 for ids in by_action.values()):
-        raise ValueError(f"control_test: needs walk, jog and wave clips, got counts "
-                         f"{ {k: len(v) for k, v in by_action.items()} }")
+        raise ValueError(
+            f"control_test: needs walk, jog and wave clips, got counts "
+            f"{ {k: len(v) for k, v in by_action.items()} }"
+        )
     length = round(PIECE_SECONDS * fps)
     first = 1 + history
     if clips.control.shape[1] < first + length:
-        raise ValueError(f"control_test: clips of {clips.control.shape[1]} frames are too short for {PIECE_SECONDS} s "
-                         f"pieces after {first} frames")
+        raise ValueError(
+            f"control_test: clips of {clips.control.shape[1]} frames are too short for {PIECE_SECONDS} s "
+            f"pieces after {first} frames"
+        )
     commands, seeds = [], []
     for k in range(n):
         walk, jog, wave = (int(by_action[a][k * len(by_action[a]) // n]) for a in ("walk", "jog", "wave"))
-        pieces = [clips.control[i, first:first + length] for i in (walk, wave, jog, wave)]
+        pieces = [clips.control[i, first : first + length] for i in (walk, wave, jog, wave)]
         commands.append(splice_controls(pieces, blend))
         seeds.append(walk)
     step = length - blend
@@ -174,5 +223,6 @@ def control_test(clips: MoGlowFeatures, action: np.ndarray, action_names: Sequen
 def long_clips(n_per_mode: int) -> MoGlowFeatures:
     """Raw features of held-out 20-second walk and jog clips (generated once, cached under ``build/data``)."""
     data = load_or_generate(LONG_SEED, n_per_mode, seconds=LONG_SECONDS, split="test")
-    return clip_features(data, MoGlowDataConfig(actions=("walk", "jog"), mirror=False, reverse_time=False),
-                         augment=False)
+    return clip_features(
+        data, MoGlowDataConfig(actions=("walk", "jog"), mirror=False, reverse_time=False), augment=False
+    )

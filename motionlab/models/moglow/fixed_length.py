@@ -29,7 +29,14 @@ from motionlab.models.moglow.data import (
     standardize,
 )
 from motionlab.models.moglow.training import data_identity
-from motionlab.train import PiecewiseLinear, TensorBatches, TrainConfig, TrainResult, build_seeded, train_or_load
+from motionlab.train import (
+    PiecewiseLinear,
+    TensorBatches,
+    TrainConfig,
+    TrainResult,
+    build_seeded,
+    train_or_load,
+)
 
 #: Frames per clip (the benchmark's 4 s at 30 fps); divisible by 2**levels.
 CLIP_FRAMES = 120
@@ -42,19 +49,33 @@ def channels_first(features: MoGlowFeatures) -> tuple[Tensor, Tensor]:
 
 def glow_config() -> GlowConfig:
     """The chapter's Glow for the active profile (tiny in the quick profile)."""
-    return GlowConfig(channels=POSE_DIM, length=CLIP_FRAMES, cond_channels=CONTROL_DIM, levels=3,
-                      steps_per_level=config.choose(quick=1, full=4), hidden=config.choose(quick=8, full=64))
+    return GlowConfig(
+        channels=POSE_DIM,
+        length=CLIP_FRAMES,
+        cond_channels=CONTROL_DIM,
+        levels=3,
+        steps_per_level=config.choose(quick=1, full=4),
+        hidden=config.choose(quick=8, full=64),
+    )
 
 
 def glow_train_config() -> TrainConfig:
     """Training schedule for the active profile: AdamW with a linear decay of the learning rate."""
     steps = config.choose(quick=6, full=300)
-    return TrainConfig(steps=steps, batch_size=16, lr=2e-3, grad_clip=5.0,
-                       lr_schedule=PiecewiseLinear(((0, 1.0), (steps, 0.05))))
+    return TrainConfig(
+        steps=steps,
+        batch_size=16,
+        lr=2e-3,
+        grad_clip=5.0,
+        lr_schedule=PiecewiseLinear(((0, 1.0), (steps, 0.05))),
+    )
 
 
-def glow_nll_loss(model: Glow, batch: tuple[Tensor, Tensor], step: int, coeffs: dict[str, float]) -> dict[str, Tensor]:
-    """Mean negative log-likelihood in nats per dimension (per pose channel and frame) of a batch ``(x, cond)``."""
+def glow_nll_loss(
+    model: Glow, batch: tuple[Tensor, Tensor], step: int, coeffs: dict[str, float]
+) -> dict[str, Tensor]:
+    """Mean negative log-likelihood in nats per dimension (per pose channel and frame) of a batch ``(x,
+    cond)``."""
     x, cond = batch
     nll = -model.log_prob(x, cond).mean() / (x.shape[1] * x.shape[2])
     return {"loss": nll, "nll": nll.detach()}
@@ -71,26 +92,36 @@ class FixedLengthGlow(NamedTuple):
     test: tuple[Tensor, Tensor]
 
 
-def train_fixed_length_glow(benchmark: Benchmark, data_cfg: MoGlowDataConfig = MoGlowDataConfig(),
-                            progress: bool | None = None) -> FixedLengthGlow:
+def train_fixed_length_glow(
+    benchmark: Benchmark, data_cfg: MoGlowDataConfig | None = None, progress: bool | None = None
+) -> FixedLengthGlow:
     """Train (or load from the cache) the fixed-length Glow on the benchmark's clips of ``data_cfg.actions``.
 
     Training clips are augmented (mirror, time reversal) as ``data_cfg`` says; the test clips are not.
     """
+    data_cfg = data_cfg if data_cfg is not None else MoGlowDataConfig()
     train = clip_features(benchmark.train, data_cfg, augment=True)
     scalers = fit_scalers(train)
     train_x = channels_first(standardize(train, scalers))
     test_x = channels_first(standardize(clip_features(benchmark.test, data_cfg, augment=False), scalers))
     model_cfg, train_cfg = glow_config(), glow_train_config()
     model = build_seeded(lambda: Glow(model_cfg), train_cfg.seed)
-    result = train_or_load("fixed_length_glow", model_cfg, model, glow_nll_loss, TensorBatches(train_x),
-                           train_cfg, data_config=data_identity(data_cfg, CLIP_FRAMES, CLIP_FRAMES),
-                           progress=progress)
+    result = train_or_load(
+        "fixed_length_glow",
+        model_cfg,
+        model,
+        glow_nll_loss,
+        TensorBatches(train_x),
+        train_cfg,
+        data_config=data_identity(data_cfg, CLIP_FRAMES, CLIP_FRAMES),
+        progress=progress,
+    )
     return FixedLengthGlow(model, scalers, result, train_x, test_x)
 
 
-def sample_clips(glow: FixedLengthGlow, control: Tensor, temperature: float = 1.0,
-                 generator: torch.Generator | None = None) -> tuple[Tensor, Tensor]:
+def sample_clips(
+    glow: FixedLengthGlow, control: Tensor, temperature: float = 1.0, generator: torch.Generator | None = None
+) -> tuple[Tensor, Tensor]:
     """Whole clips for controls ``(B, T, 3)`` (m/frame, rad/frame): poses ``(B, T, 64)`` in metres and world
     joint positions ``(B, T, 22, 3)`` (root path integrated from the control, starting at the origin)."""
     cond = glow.scalers.control.transform(control).transpose(1, 2).contiguous()

@@ -21,12 +21,18 @@ from motionlab.models.moglow.data import CONTROL_DIM, MoGlowFeatures, Scalers
 
 
 class AutoregressiveModel(Protocol):
-    """MoGlow or the Gaussian baseline: ``cfg.history`` and ``sample(control, seed_pose, temperature, generator)``."""
+    """MoGlow or the Gaussian baseline: ``cfg.history`` and ``sample(control, seed_pose, temperature,
+    generator)``."""
 
     cfg: object
 
-    def sample(self, control: Tensor, seed_pose: Tensor, temperature: float = 1.0,
-               generator: torch.Generator | None = None) -> Tensor: ...
+    def sample(
+        self,
+        control: Tensor,
+        seed_pose: Tensor,
+        temperature: float = 1.0,
+        generator: torch.Generator | None = None,
+    ) -> Tensor: ...
 
 
 @dataclass(frozen=True)
@@ -55,18 +61,23 @@ def control_programme(segments: Sequence[Segment], fps: float = 30.0, ramp: floa
     """
     if not segments:
         raise ValueError("control_programme: needs at least one segment")
-    rows = [torch.tensor([[s.speed, s.sideways, s.turn]], dtype=torch.float64).expand(round(s.seconds * fps), 3)
-            for s in segments]
+    rows = [
+        torch.tensor([[s.speed, s.sideways, s.turn]], dtype=torch.float64).expand(round(s.seconds * fps), 3)
+        for s in segments
+    ]
     control = torch.cat(rows) / fps
     width = round(ramp * fps)
     if width > 1:
-        padded = torch.cat([control[:1].expand(width // 2, 3), control, control[-1:].expand(width - 1 - width // 2, 3)])
+        padded = torch.cat(
+            [control[:1].expand(width // 2, 3), control, control[-1:].expand(width - 1 - width // 2, 3)]
+        )
         control = padded.unfold(0, width, 1).mean(dim=-1)
     return control.float()
 
 
 def splice_controls(pieces: Sequence[Tensor], blend: int = 15) -> Tensor:
-    """Join control sequences ``(T_i, 3)`` end to end, cross-fading linearly over ``blend`` frames at each joint.
+    """Join control sequences ``(T_i, 3)`` end to end, cross-fading linearly over ``blend`` frames at each
+    joint.
 
     Recorded controls carry the gait's own rhythm (the pelvis sways and turns a little with every step),
     which a constant command lacks; splicing pieces of recorded control gives realistic commands that
@@ -77,23 +88,29 @@ def splice_controls(pieces: Sequence[Tensor], blend: int = 15) -> Tensor:
     if not pieces:
         raise ValueError("splice_controls: needs at least one piece")
     if any(p.dim() != 2 or p.shape[1] != CONTROL_DIM or p.shape[0] <= 2 * blend for p in pieces):
-        raise ValueError(f"splice_controls: pieces must be (T, {CONTROL_DIM}) with T > 2 * blend = {2 * blend}, got "
-                         f"{[tuple(p.shape) for p in pieces]}")
+        raise ValueError(
+            f"splice_controls: pieces must be (T, {CONTROL_DIM}) with T > 2 * blend = {2 * blend}, got "
+            f"{[tuple(p.shape) for p in pieces]}"
+        )
     out = pieces[0]
     weight = torch.linspace(0.0, 1.0, blend + 2, dtype=out.dtype)[1:-1, None]
     for piece in pieces[1:]:
         mixed = (1 - weight) * out[-blend:] + weight * piece[:blend] if blend else out[:0]
-        out = torch.cat([out[:out.shape[0] - blend], mixed, piece[blend:]])
+        out = torch.cat([out[: out.shape[0] - blend], mixed, piece[blend:]])
     return out
 
 
-def seed_features(clips: MoGlowFeatures, indices: Sequence[int], history: int, start: int = 1) -> MoGlowFeatures:
+def seed_features(
+    clips: MoGlowFeatures, indices: Sequence[int], history: int, start: int = 1
+) -> MoGlowFeatures:
     """Frames ``start .. start + history - 1`` of the chosen clips ``(B, history, ·)``: a generation seed.
 
     ``start = 1`` skips frame 0, whose control is undefined.
     """
     index = torch.as_tensor(list(indices), dtype=torch.long)
-    return MoGlowFeatures(clips.pose[index, start:start + history], clips.control[index, start:start + history])
+    return MoGlowFeatures(
+        clips.pose[index, start : start + history], clips.control[index, start : start + history]
+    )
 
 
 class GeneratedMotion(NamedTuple):
@@ -105,8 +122,14 @@ class GeneratedMotion(NamedTuple):
     positions: Tensor
 
 
-def generate_motion(model: AutoregressiveModel, scalers: Scalers, control: Tensor, seed: MoGlowFeatures,
-                    temperature: float = 1.0, generator: torch.Generator | None = None) -> GeneratedMotion:
+def generate_motion(
+    model: AutoregressiveModel,
+    scalers: Scalers,
+    control: Tensor,
+    seed: MoGlowFeatures,
+    temperature: float = 1.0,
+    generator: torch.Generator | None = None,
+) -> GeneratedMotion:
     """Generate ``N`` frames after ``seed`` following ``control``.
 
     Args:
@@ -117,10 +140,13 @@ def generate_motion(model: AutoregressiveModel, scalers: Scalers, control: Tenso
         temperature, generator: as for the model's ``sample``.
     """
     if control.dim() != 3 or control.shape[-1] != CONTROL_DIM or seed.pose.shape[0] != control.shape[0]:
-        raise ValueError(f"generate_motion: control must be (B, N, {CONTROL_DIM}) with the seed's batch "
-                         f"{seed.pose.shape[0]}, got {tuple(control.shape)}")
+        raise ValueError(
+            f"generate_motion: control must be (B, N, {CONTROL_DIM}) with the seed's batch "
+            f"{seed.pose.shape[0]}, got {tuple(control.shape)}"
+        )
     all_control = torch.cat([seed.control, control.to(seed.control)], dim=1)
-    generated = model.sample(scalers.control.transform(all_control), scalers.pose.transform(seed.pose),
-                             temperature, generator)
+    generated = model.sample(
+        scalers.control.transform(all_control), scalers.pose.transform(seed.pose), temperature, generator
+    )
     pose = torch.cat([seed.pose, scalers.pose.inverse(generated)], dim=1)
     return GeneratedMotion(pose, all_control, from_moglow(torch.cat([pose, all_control], dim=-1)))

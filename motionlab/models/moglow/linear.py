@@ -57,9 +57,17 @@ class LinearPredictor(FlowLayer):
         return torch.nn.functional.linear(cond, self.weight, self.bias)
 
     @torch.no_grad()
-    def fit(self, pose: Tensor, control: Tensor, history: int, dropout: float, seed: int = 0,
-            max_windows: int = 2048) -> float:
-        """Least-squares ``A``, ``b`` and the residual log-std per channel from windows ``(N, T, P)``, ``(N, T, C)``.
+    def fit(
+        self,
+        pose: Tensor,
+        control: Tensor,
+        history: int,
+        dropout: float,
+        seed: int = 0,
+        max_windows: int = 2048,
+    ) -> float:
+        """Least-squares ``A``, ``b`` and the residual log-std per channel from windows ``(N, T, P)``, ``(N,
+        T, C)``.
 
         Uses at most ``max_windows`` windows, evenly spaced. History dropout flags (probability ``dropout``)
         come from a generator seeded with ``seed``. Returns the root-mean-square residual (standard units).

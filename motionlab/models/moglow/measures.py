@@ -43,7 +43,12 @@ def support_foot_slide(positions: Tensor, fps: float = 30.0, feet: tuple[int, ..
     Frame ``t``'s support joint is the lowest of ``feet`` at ``t``; its speed is its displacement from
     ``t`` to ``t + 1`` times ``fps``.
     """
-    if not isinstance(positions, Tensor) or positions.dim() < 3 or positions.shape[-1] != 3 or positions.shape[-3] < 2:
+    if (
+        not isinstance(positions, Tensor)
+        or positions.dim() < 3
+        or positions.shape[-1] != 3
+        or positions.shape[-3] < 2
+    ):
         shape = tuple(positions.shape) if isinstance(positions, Tensor) else type(positions).__name__
         raise ValueError(f"support_foot_slide: positions must be (..., T >= 2, J, 3), got {shape}")
     if not bool(torch.isfinite(positions).all()):
@@ -85,18 +90,21 @@ def control_mismatch(pose: Tensor, control: Tensor, fps: float = 30.0, window: i
         window: frames per window (the last incomplete window is dropped).
     """
     if control.shape[:-1] != pose.shape[:-1] or control.shape[-1] != 3:
-        raise ValueError(f"control_mismatch: control must be (..., T, 3) with the pose's (..., T), got "
-                         f"{tuple(control.shape)} and {tuple(pose.shape)}")
+        raise ValueError(
+            f"control_mismatch: control must be (..., T, 3) with the pose's (..., T), got "
+            f"{tuple(control.shape)} and {tuple(pose.shape)}"
+        )
     difference = control[..., 1:, 0] * fps - gait_speed(pose, fps)
     n_windows = difference.shape[-1] // window
     if n_windows < 1:
         raise ValueError(f"control_mismatch: needs at least {window + 1} frames, got {pose.shape[-2]}")
-    per_window = difference[..., :n_windows * window].unflatten(-1, (n_windows, window)).mean(dim=-1)
+    per_window = difference[..., : n_windows * window].unflatten(-1, (n_windows, window)).mean(dim=-1)
     return per_window.abs().mean(dim=-1)
 
 
 def joint_speed(pose: Tensor, fps: float = 30.0) -> Tensor:
-    """Mean speed (m/s) of the root-local joints per frame step ``(..., T-1)`` from MoGlow poses ``(..., T, 64)``.
+    """Mean speed (m/s) of the root-local joints per frame step ``(..., T-1)`` from MoGlow poses ``(..., T,
+    64)``.
 
     The 21 non-root joints' xyz in the heading frame (channels 1..63); the root height is left out.
     """
@@ -113,10 +121,12 @@ def speed_ratio(pose: Tensor, window: int, fps: float = 30.0) -> float:
     ``pose`` ``(B, T, 64)`` in metres with ``T >= 2 * window``; speeds are averaged over the batch first.
     """
     if pose.dim() != 3 or window < 2 or pose.shape[1] < 2 * window:
-        raise ValueError(f"speed_ratio: pose must be (B, T, 64) with T >= 2 * window, got {tuple(pose.shape)} and "
-                         f"window={window}")
+        raise ValueError(
+            f"speed_ratio: pose must be (B, T, 64) with T >= 2 * window, got {tuple(pose.shape)} and "
+            f"window={window}"
+        )
     speed = joint_speed(pose, fps)
-    first = speed[:, :window - 1].mean()
+    first = speed[:, : window - 1].mean()
     if float(first) <= 0:
         raise ValueError("speed_ratio: the first window does not move, the ratio is undefined")
-    return float(speed[:, -(window - 1):].mean() / first)
+    return float(speed[:, -(window - 1) :].mean() / first)

@@ -48,25 +48,35 @@ class MoGlow(nn.Module):
         self.cfg = cfg
         layers: list[nn.Module] = []
         for _ in range(cfg.steps):
-            layers += [ActNorm(cfg.pose_dim), InvertibleConv1x1(cfg.pose_dim),
-                       LSTMAffineCoupling(cfg.pose_dim, cfg.cond_features, cfg.hidden)]
+            layers += [
+                ActNorm(cfg.pose_dim),
+                InvertibleConv1x1(cfg.pose_dim),
+                LSTMAffineCoupling(cfg.pose_dim, cfg.cond_features, cfg.hidden),
+            ]
         self.cond_encoder = nn.Linear(cfg.cond_dim, cfg.cond_features)
         self.linear = LinearPredictor(cfg.pose_dim, cfg.cond_dim)
         self.flow = FlowSequence(layers)
         self.prior = StandardNormal()
 
     def _check(self, pose: Tensor, control: Tensor, where: str) -> None:
-        check_pose_control(pose, control, self.cfg.pose_dim, self.cfg.control_dim, self.cfg.history + 1, where)
+        check_pose_control(
+            pose, control, self.cfg.pose_dim, self.cfg.control_dim, self.cfg.history + 1, where
+        )
         if control.shape[1] != pose.shape[1]:
-            raise ValueError(f"{where}: pose and control must have the same frames, got {pose.shape[1]} and "
-                             f"{control.shape[1]}")
+            raise ValueError(
+                f"{where}: pose and control must have the same frames, got {pose.shape[1]} and "
+                f"{control.shape[1]}"
+            )
 
     def initialize(self, pose: Tensor, control: Tensor, seed: int = 0) -> float:
         """Fit the linear predictor (:mod:`.linear`) to training windows; returns its RMS residual."""
         return self.linear.fit(pose, control, self.cfg.history, self.cfg.dropout, seed)
 
-    def latents(self, pose: Tensor, control: Tensor, generator: torch.Generator | None = None) -> tuple[Tensor, Tensor]:
-        """The flow's latents ``z`` ``(B, T - tau, P)`` of frames ``tau .. T-1`` and the log-determinant ``(B,)``.
+    def latents(
+        self, pose: Tensor, control: Tensor, generator: torch.Generator | None = None
+    ) -> tuple[Tensor, Tensor]:
+        """The flow's latents ``z`` ``(B, T - tau, P)`` of frames ``tau .. T-1`` and the log-determinant
+        ``(B,)``.
 
         Args:
             pose: ``(B, T, P)``; frames ``0 .. tau-1`` only serve as history.
@@ -78,9 +88,11 @@ class MoGlow(nn.Module):
         batch, frames, _ = pose.shape
         keep = None
         if self.cfg.dropout > 0:
-            keep = history_keep_mask(batch, frames - self.cfg.history, self.cfg.history, self.cfg.dropout, generator)
+            keep = history_keep_mask(
+                batch, frames - self.cfg.history, self.cfg.history, self.cfg.dropout, generator
+            )
         cond = autoregressive_conditioning(pose, control, self.cfg.history, keep).transpose(1, 2)
-        u, linear_logdet = self.linear(pose[:, self.cfg.history:].transpose(1, 2), cond)
+        u, linear_logdet = self.linear(pose[:, self.cfg.history :].transpose(1, 2), cond)
         z, logdet = self.flow(u, self.cond_encoder(cond.transpose(1, 2)).transpose(1, 2))
         return z.transpose(1, 2), logdet + linear_logdet
 
@@ -94,27 +106,37 @@ class MoGlow(nn.Module):
     def generation_plan(self) -> GenerationPlan:
         """The weights arranged for generating one frame at a time (:mod:`.sampler`), steps in inverse order.
 
-        Each step's ActNorm and 1x1 convolution are folded into one matrix; the couplings' weights are split by
-        what they read, and the conditioning features' parts of all couplings are stacked side by side.
+        Each step's ActNorm and 1x1 convolution are folded into one matrix; the couplings' weights are split
+        by what they read, and the conditioning features' parts of all couplings are stacked side by side.
         """
         cfg = self.cfg
         past = cfg.history * cfg.pose_dim
         layers = list(self.flow.layers)
         steps, feature_weights = [], []
         for k in reversed(range(cfg.steps)):
-            actnorm, conv, coupling = layers[3 * k:3 * k + 3]
+            actnorm, conv, coupling = layers[3 * k : 3 * k + 3]
             matrix = conv.matrices()[1].T * torch.exp(-actnorm.log_scale)[None, :]
             weights = coupling.frame_weights()
-            steps.append(InverseStep(weights, matrix[:coupling.n_a], matrix[coupling.n_a:], -actnorm.bias))
+            steps.append(InverseStep(weights, matrix[: coupling.n_a], matrix[coupling.n_a :], -actnorm.bias))
             feature_weights += [weights.lstm_input_cond.T, weights.out_input_cond]
         weight = torch.cat([self.cond_encoder.weight, self.linear.weight]).T  # (cond_dim, F + P)
-        return GenerationPlan(weight[:past].contiguous(), weight[past:].contiguous(),
-                              torch.cat([self.cond_encoder.bias, self.linear.bias]),
-                              torch.cat(feature_weights, dim=1).contiguous(), torch.exp(self.linear.log_scale), steps)
+        return GenerationPlan(
+            weight[:past].contiguous(),
+            weight[past:].contiguous(),
+            torch.cat([self.cond_encoder.bias, self.linear.bias]),
+            torch.cat(feature_weights, dim=1).contiguous(),
+            torch.exp(self.linear.log_scale),
+            steps,
+        )
 
     @torch.no_grad()
-    def sample(self, control: Tensor, seed_pose: Tensor, temperature: float = 1.0,
-               generator: torch.Generator | None = None) -> Tensor:
+    def sample(
+        self,
+        control: Tensor,
+        seed_pose: Tensor,
+        temperature: float = 1.0,
+        generator: torch.Generator | None = None,
+    ) -> Tensor:
         """Generate poses ``(B, N, P)`` frame by frame (:mod:`.sampler`).
 
         Args:

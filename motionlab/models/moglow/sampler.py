@@ -23,7 +23,9 @@ and dispatch overhead, while its arithmetic costs well under one, so the loop is
 import functools
 import warnings
 from collections.abc import Callable
-from typing import List, NamedTuple  # TorchScript reads these annotations: no ``from __future__ import annotations``
+from typing import (
+    NamedTuple,
+)  # TorchScript reads these annotations: no ``from __future__ import annotations``
 
 import torch
 from torch import Tensor
@@ -42,37 +44,40 @@ class InverseStep(NamedTuple):
     coupling: FrameCoupling
     matrix_a: Tensor  # (C_a, P)
     matrix_b: Tensor  # (C_b, P)
-    shift: Tensor     # (P,)
+    shift: Tensor  # (P,)
 
 
 class GenerationPlan(NamedTuple):
-    """A MoGlow's weights arranged for :func:`generate_frames` (``F`` conditioning features, ``P`` pose channels,
-    ``tau`` history frames, ``C`` control channels, ``K`` steps); a snapshot, built again after training.
+    """A MoGlow's weights arranged for :func:`generate_frames` (``F`` conditioning features, ``P`` pose
+    channels, ``tau`` history frames, ``C`` control channels, ``K`` steps); a snapshot, built again after
+    training.
 
     The conditioning encoder and the linear predictor read the same vector ``c_t``, so their weights are
-    side by side: ``[features | mean] = past @ past_weight + controls @ control_weight + bias`` ``(B, F + P)``.
-    ``feature_weight`` ``(F, K * (4H + 2 C_b))`` maps the features to every step's LSTM-gate part (``4H``) and
-    output part (``2 C_b``), step after step in inverse order, as in ``steps``. The generated pose is
-    ``mean + x * residual_scale``.
+    side by side: ``[features | mean] = past @ past_weight + controls @ control_weight + bias`` ``(B, F +
+    P)``. ``feature_weight`` ``(F, K * (4H + 2 C_b))`` maps the features to every step's LSTM-gate part
+    (``4H``) and output part (``2 C_b``), step after step in inverse order, as in ``steps``. The generated
+    pose is ``mean + x * residual_scale``.
     """
 
-    past_weight: Tensor      # (tau * P, F + P)
-    control_weight: Tensor   # ((tau + 1) * C, F + P)
-    bias: Tensor             # (F + P,)
-    feature_weight: Tensor   # (F, K * (4H + 2 C_b))
-    residual_scale: Tensor   # (P,)
-    steps: List[InverseStep]
+    past_weight: Tensor  # (tau * P, F + P)
+    control_weight: Tensor  # ((tau + 1) * C, F + P)
+    bias: Tensor  # (F + P,)
+    feature_weight: Tensor  # (F, K * (4H + 2 C_b))
+    residual_scale: Tensor  # (P,)
+    steps: list[InverseStep]
 
 
-def generate_frames(plan: GenerationPlan, control_part: Tensor, past: Tensor, keep: Tensor, noise: Tensor) -> Tensor:
+def generate_frames(
+    plan: GenerationPlan, control_part: Tensor, past: Tensor, keep: Tensor, noise: Tensor
+) -> Tensor:
     """The frame-by-frame loop: poses ``(B, N, P)`` in standard units.
 
     Args:
         plan: the model's weights (:meth:`motionlab.models.moglow.model.MoGlow.generation_plan`).
-        control_part: ``(B, N, F + P)``, the controls' part of ``[features | mean]`` of every frame, bias included.
-        past: ``(B, tau * P)``, the seed poses, oldest first, flattened.
-        keep: ``(B, N, tau * P)``, the history dropout flags of every frame, repeated over each pose's channels.
-        noise: ``(B, N, P)``, the latents ``z_t`` (temperature applied).
+        control_part: ``(B, N, F + P)``, the controls' part of ``[features | mean]`` of every frame, bias
+        included. past: ``(B, tau * P)``, the seed poses, oldest first, flattened.
+        keep: ``(B, N, tau * P)``, the history dropout flags of every frame, repeated over each pose's
+        channels. noise: ``(B, N, P)``, the latents ``z_t`` (temperature applied).
     """
     batch, frames, pose_dim = noise.shape
     features = plan.feature_weight.shape[0]
@@ -81,7 +86,7 @@ def generate_frames(plan: GenerationPlan, control_part: Tensor, past: Tensor, ke
     gates, step_width = 4 * hidden, 4 * hidden + 2 * (pose_dim - n_a)
     h = [noise.new_zeros(batch, hidden) for _ in plan.steps]
     c = [noise.new_zeros(batch, hidden) for _ in plan.steps]
-    poses: List[Tensor] = []
+    poses: list[Tensor] = []
     for t in range(frames):
         features_and_mean = torch.addmm(control_part[:, t], past * keep[:, t], plan.past_weight)
         features_by_step = torch.mm(features_and_mean[:, :features], plan.feature_weight)
@@ -89,10 +94,18 @@ def generate_frames(plan: GenerationPlan, control_part: Tensor, past: Tensor, ke
         for k, step in enumerate(plan.steps):
             weights, offset = step.coupling, k * step_width
             x_a = x[:, :n_a]
-            h[k], c[k] = torch.lstm_cell(x_a, (h[k], c[k]), weights.lstm_input_a, weights.lstm_hidden,
-                                         features_by_step[:, offset:offset + gates], weights.lstm_bias)
+            h[k], c[k] = torch.lstm_cell(
+                x_a,
+                (h[k], c[k]),
+                weights.lstm_input_a,
+                weights.lstm_hidden,
+                features_by_step[:, offset : offset + gates],
+                weights.lstm_bias,
+            )
             params = torch.addmm(weights.out_bias, h[k], weights.out_hidden).addmm_(x_a, weights.out_input_a)
-            shift, raw_scale = params.add_(features_by_step[:, offset + gates:offset + step_width]).chunk(2, dim=1)
+            shift, raw_scale = params.add_(features_by_step[:, offset + gates : offset + step_width]).chunk(
+                2, dim=1
+            )
             x_b = x[:, n_a:].div(torch.sigmoid(raw_scale)).sub_(shift)
             x = torch.addmm(step.shift, x_a, step.matrix_a).addmm_(x_b, step.matrix_b)
         pose = features_and_mean[:, features:].addcmul(x, plan.residual_scale)
@@ -107,38 +120,57 @@ def _scripted_loop() -> Callable[..., Tensor]:
     with warnings.catch_warnings():
         # TorchScript is deprecated in favour of torch.compile, which does not help here: at batch 1 its
         # compiled frame still runs under Python (measured: no faster than the plain loop).
-        warnings.filterwarnings("ignore", message=".*torch.jit.script.*is deprecated", category=DeprecationWarning)
+        warnings.filterwarnings(
+            "ignore", message=".*torch.jit.script.*is deprecated", category=DeprecationWarning
+        )
         return torch.jit.script(generate_frames)
 
 
-def _shapes_fit(plan: GenerationPlan, control: Tensor, seed_pose: Tensor, keep: Tensor | None, noise: Tensor) -> bool:
+def _shapes_fit(
+    plan: GenerationPlan, control: Tensor, seed_pose: Tensor, keep: Tensor | None, noise: Tensor
+) -> bool:
     """Whether the inputs' shapes fit each other and the plan (see :func:`sample_frames`)."""
     if not control.dim() == seed_pose.dim() == noise.dim() == 3:
         return False
     batch, history, pose_dim = seed_pose.shape
     frames = noise.shape[1]
-    return (control.shape[:2] == (batch, history + frames) and noise.shape == (batch, frames, pose_dim)
-            and (keep is None or keep.shape == (batch, frames, history))
-            and plan.past_weight.shape[0] == history * pose_dim and plan.residual_scale.shape[0] == pose_dim
-            and plan.control_weight.shape[0] == (history + 1) * control.shape[2])
+    return (
+        control.shape[:2] == (batch, history + frames)
+        and noise.shape == (batch, frames, pose_dim)
+        and (keep is None or keep.shape == (batch, frames, history))
+        and plan.past_weight.shape[0] == history * pose_dim
+        and plan.residual_scale.shape[0] == pose_dim
+        and plan.control_weight.shape[0] == (history + 1) * control.shape[2]
+    )
 
 
-def _check_inputs(plan: GenerationPlan, control: Tensor, seed_pose: Tensor, keep: Tensor | None,
-                  noise: Tensor) -> None:
+def _check_inputs(
+    plan: GenerationPlan, control: Tensor, seed_pose: Tensor, keep: Tensor | None, noise: Tensor
+) -> None:
     """Raise ``ValueError`` unless the inputs' shapes and dtype fit each other and the plan."""
     if not _shapes_fit(plan, control, seed_pose, keep, noise):
-        raise ValueError(f"sample_frames: shapes disagree: control {tuple(control.shape)} must be (B, tau + N, C), "
-                         f"seed_pose {tuple(seed_pose.shape)} (B, tau, P), noise {tuple(noise.shape)} (B, N, P), keep "
-                         f"{None if keep is None else tuple(keep.shape)} (B, N, tau), with the plan's tau * P = "
-                         f"{plan.past_weight.shape[0]}, P = {plan.residual_scale.shape[0]}, (tau + 1) * C = "
-                         f"{plan.control_weight.shape[0]}")
+        raise ValueError(
+            f"sample_frames: shapes disagree: control {tuple(control.shape)} must be (B, tau + N, C), "
+            f"seed_pose {tuple(seed_pose.shape)} (B, tau, P), noise {tuple(noise.shape)} (B, N, P), keep "
+            f"{None if keep is None else tuple(keep.shape)} (B, N, tau), with the plan's tau * P = "
+            f"{plan.past_weight.shape[0]}, P = {plan.residual_scale.shape[0]}, (tau + 1) * C = "
+            f"{plan.control_weight.shape[0]}"
+        )
     if len({x.dtype for x in (control, seed_pose, noise, plan.bias)}) != 1:
-        raise ValueError(f"sample_frames: control, seed_pose, noise and the model must share one dtype, got "
-                         f"{control.dtype}, {seed_pose.dtype}, {noise.dtype} and {plan.bias.dtype}")
+        raise ValueError(
+            f"sample_frames: control, seed_pose, noise and the model must share one dtype, got "
+            f"{control.dtype}, {seed_pose.dtype}, {noise.dtype} and {plan.bias.dtype}"
+        )
 
 
-def sample_frames(plan: GenerationPlan, control: Tensor, seed_pose: Tensor, keep: Tensor | None, noise: Tensor,
-                  scripted: bool = True) -> Tensor:
+def sample_frames(
+    plan: GenerationPlan,
+    control: Tensor,
+    seed_pose: Tensor,
+    keep: Tensor | None,
+    noise: Tensor,
+    scripted: bool = True,
+) -> Tensor:
     """Generate ``N`` poses ``(B, N, P)`` after the seed (standard units; values checked by the caller).
 
     Args:
@@ -154,10 +186,17 @@ def sample_frames(plan: GenerationPlan, control: Tensor, seed_pose: Tensor, keep
     _check_inputs(plan, control, seed_pose, keep, noise)
     batch, history, pose_dim = seed_pose.shape
     frames = noise.shape[1]
-    windows = control.unfold(1, history + 1, 1).transpose(2, 3).reshape(batch * frames, -1)  # (B N, (tau+1) C)
+    windows = (
+        control.unfold(1, history + 1, 1).transpose(2, 3).reshape(batch * frames, -1)
+    )  # (B N, (tau+1) C)
     control_part = torch.addmm(plan.bias, windows, plan.control_weight).view(batch, frames, -1)
     if keep is None:
         keep = noise.new_ones(batch, frames, history)
     loop = _scripted_loop() if scripted else generate_frames
-    return loop(plan, control_part, seed_pose.reshape(batch, history * pose_dim),
-                keep.to(noise.dtype).repeat_interleave(pose_dim, dim=2), noise)
+    return loop(
+        plan,
+        control_part,
+        seed_pose.reshape(batch, history * pose_dim),
+        keep.to(noise.dtype).repeat_interleave(pose_dim, dim=2),
+        noise,
+    )

@@ -46,18 +46,28 @@ def prepare_data(benchmark: Benchmark, cfg: MoGlowDataConfig, length: int, strid
     train = clip_features(benchmark.train, cfg, augment=True)
     scalers = fit_scalers(train)
     test = standardize(clip_features(benchmark.test, cfg, augment=False), scalers)
-    return PreparedData(sequence_windows(standardize(train, scalers), length, stride),
-                        sequence_windows(test, length, stride), scalers)
+    return PreparedData(
+        sequence_windows(standardize(train, scalers), length, stride),
+        sequence_windows(test, length, stride),
+        scalers,
+    )
 
 
 def data_identity(cfg: MoGlowDataConfig, length: int, stride: int) -> dict[str, Any]:
-    """What defines the training data, for the checkpoint cache key (with the benchmark sizes and generator)."""
-    return {"data": asdict(cfg), "length": length, "stride": stride, "sizes": list(benchmark_sizes()),
-            "generator": generator_fingerprint()}
+    """What defines the training data, for the checkpoint cache key (with the benchmark sizes and
+    generator)."""
+    return {
+        "data": asdict(cfg),
+        "length": length,
+        "stride": stride,
+        "sizes": list(benchmark_sizes()),
+        "generator": generator_fingerprint(),
+    }
 
 
-def nll_per_frame_loss(model: nn.Module, batch: tuple[Tensor, Tensor], step: int,
-                       coeffs: dict[str, float]) -> dict[str, Tensor]:
+def nll_per_frame_loss(
+    model: nn.Module, batch: tuple[Tensor, Tensor], step: int, coeffs: dict[str, float]
+) -> dict[str, Tensor]:
     """Mean negative log-likelihood per generated frame (nats) of a batch ``(pose, control)``."""
     pose, control = batch
     frames = pose.shape[1] - model.cfg.history
@@ -67,7 +77,8 @@ def nll_per_frame_loss(model: nn.Module, batch: tuple[Tensor, Tensor], step: int
 
 @torch.no_grad()
 def held_out_nll(model: nn.Module, data: MoGlowFeatures, seed: int = 0, batch_size: int = 256) -> float:
-    """Mean NLL per frame (nats) of ``model`` on windows ``data`` (history dropout flags drawn from ``seed``)."""
+    """Mean NLL per frame (nats) of ``model`` on windows ``data`` (history dropout flags drawn from
+    ``seed``)."""
     generator = torch.Generator().manual_seed(seed)
     total, frames = 0.0, 0
     for pose, control in zip(data.pose.split(batch_size), data.control.split(batch_size)):

@@ -35,7 +35,9 @@ class FrameBaseline(nn.Module):
     def __init__(self, cfg: BaselineConfig, codec: PoseCodec) -> None:
         super().__init__()
         if codec.n_joints != cfg.n_joints:
-            raise ValueError(f"FrameBaseline: the codec has {codec.n_joints} joints, the config {cfg.n_joints}")
+            raise ValueError(
+                f"FrameBaseline: the codec has {codec.n_joints} joints, the config {cfg.n_joints}"
+            )
         self.cfg = cfg
         self.codec = codec
         self.head = OutputHead("quaternion")
@@ -44,7 +46,9 @@ class FrameBaseline(nn.Module):
         self.control = ControlEmbedding(cfg.n_actions, cfg.n_bodies, cfg.control_dim)
         if cfg.kind == "erd":
             self.encoder: nn.Module = mlp([inputs, cfg.encoder_dim, cfg.encoder_dim])
-            self.rnn: nn.LSTM | nn.GRU = nn.LSTM(cfg.encoder_dim, cfg.hidden_dim, num_layers=2, batch_first=True)
+            self.rnn: nn.LSTM | nn.GRU = nn.LSTM(
+                cfg.encoder_dim, cfg.hidden_dim, num_layers=2, batch_first=True
+            )
             self.decoder = mlp([cfg.hidden_dim, cfg.encoder_dim, raw_dim])
         else:
             self.encoder = nn.Identity()
@@ -57,21 +61,33 @@ class FrameBaseline(nn.Module):
         rest = assemble_pose(torch.tensor([1.0, 0.0, 0.0, 0.0]).expand(cfg.n_joints - 1, 4), torch.zeros(6))
         self.start_pose = nn.Parameter(rest.clone())
 
-    def initial_state(self, action: Tensor, body: Tensor, generator: torch.Generator | None = None) -> RecurrentState:
-        """The sampled initial state: ``(2, B, hidden)`` for the GRU, ``(h, c)`` of that shape for the LSTM."""
+    def initial_state(
+        self, action: Tensor, body: Tensor, generator: torch.Generator | None = None
+    ) -> RecurrentState:
+        """The sampled initial state: ``(2, B, hidden)`` for the GRU, ``(h, c)`` of that shape for the
+        LSTM."""
         flat = self.initial(action, body, generator)
         layers = flat.unflatten(-1, (-1, 2, self.cfg.hidden_dim)).permute(1, 2, 0, 3).contiguous()
         return (layers[0], layers[1]) if self.cfg.kind == "erd" else layers[0]
 
-    def _step(self, inputs: Tensor, control: Tensor, state: RecurrentState) -> tuple[Tensor, Tensor, RecurrentState]:
+    def _step(
+        self, inputs: Tensor, control: Tensor, state: RecurrentState
+    ) -> tuple[Tensor, Tensor, RecurrentState]:
         """Run the network over input poses ``(B, T, 90)``: poses, raw quaternions and the new state."""
         controls = control[:, None].expand(-1, inputs.shape[1], -1)
         hidden, state = self.rnn(self.encoder(torch.cat([inputs, controls], dim=-1)), state)
         params, root = split_raw_pose(self.decoder(hidden), self.head, self.cfg.n_joints)
         return assemble_pose(self.head.quaternions(params), root), params, state
 
-    def forward(self, poses: Tensor, action: Tensor, body: Tensor, input_noise: float = 0.0, sampling: float = 0.0,
-                generator: torch.Generator | None = None) -> PosePrediction:
+    def forward(
+        self,
+        poses: Tensor,
+        action: Tensor,
+        body: Tensor,
+        input_noise: float = 0.0,
+        sampling: float = 0.0,
+        generator: torch.Generator | None = None,
+    ) -> PosePrediction:
         """Predict every frame of ``poses`` ``(B, T, 90)`` from the frames before it (teacher-forced).
 
         Args:
@@ -79,9 +95,14 @@ class FrameBaseline(nn.Module):
             sampling: probability of feeding the model's own prediction instead of the data (QuaterNet).
         """
         if poses.dim() != 3 or poses.shape[-1] != self.cfg.pose_dim:
-            raise ValueError(f"FrameBaseline: poses must be (B, T, {self.cfg.pose_dim}), got {tuple(poses.shape)}")
+            raise ValueError(
+                f"FrameBaseline: poses must be (B, T, {self.cfg.pose_dim}), got {tuple(poses.shape)}"
+            )
         if input_noise < 0 or not 0.0 <= sampling <= 1.0:
-            raise ValueError(f"FrameBaseline: input_noise must be >= 0 and sampling in [0, 1], got {input_noise}, {sampling}")
+            raise ValueError(
+                f"FrameBaseline: input_noise must be >= 0 and sampling in [0, 1], got {input_noise}, "
+                f"{sampling}"
+            )
         control = self.control(action, body)
         state = self.initial_state(action, body, generator)
         start = self.start_pose.expand(poses.shape[0], 1, -1)
@@ -97,8 +118,9 @@ class FrameBaseline(nn.Module):
         return PosePrediction(predicted, params)
 
     @torch.no_grad()
-    def generate(self, action: Tensor, body: Tensor, n_frames: int,
-                 generator: torch.Generator | None = None) -> Tensor:
+    def generate(
+        self, action: Tensor, body: Tensor, n_frames: int, generator: torch.Generator | None = None
+    ) -> Tensor:
         """Roll out ``n_frames`` pose vectors ``(B, n_frames, 90)`` from a sampled initial state."""
         if isinstance(n_frames, bool) or not isinstance(n_frames, int) or n_frames < 1:
             raise ValueError(f"FrameBaseline.generate: n_frames must be a positive integer, got {n_frames!r}")
@@ -122,9 +144,16 @@ def baseline_loss(cfg: LossConfig) -> LossFn:
     """
     weights = joint_weights(cfg.joint_weights)
 
-    def loss_fn(model: nn.Module, batch: WindowBatch, step: int, coeffs: dict[str, float]) -> dict[str, Tensor]:
-        out = model(batch.poses, batch.action, batch.body, input_noise=coeffs.get("input_noise", 0.0),
-                    sampling=coeffs.get("sampling", 0.0))
+    def loss_fn(
+        model: nn.Module, batch: WindowBatch, step: int, coeffs: dict[str, float]
+    ) -> dict[str, Tensor]:
+        out = model(
+            batch.poses,
+            batch.action,
+            batch.body,
+            input_noise=coeffs.get("input_noise", 0.0),
+            sampling=coeffs.get("sampling", 0.0),
+        )
         codec = model.codec
         predicted_q, predicted_root = codec.split(out.poses)
         target_q, target_root = codec.split(batch.poses)

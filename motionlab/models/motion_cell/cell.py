@@ -21,7 +21,8 @@ from motionlab.models.gaussian import reparameterize
 from motionlab.models.motion_cell.config import MotionCellConfig
 from motionlab.models.motion_cell.words import mlp
 
-#: Log-variances are squashed smoothly into ``(-LOGVAR_BOUND, LOGVAR_BOUND)`` so a bad step cannot overflow ``exp``.
+#: Log-variances are squashed smoothly into ``(-LOGVAR_BOUND, LOGVAR_BOUND)`` so a bad step cannot overflow
+#: ``exp``.
 LOGVAR_BOUND = 8.0
 
 
@@ -30,15 +31,21 @@ def bounded_logvar(raw: Tensor) -> Tensor:
     return LOGVAR_BOUND * torch.tanh(raw / LOGVAR_BOUND)
 
 
-def check_attributes(action: Tensor, body: Tensor, n_actions: int, n_bodies: int, where: str) -> tuple[Tensor, Tensor]:
+def check_attributes(
+    action: Tensor, body: Tensor, n_actions: int, n_bodies: int, where: str
+) -> tuple[Tensor, Tensor]:
     """``action`` and ``body`` as int64 ``(B,)`` tensors, checked against the number of classes."""
     action = torch.as_tensor(action, dtype=torch.int64)
     body = torch.as_tensor(body, dtype=torch.int64)
     if action.dim() != 1 or action.shape != body.shape:
-        raise ValueError(f"{where}: action and body must be (B,) each, got {tuple(action.shape)} and {tuple(body.shape)}")
+        raise ValueError(
+            f"{where}: action and body must be (B,) each, got {tuple(action.shape)} and {tuple(body.shape)}"
+        )
     for name, value, count in (("action", action, n_actions), ("body", body, n_bodies)):
         if value.numel() and (int(value.min()) < 0 or int(value.max()) >= count):
-            raise ValueError(f"{where}: {name} values must lie in [0, {count}), got {sorted(set(value.tolist()))}")
+            raise ValueError(
+                f"{where}: {name} values must lie in [0, {count}), got {sorted(set(value.tolist()))}"
+            )
     return action, body
 
 
@@ -97,12 +104,15 @@ class MotionCell(nn.Module):
         self.gru = nn.ModuleList([nn.GRUCell(2 * f + c, h), nn.GRUCell(h, h)])
         self.initial = InitialState(cfg.n_actions, cfg.n_bodies, 2 * h)
 
-    def initial_state(self, action: Tensor, body: Tensor, generator: torch.Generator | None = None) -> tuple[Tensor, Tensor]:
+    def initial_state(
+        self, action: Tensor, body: Tensor, generator: torch.Generator | None = None
+    ) -> tuple[Tensor, Tensor]:
         """Sampled states ``(h^1_0, h^2_0)``, each ``(B, hidden_dim)``."""
         return tuple(self.initial(action, body, generator).chunk(2, dim=-1))  # type: ignore[return-value]
 
     def prior(self, state: Tensor, control: Tensor) -> tuple[Tensor, Tensor]:
-        """Prior mean and log-variance ``(..., latent_dim)`` from states and controls ``(..., h)``, ``(..., c)``."""
+        """Prior mean and log-variance ``(..., latent_dim)`` from states and controls ``(..., h)``, ``(...,
+        c)``."""
         mu, raw = self.prior_net(torch.cat([state, control], dim=-1)).chunk(2, dim=-1)
         return mu, bounded_logvar(raw)
 
@@ -119,8 +129,9 @@ class MotionCell(nn.Module):
         """Word codes ``(..., word_dim)`` from ``f_z(z_t)``, ``h_{t-1}`` and ``f_c(c)``."""
         return self.decoder_net(torch.cat([latent_features, state, control], dim=-1))
 
-    def transition(self, layers: tuple[Tensor, Tensor], word_features: Tensor, latent_features: Tensor,
-                   control: Tensor) -> tuple[Tensor, Tensor]:
+    def transition(
+        self, layers: tuple[Tensor, Tensor], word_features: Tensor, latent_features: Tensor, control: Tensor
+    ) -> tuple[Tensor, Tensor]:
         """The two stacked GRU cells: ``(h^1_{t-1}, h^2_{t-1}) -> (h^1_t, h^2_t)``."""
         lower = self.gru[0](torch.cat([word_features, latent_features, control], dim=-1), layers[0])
         return lower, self.gru[1](lower, layers[1])

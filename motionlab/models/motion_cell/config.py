@@ -41,7 +41,8 @@ def _joints(owner: str, n_joints: int) -> None:
 
 
 def pose_dim(n_joints: int) -> int:
-    """Channels of one pose vector of a ``n_joints`` skeleton: ``J - 1`` quaternions and the 6 root channels."""
+    """Channels of one pose vector of a ``n_joints`` skeleton: ``J - 1`` quaternions and the 6 root
+    channels."""
     return (n_joints - 1) * 4 + ROOT_DIM
 
 
@@ -73,9 +74,17 @@ class MotionCellConfig:
     output: str = "quaternion"
 
     def __post_init__(self) -> None:
-        _positive("MotionCellConfig", word_length=self.word_length, word_dim=self.word_dim,
-                  feature_dim=self.feature_dim, latent_dim=self.latent_dim, hidden_dim=self.hidden_dim,
-                  control_dim=self.control_dim, n_actions=self.n_actions, n_bodies=self.n_bodies)
+        _positive(
+            "MotionCellConfig",
+            word_length=self.word_length,
+            word_dim=self.word_dim,
+            feature_dim=self.feature_dim,
+            latent_dim=self.latent_dim,
+            hidden_dim=self.hidden_dim,
+            control_dim=self.control_dim,
+            n_actions=self.n_actions,
+            n_bodies=self.n_bodies,
+        )
         _joints("MotionCellConfig", self.n_joints)
         _choice("MotionCellConfig", "output", self.output, OUTPUT_KINDS)
 
@@ -107,8 +116,14 @@ class BaselineConfig:
 
     def __post_init__(self) -> None:
         _choice("BaselineConfig", "kind", self.kind, ("erd", "quaternet"))
-        _positive("BaselineConfig", hidden_dim=self.hidden_dim, encoder_dim=self.encoder_dim,
-                  control_dim=self.control_dim, n_actions=self.n_actions, n_bodies=self.n_bodies)
+        _positive(
+            "BaselineConfig",
+            hidden_dim=self.hidden_dim,
+            encoder_dim=self.encoder_dim,
+            control_dim=self.control_dim,
+            n_actions=self.n_actions,
+            n_bodies=self.n_bodies,
+        )
         _joints("BaselineConfig", self.n_joints)
 
     @property
@@ -137,8 +152,8 @@ class LossConfig:
         classifier_every: the classifier loss is computed every this many steps, with this factor on its
             weight (the same weight on average, at a fraction of the cost).
         classifier_truncate: the classifier's gradient stops at the recurrent state between words (it
-            shapes each word's prior and decoder, not the earlier words; through a rollout of tens of words the
-            full gradient explodes and swamps the reconstruction).
+            shapes each word's prior and decoder, not the earlier words; through a rollout of tens of words
+            the full gradient explodes and swamps the reconstruction).
     """
 
     joint_weights: str = "impact"
@@ -152,9 +167,16 @@ class LossConfig:
 
     def __post_init__(self) -> None:
         _choice("LossConfig", "joint_weights", self.joint_weights, JOINT_WEIGHTINGS)
-        _non_negative("LossConfig", root_weight=self.root_weight, norm_weight=self.norm_weight,
-                      feature_weight=self.feature_weight, entropy_weight=self.entropy_weight)
-        _positive("LossConfig", classifier_clips=self.classifier_clips, classifier_every=self.classifier_every)
+        _non_negative(
+            "LossConfig",
+            root_weight=self.root_weight,
+            norm_weight=self.norm_weight,
+            feature_weight=self.feature_weight,
+            entropy_weight=self.entropy_weight,
+        )
+        _positive(
+            "LossConfig", classifier_clips=self.classifier_clips, classifier_every=self.classifier_every
+        )
 
 
 @dataclass(frozen=True)
@@ -175,7 +197,9 @@ class DenoiserConfig:
         _joints("DenoiserConfig", self.n_joints)
         _positive("DenoiserConfig", channels=self.channels, bottleneck=self.bottleneck)
         if not isinstance(self.kernel_size, int) or self.kernel_size < 1 or self.kernel_size % 2 != 1:
-            raise ValueError(f"DenoiserConfig.kernel_size must be an odd positive integer, got {self.kernel_size!r}")
+            raise ValueError(
+                f"DenoiserConfig.kernel_size must be an odd positive integer, got {self.kernel_size!r}"
+            )
 
     @property
     def pose_dim(self) -> int:

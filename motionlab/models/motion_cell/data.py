@@ -1,11 +1,12 @@
 """The Motion Cell chapter's pose vectors: from clips to model space and back to joint positions.
 
 Every model of the chapter reads and writes *pose vectors* ``(..., 90)`` for the 22-joint skeleton: the
-21 non-root local quaternions (w first, unit length, as in :func:`~motionlab.data.representations.to_motion_cell`)
-followed by the 6 root channels (forward and sideways velocity, root height, yaw rate, pitch, roll),
-standardised with the training data's mean and standard deviation. Quaternions are not standardised:
-the losses compare them as rotations. :class:`PoseCodec` holds the root statistics and the skeletons,
-travels inside each model's checkpoint, and turns pose vectors into joint positions.
+21 non-root local quaternions (w first, unit length, as in
+:func:`~motionlab.data.representations.to_motion_cell`) followed by the 6 root channels (forward and sideways
+velocity, root height, yaw rate, pitch, roll), standardised with the training data's mean and standard
+deviation. Quaternions are not standardised: the losses compare them as rotations. :class:`PoseCodec` holds
+the root statistics and the skeletons, travels inside each model's checkpoint, and turns pose vectors into
+joint positions.
 """
 
 from __future__ import annotations
@@ -47,8 +48,10 @@ class PoseCodec(nn.Module):
         super().__init__()
         offsets = torch.as_tensor(np.asarray(offsets), dtype=torch.float32)
         if offsets.dim() != 3 or offsets.shape[-1] != 3 or offsets.shape[1] != len(parents):
-            raise ValueError(f"PoseCodec: offsets must be (n_bodies, J, 3) with J = len(parents) = {len(parents)}, "
-                             f"got {tuple(offsets.shape)}")
+            raise ValueError(
+                f"PoseCodec: offsets must be (n_bodies, J, 3) with J = len(parents) = {len(parents)}, "
+                f"got {tuple(offsets.shape)}"
+            )
         self.register_buffer("offsets", offsets.clone())
         self.parents = tuple(int(p) for p in parents)
         self.root = Standardizer(ROOT_DIM)
@@ -82,7 +85,8 @@ class PoseCodec(nn.Module):
         return torch.cat([poses[..., :-ROOT_DIM], self.root.inverse(poses[..., -ROOT_DIM:])], dim=-1)
 
     def split(self, poses: Tensor) -> tuple[Tensor, Tensor]:
-        """Joint quaternions ``(..., J - 1, 4)`` and standardised root channels ``(..., 6)`` of pose vectors."""
+        """Joint quaternions ``(..., J - 1, 4)`` and standardised root channels ``(..., 6)`` of pose
+        vectors."""
         self._check(poses, "poses", "split")
         return poses[..., :-ROOT_DIM].unflatten(-1, (self.n_joints - 1, 4)), poses[..., -ROOT_DIM:]
 
@@ -99,7 +103,8 @@ class PoseCodec(nn.Module):
         return forward_kinematics(rotations, root_positions, self._offsets(poses, body), self.parents)[0]
 
     def local_positions(self, poses: Tensor, body: Tensor) -> Tensor:
-        """Joint positions ``(B, T, J, 3)`` posed by the joint rotations alone: root at the origin, unrotated."""
+        """Joint positions ``(B, T, J, 3)`` posed by the joint rotations alone: root at the origin,
+        unrotated."""
         self._check(poses, "poses", "local_positions")
         quaternions, _ = self.split(poses)
         identity = torch.zeros_like(quaternions[..., :1, :])
@@ -112,10 +117,15 @@ class PoseCodec(nn.Module):
         """Rest offsets ``(B, 1, J, 3)`` of each clip's body type, for poses ``(B, T, 90)``."""
         body = torch.as_tensor(body, dtype=torch.int64)
         if poses.dim() != 3 or body.shape != poses.shape[:1]:
-            raise ValueError(f"PoseCodec: expected poses (B, T, {self.pose_dim}) and body (B,), got "
-                             f"{tuple(poses.shape)} and {tuple(body.shape)}")
+            raise ValueError(
+                f"PoseCodec: expected poses (B, T, {self.pose_dim}) and body (B,), got "
+                f"{tuple(poses.shape)} and {tuple(body.shape)}"
+            )
         if body.numel() and (int(body.min()) < 0 or int(body.max()) >= self.offsets.shape[0]):
-            raise ValueError(f"PoseCodec: body types must lie in [0, {self.offsets.shape[0]}), got {sorted(set(body.tolist()))}")
+            raise ValueError(
+                f"PoseCodec: body types must lie in [0, {self.offsets.shape[0]}), got "
+                f"{sorted(set(body.tolist()))}"
+            )
         return self.offsets[body][:, None]
 
 
@@ -138,7 +148,9 @@ class WindowBatches:
         length: frames per window (at most ``T``).
     """
 
-    def __init__(self, poses: Tensor, action: Tensor | np.ndarray, body: Tensor | np.ndarray, length: int) -> None:
+    def __init__(
+        self, poses: Tensor, action: Tensor | np.ndarray, body: Tensor | np.ndarray, length: int
+    ) -> None:
         check_tensor(poses, "poses", "WindowBatches", (None,), min_leading=2)
         if poses.dim() != 3:
             raise ValueError(f"WindowBatches: poses must be (N, T, D), got {tuple(poses.shape)}")
@@ -146,10 +158,14 @@ class WindowBatches:
         self.action = torch.as_tensor(np.asarray(action), dtype=torch.int64)
         self.body = torch.as_tensor(np.asarray(body), dtype=torch.int64)
         if self.action.shape != poses.shape[:1] or self.body.shape != poses.shape[:1]:
-            raise ValueError(f"WindowBatches: action and body must be ({poses.shape[0]},), got "
-                             f"{tuple(self.action.shape)} and {tuple(self.body.shape)}")
+            raise ValueError(
+                f"WindowBatches: action and body must be ({poses.shape[0]},), got "
+                f"{tuple(self.action.shape)} and {tuple(self.body.shape)}"
+            )
         if isinstance(length, bool) or not isinstance(length, int) or not 1 <= length <= poses.shape[1]:
-            raise ValueError(f"WindowBatches: length must be an integer in [1, {poses.shape[1]}], got {length!r}")
+            raise ValueError(
+                f"WindowBatches: length must be an integer in [1, {poses.shape[1]}], got {length!r}"
+            )
         self.length = length
 
     def __len__(self) -> int:
@@ -161,6 +177,8 @@ class WindowBatches:
             raise ValueError(f"WindowBatches: {n} clips cannot fill a batch of {batch_size}")
         order = torch.randperm(n, generator=generator)
         for begin in range(0, n - batch_size + 1, batch_size):
-            index = order[begin:begin + batch_size]
+            index = order[begin : begin + batch_size]
             start = torch.randint(0, n_frames - self.length + 1, (batch_size,), generator=generator)
-            yield WindowBatch(gather_windows(self.poses, index, start, self.length), self.action[index], self.body[index])
+            yield WindowBatch(
+                gather_windows(self.poses, index, start, self.length), self.action[index], self.body[index]
+            )

@@ -1,4 +1,5 @@
-"""The paper's first step: a 1D-convolutional denoising autoencoder that cleans motion capture before training.
+"""The paper's first step: a 1D-convolutional denoising autoencoder that cleans motion capture before
+training.
 
 Real capture is noisy (jitter on every frame, spikes where markers were lost). Our synthetic clips are
 clean, so the chapter plays the whole story: the training split is "captured" through the noise model
@@ -28,7 +29,8 @@ from motionlab.models.motion_cell.output import OutputHead, PosePrediction, asse
 
 #: Noise on the root position: 0.5 mm jitter, no spikes. The pelvis is tracked by a rigid cluster of markers,
 #: far better than single joints, and the root channels are velocities (frame differences), which magnify
-#: jitter: 5 mm would already swamp the sideways velocity (its standard deviation in the data is 4 mm per frame).
+#: jitter: 5 mm would already swamp the sideways velocity (its standard deviation in the data is 4 mm per
+#: frame).
 ROOT_NOISE = NoiseConfig(jitter=0.0005, spike_rate=0.0)
 
 #: Clips denoised at a time.
@@ -47,7 +49,9 @@ def noisy_features(rotations: np.ndarray, positions: np.ndarray, rng: np.random.
     """
     if not isinstance(rng, np.random.Generator):
         if isinstance(rng, bool) or not isinstance(rng, (int, np.integer)) or rng < 0:
-            raise ValueError(f"noisy_features: rng must be a numpy Generator or a non-negative integer seed, got {rng!r}")
+            raise ValueError(
+                f"noisy_features: rng must be a numpy Generator or a non-negative integer seed, got {rng!r}"
+            )
         rng = np.random.default_rng(int(rng))
     noisy_rotations = np.asarray(rotations, dtype=np.float32).copy()
     noisy_rotations[:, :, 1:], _ = add_rotation_noise(noisy_rotations[:, :, 1:], rng, ROTATION_NOISE)
@@ -63,23 +67,35 @@ class DenoisingAutoencoder(nn.Module):
     def __init__(self, cfg: DenoiserConfig, codec: PoseCodec) -> None:
         super().__init__()
         if codec.n_joints != cfg.n_joints:
-            raise ValueError(f"DenoisingAutoencoder: the codec has {codec.n_joints} joints, the config {cfg.n_joints}")
+            raise ValueError(
+                f"DenoisingAutoencoder: the codec has {codec.n_joints} joints, the config {cfg.n_joints}"
+            )
         self.cfg = cfg
         self.codec = codec
         self.head = OutputHead("quaternion")
         k, pad = cfg.kernel_size, cfg.kernel_size // 2
-        self.encoder = nn.Sequential(nn.Conv1d(cfg.pose_dim, cfg.channels, k, padding=pad), nn.ELU(),
-                                     nn.Conv1d(cfg.channels, cfg.bottleneck, k, padding=pad), nn.ELU())
-        self.decoder = nn.Sequential(nn.Conv1d(cfg.bottleneck, cfg.channels, k, padding=pad), nn.ELU(),
-                                     nn.Conv1d(cfg.channels, cfg.pose_dim, k, padding=pad))
+        self.encoder = nn.Sequential(
+            nn.Conv1d(cfg.pose_dim, cfg.channels, k, padding=pad),
+            nn.ELU(),
+            nn.Conv1d(cfg.channels, cfg.bottleneck, k, padding=pad),
+            nn.ELU(),
+        )
+        self.decoder = nn.Sequential(
+            nn.Conv1d(cfg.bottleneck, cfg.channels, k, padding=pad),
+            nn.ELU(),
+            nn.Conv1d(cfg.channels, cfg.pose_dim, k, padding=pad),
+        )
         with torch.no_grad():  # start close to "change nothing"
             self.decoder[-1].weight.mul_(0.01)
             self.decoder[-1].bias.zero_()
 
     def forward(self, noisy: Tensor) -> PosePrediction:
-        """Denoised pose vectors ``(B, T, 90)`` and the corrected quaternions before normalisation ``(B, T, J - 1, 4)``."""
+        """Denoised pose vectors ``(B, T, 90)`` and the corrected quaternions before normalisation ``(B, T, J
+        - 1, 4)``."""
         if noisy.dim() != 3 or noisy.shape[-1] != self.cfg.pose_dim:
-            raise ValueError(f"DenoisingAutoencoder: expected (B, T, {self.cfg.pose_dim}), got {tuple(noisy.shape)}")
+            raise ValueError(
+                f"DenoisingAutoencoder: expected (B, T, {self.cfg.pose_dim}), got {tuple(noisy.shape)}"
+            )
         corrected = noisy + self.decoder(self.encoder(noisy.transpose(1, 2))).transpose(1, 2)
         quaternions, root = self.codec.split(corrected)
         return PosePrediction(assemble_pose(quat_normalize(quaternions), root), quaternions)
@@ -88,14 +104,17 @@ class DenoisingAutoencoder(nn.Module):
     def denoise(self, noisy: Tensor) -> Tensor:
         """Denoised pose vectors ``(N, T, 90)``, in chunks of :data:`CHUNK` clips."""
         self.eval()
-        return torch.cat([self(noisy[i:i + CHUNK]).poses for i in range(0, noisy.shape[0], CHUNK)])
+        return torch.cat([self(noisy[i : i + CHUNK]).poses for i in range(0, noisy.shape[0], CHUNK)])
 
 
 def denoiser_loss(cfg: LossConfig) -> LossFn:
-    """Pose loss of the denoised clips against the clean ones, plus the norm constraint; batches ``(noisy, clean)``."""
+    """Pose loss of the denoised clips against the clean ones, plus the norm constraint; batches ``(noisy,
+    clean)``."""
     weights = joint_weights(cfg.joint_weights)
 
-    def loss_fn(model: nn.Module, batch: tuple[Tensor, Tensor], step: int, coeffs: dict[str, float]) -> dict[str, Tensor]:
+    def loss_fn(
+        model: nn.Module, batch: tuple[Tensor, Tensor], step: int, coeffs: dict[str, float]
+    ) -> dict[str, Tensor]:
         noisy, clean = batch
         out = model(noisy)
         pose = pose_loss(model.codec, out.poses, clean, weights, cfg.root_weight)

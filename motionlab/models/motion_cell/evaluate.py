@@ -45,11 +45,14 @@ class MotionGenerator(Protocol):
     cfg: MotionCellConfig | BaselineConfig
     codec: PoseCodec
 
-    def generate(self, action: Tensor, body: Tensor, n_frames: int, generator: torch.Generator | None = None) -> Tensor: ...
+    def generate(
+        self, action: Tensor, body: Tensor, n_frames: int, generator: torch.Generator | None = None
+    ) -> Tensor: ...
 
 
 class SampleSet(NamedTuple):
-    """Generated clips: positions ``(N, T, 22, 3)`` over all generated frames, and attributes ``(N,)`` each."""
+    """Generated clips: positions ``(N, T, 22, 3)`` over all generated frames, and attributes ``(N,)``
+    each."""
 
     positions: Tensor
     action: Tensor
@@ -69,15 +72,22 @@ class ModelEvaluation(NamedTuple):
 
 
 def attribute_grid(n_per_combination: int, n_actions: int = 6, n_bodies: int = 2) -> tuple[Tensor, Tensor]:
-    """Actions and body types ``(n_actions * n_bodies * n_per_combination,)``: every combination equally often."""
+    """Actions and body types ``(n_actions * n_bodies * n_per_combination,)``: every combination equally
+    often."""
     if isinstance(n_per_combination, bool) or not isinstance(n_per_combination, int) or n_per_combination < 1:
-        raise ValueError(f"attribute_grid: n_per_combination must be a positive integer, got {n_per_combination!r}")
+        raise ValueError(
+            f"attribute_grid: n_per_combination must be a positive integer, got {n_per_combination!r}"
+        )
     combination = torch.arange(n_actions * n_bodies).repeat_interleave(n_per_combination)
     return combination // n_bodies, combination % n_bodies
 
 
-def protocol_samples(model: MotionGenerator, n_per_combination: int, generator: torch.Generator,
-                     n_frames: int = PROTOCOL_FRAMES) -> SampleSet:
+def protocol_samples(
+    model: MotionGenerator,
+    n_per_combination: int,
+    generator: torch.Generator,
+    n_frames: int = PROTOCOL_FRAMES,
+) -> SampleSet:
     """One sample set: ``n_per_combination`` clips of ``n_frames`` for every action x body combination."""
     action, body = attribute_grid(n_per_combination, model.cfg.n_actions, model.cfg.n_bodies)
     with torch.no_grad():
@@ -86,32 +96,58 @@ def protocol_samples(model: MotionGenerator, n_per_combination: int, generator: 
     return SampleSet(positions, action, body)
 
 
-def evaluate_model(model: MotionGenerator, evaluator: Evaluator, reference_features: Tensor, n_per_combination: int,
-                   n_repeats: int, seed: int = 0) -> ModelEvaluation:
+def evaluate_model(
+    model: MotionGenerator,
+    evaluator: Evaluator,
+    reference_features: Tensor,
+    n_per_combination: int,
+    n_repeats: int,
+    seed: int = 0,
+) -> ModelEvaluation:
     """Table 2 metrics of ``model`` over ``n_repeats`` sample sets (frames 20-140 of each sample).
 
     Repeat ``r`` draws its samples with ``torch.Generator().manual_seed(repeat_seed(seed, r))`` and its
     Diversity pairs with ``numpy.random.default_rng([seed, r])``, so the numbers are reproducible.
     """
     if isinstance(n_repeats, bool) or not isinstance(n_repeats, int) or n_repeats < 2:
-        raise ValueError(f"evaluate_model: n_repeats must be an integer >= 2 (for an interval), got {n_repeats!r}")
+        raise ValueError(
+            f"evaluate_model: n_repeats must be an integer >= 2 (for an interval), got {n_repeats!r}"
+        )
     rows, first = [], None
     for r in range(n_repeats):
-        samples = protocol_samples(model, n_per_combination, torch.Generator().manual_seed(repeat_seed(seed, r)))
+        samples = protocol_samples(
+            model, n_per_combination, torch.Generator().manual_seed(repeat_seed(seed, r))
+        )
         first = samples if first is None else first
-        rows.append(sample_metrics(evaluator, samples.evaluated, samples.action.numpy(), reference_features,
-                                   np.random.default_rng([seed, r])))
+        rows.append(
+            sample_metrics(
+                evaluator,
+                samples.evaluated,
+                samples.action.numpy(),
+                reference_features,
+                np.random.default_rng([seed, r]),
+            )
+        )
     return ModelEvaluation({key: mean_ci([row[key] for row in rows]) for key in rows[0]}, first)
 
 
-def evaluate_models(models: dict[str, MotionGenerator], evaluator: Evaluator, reference_features: Tensor,
-                    n_per_combination: int, n_repeats: int, seed: int = 0,
-                    processes: int = 2) -> dict[str, ModelEvaluation]:
+def evaluate_models(
+    models: dict[str, MotionGenerator],
+    evaluator: Evaluator,
+    reference_features: Tensor,
+    n_per_combination: int,
+    n_repeats: int,
+    seed: int = 0,
+    processes: int = 2,
+) -> dict[str, ModelEvaluation]:
     """:func:`evaluate_model` of every model, ``processes`` models at a time in worker processes.
 
     Each evaluation is seeded by ``seed`` alone, so the numbers are those of an in-process call.
     """
-    calls = [(model, evaluator, reference_features, n_per_combination, n_repeats, seed) for model in models.values()]
+    calls = [
+        (model, evaluator, reference_features, n_per_combination, n_repeats, seed)
+        for model in models.values()
+    ]
     return dict(zip(models, run_in_workers(evaluate_model, calls, processes)))
 
 
@@ -136,7 +172,9 @@ def distance_to_pose(positions: Tensor | np.ndarray, pose: Tensor) -> Tensor:
     return (poses - pose).norm(dim=-1).mean(-1)
 
 
-def action_mask(action: Tensor | np.ndarray, action_names: Sequence[str], chosen: Sequence[str] = NON_PERIODIC_ACTIONS) -> Tensor:
+def action_mask(
+    action: Tensor | np.ndarray, action_names: Sequence[str], chosen: Sequence[str] = NON_PERIODIC_ACTIONS
+) -> Tensor:
     """Boolean ``(N,)``: which clips' actions are among ``chosen`` (names from ``action_names``)."""
     unknown = set(chosen) - set(action_names)
     if unknown:
@@ -153,8 +191,9 @@ def collapse_curve(samples: SampleSet, pose: Tensor, action_names: Sequence[str]
     return distance_to_pose(samples.positions[mask], pose).mean(0)
 
 
-def real_collapse_level(positions: Tensor | np.ndarray, action: Tensor | np.ndarray, pose: Tensor,
-                        action_names: Sequence[str]) -> float:
+def real_collapse_level(
+    positions: Tensor | np.ndarray, action: Tensor | np.ndarray, pose: Tensor, action_names: Sequence[str]
+) -> float:
     """Real data's mean distance to ``pose`` over every frame of its non-periodic clips (the ratio's unit)."""
     mask = action_mask(action, action_names)
     if not bool(mask.any()):
@@ -182,8 +221,12 @@ def speed_curve(samples: SampleSet, action_names: Sequence[str], fps: float = 30
     return joint_speed(samples.positions[mask], fps).mean(0)
 
 
-def real_speed_level(positions: Tensor | np.ndarray, action: Tensor | np.ndarray, action_names: Sequence[str],
-                     fps: float = 30.0) -> float:
+def real_speed_level(
+    positions: Tensor | np.ndarray,
+    action: Tensor | np.ndarray,
+    action_names: Sequence[str],
+    fps: float = 30.0,
+) -> float:
     """Real data's mean :func:`joint_speed` over every frame of its non-periodic clips."""
     mask = action_mask(action, action_names)
     if not bool(mask.any()):
@@ -202,11 +245,13 @@ def collapse_ratio(curve: Tensor, real_level: float, frames: tuple[int, int] = C
 
 
 def tsne_embedding(features: Tensor | np.ndarray, seed: int = 0, perplexity: float = 30.0) -> np.ndarray:
-    """2-D t-SNE embedding ``(N, 2)`` of feature vectors ``(N, D)`` (scikit-learn, PCA initialisation, seeded)."""
+    """2-D t-SNE embedding ``(N, 2)`` of feature vectors ``(N, D)`` (scikit-learn, PCA initialisation,
+    seeded)."""
     from sklearn.manifold import TSNE
 
     x = np.asarray(features, dtype=np.float64)
     if x.ndim != 2 or x.shape[0] < 5:
         raise ValueError(f"tsne_embedding: features must be (N, D) with N >= 5, got {x.shape}")
-    return TSNE(n_components=2, perplexity=min(perplexity, (x.shape[0] - 1) / 3), init="pca",
-                random_state=seed).fit_transform(x)
+    return TSNE(
+        n_components=2, perplexity=min(perplexity, (x.shape[0] - 1) / 3), init="pca", random_state=seed
+    ).fit_transform(x)

@@ -23,8 +23,12 @@ from motionlab.train import LinearRamp, TrainConfig, TrainResult
 
 #: The Motion Cell and its ablations (the paper's Table 2 rows).
 VARIANTS = ("mcell", "nc", "nl", "sl")
-VARIANT_NAMES = {"mcell": "Motion Cell", "nc": "NC (no classifier loss)", "nl": "NL (all alpha_k = 1)",
-                 "sl": "SL (no motion words)"}
+VARIANT_NAMES = {
+    "mcell": "Motion Cell",
+    "nc": "NC (no classifier loss)",
+    "nl": "NL (all alpha_k = 1)",
+    "sl": "SL (no motion words)",
+}
 BASELINES = ("erd", "quaternet")
 BASELINE_NAMES = {"erd": "ERD", "quaternet": "QuaterNet-style"}
 
@@ -51,8 +55,11 @@ Job = tuple[str, str]
 def chapter_jobs() -> list[Job]:
     """Every training run of the chapter, the longest first (the order in which
     :func:`~motionlab.models.motion_cell.runner.train_chapter` starts them)."""
-    return ([("variant", "sl"), ("variant", "mcell"), ("variant", "nl"), ("variant", "nc")]
-            + [("baseline", kind) for kind in reversed(BASELINES)] + [("output", kind) for kind in OUTPUT_KINDS])
+    return (
+        [("variant", "sl"), ("variant", "mcell"), ("variant", "nl"), ("variant", "nc")]
+        + [("baseline", kind) for kind in reversed(BASELINES)]
+        + [("output", kind) for kind in OUTPUT_KINDS]
+    )
 
 
 def job_run(job: Job, settings: ChapterSettings) -> Run:
@@ -62,25 +69,49 @@ def job_run(job: Job, settings: ChapterSettings) -> Run:
     steps = settings.steps
 
     def train(steps: int, schedules: dict) -> TrainConfig:
-        return TrainConfig(steps=steps, batch_size=settings.batch_size, lr=settings.lr, schedules=schedules,
-                           lr_schedule=learning_rate_decay(steps), checkpoint_every=None)
+        return TrainConfig(
+            steps=steps,
+            batch_size=settings.batch_size,
+            lr=settings.lr,
+            schedules=schedules,
+            lr_schedule=learning_rate_decay(steps),
+            checkpoint_every=None,
+        )
 
     if kind == "variant" and name in VARIANTS:
         model = replace(mc, word_length=1) if name == "sl" else mc
         loss = LossConfig(joint_weights="uniform" if name == "nl" else "impact")
         classifier = 0.0 if name == "nc" else settings.classifier
-        return Run(f"mcell_{name}", model, loss,
-                   train(steps, motion_cell_schedules(steps, settings.beta, classifier, settings.word_drop)))
+        return Run(
+            f"mcell_{name}",
+            model,
+            loss,
+            train(steps, motion_cell_schedules(steps, settings.beta, classifier, settings.word_drop)),
+        )
     if kind == "baseline" and name in BASELINES:
-        model = BaselineConfig(kind=name, n_joints=mc.n_joints, hidden_dim=mc.hidden_dim, encoder_dim=mc.hidden_dim,
-                               control_dim=mc.control_dim, n_actions=mc.n_actions, n_bodies=mc.n_bodies)
-        schedules = ({"input_noise": LinearRamp(0, int(0.6 * steps), 0.0, settings.input_noise)} if name == "erd" else
-                     {"sampling": LinearRamp(int(0.1 * steps), int(0.5 * steps), 0.0, settings.sampling)})
+        model = BaselineConfig(
+            kind=name,
+            n_joints=mc.n_joints,
+            hidden_dim=mc.hidden_dim,
+            encoder_dim=mc.hidden_dim,
+            control_dim=mc.control_dim,
+            n_actions=mc.n_actions,
+            n_bodies=mc.n_bodies,
+        )
+        schedules = (
+            {"input_noise": LinearRamp(0, int(0.6 * steps), 0.0, settings.input_noise)}
+            if name == "erd"
+            else {"sampling": LinearRamp(int(0.1 * steps), int(0.5 * steps), 0.0, settings.sampling)}
+        )
         return Run(f"mcell_{name}", model, LossConfig(), train(steps, schedules))
     if kind == "output" and name in OUTPUT_KINDS:
         short = settings.representation_steps
-        return Run(f"mcell_output_{name}", replace(mc, output=name), LossConfig(),
-                   train(short, motion_cell_schedules(short, settings.beta, 0.0, settings.word_drop)))
+        return Run(
+            f"mcell_output_{name}",
+            replace(mc, output=name),
+            LossConfig(),
+            train(short, motion_cell_schedules(short, settings.beta, 0.0, settings.word_drop)),
+        )
     raise ValueError(f"job_run: unknown job {job!r}; see chapter_jobs() for the jobs of the chapter")
 
 
@@ -89,8 +120,13 @@ def job_data_config(settings: ChapterSettings, data: PreparedData) -> dict:
     return {"poses": data.fingerprint, "window": settings.window}
 
 
-def train_job(job: Job, settings: ChapterSettings, data: PreparedData, classifier: Evaluator | None = None,
-              progress: bool | None = None) -> tuple[nn.Module, TrainResult]:
+def train_job(
+    job: Job,
+    settings: ChapterSettings,
+    data: PreparedData,
+    classifier: Evaluator | None = None,
+    progress: bool | None = None,
+) -> tuple[nn.Module, TrainResult]:
     """Train (or load from the cache) one job; Motion Cell variants with a classifier loss need ``classifier``
     (the frozen conv evaluator of eq. 24)."""
     run = job_run(job, settings)
@@ -99,10 +135,21 @@ def train_job(job: Job, settings: ChapterSettings, data: PreparedData, classifie
     else:
         needs_classifier = uses_classifier(job, settings)
         if needs_classifier and classifier is None:
-            raise ValueError(f"train_job: {job} uses the classifier loss; pass the conv evaluator as classifier")
+            raise ValueError(
+                f"train_job: {job} uses the classifier loss; pass the conv evaluator as classifier"
+            )
         loss_fn = motion_cell_loss(run.loss, classifier_loss(classifier, data) if needs_classifier else None)
-    return train_model(run.name, run.model, data.codec, loss_fn, data.batches, run.train,
-                       data_config=job_data_config(settings, data), loss_config=run.loss, progress=progress)
+    return train_model(
+        run.name,
+        run.model,
+        data.codec,
+        loss_fn,
+        data.batches,
+        run.train,
+        data_config=job_data_config(settings, data),
+        loss_config=run.loss,
+        progress=progress,
+    )
 
 
 def uses_classifier(job: Job, settings: ChapterSettings) -> bool:
@@ -116,7 +163,9 @@ def classifier_loss(classifier: Evaluator, data: PreparedData) -> ClassifierLoss
     batches = data.batches
     with torch.no_grad():
         positions = data.codec.positions(batches.poses, batches.body)
-    return ClassifierLoss(classifier, positions, batches.action, batches.body, int(data.codec.offsets.shape[0]))
+    return ClassifierLoss(
+        classifier, positions, batches.action, batches.body, int(data.codec.offsets.shape[0])
+    )
 
 
 def job_is_cached(job: Job, settings: ChapterSettings, data: PreparedData) -> bool:

@@ -35,22 +35,27 @@ LossFn = Callable[[nn.Module, WindowBatch, int, dict[str, float]], dict[str, Ten
 
 
 def joint_weights(kind: str, n_joints: int = 22) -> Tensor:
-    """The non-root joints' weights ``alpha_k`` ``(J - 1,)``, mean 1: ``"impact"`` (eq. 23) or ``"uniform"``."""
+    """The non-root joints' weights ``alpha_k`` ``(J - 1,)``, mean 1: ``"impact"`` (eq. 23) or
+    ``"uniform"``."""
     if kind not in JOINT_WEIGHTINGS:
         raise ValueError(f"joint_weights: kind must be one of {JOINT_WEIGHTINGS}, got {kind!r}")
     if kind == "uniform":
         return torch.ones(n_joints - 1)
     weights = torch.as_tensor(joint_impact_weights()[1:], dtype=torch.float32)
     if weights.numel() != n_joints - 1:
-        raise ValueError(f"joint_weights: the impact weights are for {weights.numel() + 1} joints, not {n_joints}")
+        raise ValueError(
+            f"joint_weights: the impact weights are for {weights.numel() + 1} joints, not {n_joints}"
+        )
     return weights / weights.mean()
 
 
 def rotation_loss(predicted: Tensor, target: Tensor, weights: Tensor) -> Tensor:
     """Eq. 22: mean over frames of ``sum_k alpha_k d1(q_k, q^_k)`` for quaternions ``(..., J - 1, 4)``."""
     if predicted.shape != target.shape or predicted.shape[-2:] != (weights.numel(), 4):
-        raise ValueError(f"rotation_loss: predicted {tuple(predicted.shape)} and target {tuple(target.shape)} must "
-                         f"both be (..., {weights.numel()}, 4)")
+        raise ValueError(
+            f"rotation_loss: predicted {tuple(predicted.shape)} and target {tuple(target.shape)} must "
+            f"both be (..., {weights.numel()}, 4)"
+        )
     return (quat_geodesic(predicted, target) * weights).sum(-1).mean()
 
 
@@ -61,9 +66,11 @@ def root_loss(predicted: Tensor, target: Tensor) -> Tensor:
     return ((predicted - target) ** 2).sum(-1).mean()
 
 
-def kl_loss(posterior_mu: Tensor, posterior_logvar: Tensor, prior_mu: Tensor, prior_logvar: Tensor,
-            word_length: int) -> Tensor:
-    """KL(q || p) summed over latent dimensions, averaged over words, divided by the word length (nats/frame)."""
+def kl_loss(
+    posterior_mu: Tensor, posterior_logvar: Tensor, prior_mu: Tensor, prior_logvar: Tensor, word_length: int
+) -> Tensor:
+    """KL(q || p) summed over latent dimensions, averaged over words, divided by the word length
+    (nats/frame)."""
     return gaussian_kl(posterior_mu, posterior_logvar, prior_mu, prior_logvar).sum(-1).mean() / word_length
 
 
@@ -74,15 +81,20 @@ def norm_loss(params: Tensor, head: OutputHead) -> Tensor:
     return quat_norm_penalty(params).sum(-1).mean()
 
 
-def pose_loss(codec: PoseCodec, predicted: Tensor, target: Tensor, weights: Tensor, root_weight: float) -> Tensor:
+def pose_loss(
+    codec: PoseCodec, predicted: Tensor, target: Tensor, weights: Tensor, root_weight: float
+) -> Tensor:
     """Eq. 22's rotation term plus ``root_weight`` times the root term, for pose vectors ``(..., 90)``."""
     predicted_q, predicted_root = codec.split(predicted)
     target_q, target_root = codec.split(target)
-    return rotation_loss(predicted_q, target_q, weights) + root_weight * root_loss(predicted_root, target_root)
+    return rotation_loss(predicted_q, target_q, weights) + root_weight * root_loss(
+        predicted_root, target_root
+    )
 
 
 class ClassifierLoss(nn.Module):
-    """Eq. 24 with a frozen evaluation classifier: feature matching on its layers plus attribute cross-entropy.
+    """Eq. 24 with a frozen evaluation classifier: feature matching on its layers plus attribute
+    cross-entropy.
 
     Built with the real training clips, whose mean activations per (action, body) combination it keeps:
     for every intermediate layer of the classifier, the per-channel mean over clips and frames.
@@ -98,8 +110,15 @@ class ClassifierLoss(nn.Module):
 
     targets: list[Tensor]
 
-    def __init__(self, evaluator: Evaluator, positions: Tensor, action: Tensor, body: Tensor, n_bodies: int = 2,
-                 chunk: int = 128) -> None:
+    def __init__(
+        self,
+        evaluator: Evaluator,
+        positions: Tensor,
+        action: Tensor,
+        body: Tensor,
+        n_bodies: int = 2,
+        chunk: int = 128,
+    ) -> None:
         super().__init__()
         missing = {"action", "body"} - set(evaluator.classifier.heads)
         if missing:
@@ -110,15 +129,21 @@ class ClassifierLoss(nn.Module):
         n_combinations = int(self.evaluator.classifier.heads["action"].out_features) * n_bodies
         counts = torch.bincount(combination, minlength=n_combinations).double()
         if bool((counts == 0).any()):
-            raise ValueError(f"ClassifierLoss: the real clips miss attribute combinations "
-                             f"{torch.nonzero(counts == 0).flatten().tolist()} (action * {n_bodies} + body)")
+            raise ValueError(
+                f"ClassifierLoss: the real clips miss attribute combinations "
+                f"{torch.nonzero(counts == 0).flatten().tolist()} (action * {n_bodies} + body)"
+            )
         sums: list[Tensor] | None = None
         with torch.no_grad():
             for begin in range(0, positions.shape[0], chunk):
-                clip_means = self.clip_means(self.activations(positions[begin:begin + chunk]))
-                index = combination[begin:begin + chunk]
-                parts = [torch.zeros(n_combinations, m.shape[-1], dtype=torch.float64).index_add_(0, index, m.double())
-                         for m in clip_means]
+                clip_means = self.clip_means(self.activations(positions[begin : begin + chunk]))
+                index = combination[begin : begin + chunk]
+                parts = [
+                    torch.zeros(n_combinations, m.shape[-1], dtype=torch.float64).index_add_(
+                        0, index, m.double()
+                    )
+                    for m in clip_means
+                ]
                 sums = parts if sums is None else [s + p for s, p in zip(sums, parts)]
         self.targets = [(s / counts[:, None]).float() for s in sums]
 
@@ -133,8 +158,10 @@ class ClassifierLoss(nn.Module):
 
     def forward(self, generated: Tensor, action: Tensor, body: Tensor) -> tuple[Tensor, Tensor]:
         if generated.dim() != 4 or generated.shape[0] != action.shape[0] or action.shape != body.shape:
-            raise ValueError(f"ClassifierLoss: expected generated (B, T, 22, 3) and attributes (B,), got "
-                             f"{tuple(generated.shape)}, {tuple(action.shape)} and {tuple(body.shape)}")
+            raise ValueError(
+                f"ClassifierLoss: expected generated (B, T, 22, 3) and attributes (B,), got "
+                f"{tuple(generated.shape)}, {tuple(action.shape)} and {tuple(body.shape)}"
+            )
         outputs = self.activations(generated)
         combination = action * self.n_bodies + body
         matching = generated.new_zeros(())
@@ -142,7 +169,9 @@ class ClassifierLoss(nn.Module):
             wanted = target[combination].mean(0)
             matching = matching + ((mean.mean(0) - wanted) ** 2).sum() / (wanted**2).sum().clamp(min=1e-8)
         heads = self.evaluator.classifier.heads
-        entropy = F.cross_entropy(heads["action"](outputs[-1]), action) + F.cross_entropy(heads["body"](outputs[-1]), body)
+        entropy = F.cross_entropy(heads["action"](outputs[-1]), action) + F.cross_entropy(
+            heads["body"](outputs[-1]), body
+        )
         return matching, entropy
 
 
@@ -156,28 +185,50 @@ def motion_cell_loss(cfg: LossConfig, classifier: ClassifierLoss | None = None) 
     """
     weights = joint_weights(cfg.joint_weights)
 
-    def loss_fn(model: nn.Module, batch: WindowBatch, step: int, coeffs: dict[str, float]) -> dict[str, Tensor]:
+    def loss_fn(
+        model: nn.Module, batch: WindowBatch, step: int, coeffs: dict[str, float]
+    ) -> dict[str, Tensor]:
         out = model(batch.poses, batch.action, batch.body, word_drop=coeffs.get("word_drop", 0.0))
         codec = model.codec
         predicted_q, predicted_root = codec.split(out.poses)
         target_q, target_root = codec.split(batch.poses)
         rotation = rotation_loss(predicted_q, target_q, weights)
         root = root_loss(predicted_root, target_root)
-        kl = kl_loss(out.posterior_mu, out.posterior_logvar, out.prior_mu, out.prior_logvar, model.cfg.word_length)
+        kl = kl_loss(
+            out.posterior_mu, out.posterior_logvar, out.prior_mu, out.prior_logvar, model.cfg.word_length
+        )
         norm = norm_loss(out.rotation_params, model.head)
         lambda_cl = coeffs.get("classifier", 0.0)
         matching = entropy = out.poses.new_zeros(())
         if lambda_cl > 0 and step % cfg.classifier_every == 0:
             if classifier is None:
-                raise ValueError("motion_cell_loss: the 'classifier' schedule is positive but no ClassifierLoss was given")
+                raise ValueError(
+                    "motion_cell_loss: the 'classifier' schedule is positive but no ClassifierLoss was given"
+                )
             k = min(cfg.classifier_clips, batch.poses.shape[0])
             action, body = batch.action[:k], batch.body[:k]
-            generated = codec.positions(model.rollout(action, body, batch.poses.shape[1], truncate=cfg.classifier_truncate), body)
+            generated = codec.positions(
+                model.rollout(action, body, batch.poses.shape[1], truncate=cfg.classifier_truncate), body
+            )
             matching, entropy = classifier(generated, action, body)
-        classifier_term = cfg.classifier_every * (cfg.feature_weight * matching + cfg.entropy_weight * entropy)
-        total = (rotation + cfg.root_weight * root + coeffs.get("beta", 1.0) * kl + lambda_cl * classifier_term
-                 + cfg.norm_weight * norm)
-        return {"loss": total, "rotation": rotation, "root": root, "kl": kl, "feature_matching": matching,
-                "cross_entropy": entropy, "norm": norm}
+        classifier_term = cfg.classifier_every * (
+            cfg.feature_weight * matching + cfg.entropy_weight * entropy
+        )
+        total = (
+            rotation
+            + cfg.root_weight * root
+            + coeffs.get("beta", 1.0) * kl
+            + lambda_cl * classifier_term
+            + cfg.norm_weight * norm
+        )
+        return {
+            "loss": total,
+            "rotation": rotation,
+            "root": root,
+            "kl": kl,
+            "feature_matching": matching,
+            "cross_entropy": entropy,
+            "norm": norm,
+        }
 
     return loss_fn

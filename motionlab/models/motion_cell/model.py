@@ -47,7 +47,9 @@ class MotionCellModel(nn.Module):
     def __init__(self, cfg: MotionCellConfig, codec: PoseCodec) -> None:
         super().__init__()
         if codec.n_joints != cfg.n_joints:
-            raise ValueError(f"MotionCellModel: the codec has {codec.n_joints} joints, the config {cfg.n_joints}")
+            raise ValueError(
+                f"MotionCellModel: the codec has {codec.n_joints} joints, the config {cfg.n_joints}"
+            )
         self.cfg = cfg
         self.codec = codec
         self.head = OutputHead(cfg.output)
@@ -56,7 +58,8 @@ class MotionCellModel(nn.Module):
         self.cell = MotionCell(cfg)
 
     def decode_words(self, codes: Tensor) -> tuple[Tensor, Tensor]:
-        """Pose vectors ``(B, N * l, 90)`` and rotation parameters ``(B, N * l, J - 1, p)`` of word codes ``(B, N, word_dim)``."""
+        """Pose vectors ``(B, N * l, 90)`` and rotation parameters ``(B, N * l, J - 1, p)`` of word codes
+        ``(B, N, word_dim)``."""
         raw = from_words(self.word_decoder(codes), self.cfg.word_length)
         params, root = split_raw_pose(raw, self.head, self.cfg.n_joints)
         return assemble_pose(self.head.quaternions(params), root), params
@@ -67,15 +70,25 @@ class MotionCellModel(nn.Module):
 
     def _check_poses(self, poses: Tensor) -> None:
         if poses.dim() != 3 or poses.shape[-1] != self.cfg.pose_dim:
-            raise ValueError(f"MotionCellModel: poses must be (B, T, {self.cfg.pose_dim}), got {tuple(poses.shape)}")
+            raise ValueError(
+                f"MotionCellModel: poses must be (B, T, {self.cfg.pose_dim}), got {tuple(poses.shape)}"
+            )
         if poses.shape[1] % self.cfg.word_length:
-            raise ValueError(f"MotionCellModel: {poses.shape[1]} frames are not a whole number of words of "
-                             f"{self.cfg.word_length} frames")
+            raise ValueError(
+                f"MotionCellModel: {poses.shape[1]} frames are not a whole number of words of "
+                f"{self.cfg.word_length} frames"
+            )
         if not bool(torch.isfinite(poses).all()):
             raise ValueError("MotionCellModel: poses contain NaN or inf")
 
-    def forward(self, poses: Tensor, action: Tensor, body: Tensor, word_drop: float = 0.0,
-                generator: torch.Generator | None = None) -> MotionCellOutput:
+    def forward(
+        self,
+        poses: Tensor,
+        action: Tensor,
+        body: Tensor,
+        word_drop: float = 0.0,
+        generator: torch.Generator | None = None,
+    ) -> MotionCellOutput:
         """Reconstruct ``poses`` ``(B, T, 90)`` (``T`` a multiple of ``l``) through the posterior.
 
         Args:
@@ -106,21 +119,36 @@ class MotionCellModel(nn.Module):
             logvars.append(logvar)
         previous = torch.stack(states, dim=1)
         prior_mu, prior_logvar = cell.prior(previous, controls)
-        reconstruction, params = self.decode_words(cell.decode(torch.stack(latent_features, dim=1), previous, controls))
-        return MotionCellOutput(reconstruction, params, torch.stack(mus, dim=1), torch.stack(logvars, dim=1),
-                                prior_mu, prior_logvar)
+        reconstruction, params = self.decode_words(
+            cell.decode(torch.stack(latent_features, dim=1), previous, controls)
+        )
+        return MotionCellOutput(
+            reconstruction,
+            params,
+            torch.stack(mus, dim=1),
+            torch.stack(logvars, dim=1),
+            prior_mu,
+            prior_logvar,
+        )
 
     @torch.no_grad()
-    def generate(self, action: Tensor, body: Tensor, n_frames: int,
-                 generator: torch.Generator | None = None) -> Tensor:
+    def generate(
+        self, action: Tensor, body: Tensor, n_frames: int, generator: torch.Generator | None = None
+    ) -> Tensor:
         """Sample pose vectors ``(B, n_frames, 90)`` for attributes ``(B,)``, any ``n_frames >= 1``.
 
         The same ``generator`` state gives bitwise-identical samples.
         """
         return self.rollout(action, body, n_frames, generator)
 
-    def rollout(self, action: Tensor, body: Tensor, n_frames: int, generator: torch.Generator | None = None,
-                truncate: bool = False) -> Tensor:
+    def rollout(
+        self,
+        action: Tensor,
+        body: Tensor,
+        n_frames: int,
+        generator: torch.Generator | None = None,
+        truncate: bool = False,
+    ) -> Tensor:
         """:meth:`generate` with gradients (for losses on samples).
 
         With ``truncate`` the recurrent state is detached after every word, so gradients reach each word's
@@ -128,7 +156,9 @@ class MotionCellModel(nn.Module):
         back-propagation through time).
         """
         if isinstance(n_frames, bool) or not isinstance(n_frames, int) or n_frames < 1:
-            raise ValueError(f"MotionCellModel.generate: n_frames must be a positive integer, got {n_frames!r}")
+            raise ValueError(
+                f"MotionCellModel.generate: n_frames must be a positive integer, got {n_frames!r}"
+            )
         cell = self.cell
         control = cell.control(action, body)
         layers = cell.initial_state(action, body, generator)

@@ -51,8 +51,10 @@ class OutputHead:
     def identity_offset(self, raw: Tensor) -> Tensor:
         """``raw`` ``(..., params_per_joint)`` moved so that zero means the identity rotation."""
         if raw.shape[-1] != self.params_per_joint:
-            raise ValueError(f"OutputHead({self.kind}): expected raw outputs (..., {self.params_per_joint}), "
-                             f"got {tuple(raw.shape)}")
+            raise ValueError(
+                f"OutputHead({self.kind}): expected raw outputs (..., {self.params_per_joint}), "
+                f"got {tuple(raw.shape)}"
+            )
         return raw + torch.tensor(_IDENTITY[self.kind], dtype=raw.dtype)
 
     def quaternions(self, params: Tensor) -> Tensor:
@@ -67,19 +69,23 @@ class OutputHead:
 def split_raw_pose(raw: Tensor, head: OutputHead, n_joints: int) -> tuple[Tensor, Tensor]:
     """Identity-offset rotation parameters ``(..., J - 1, p)`` and root channels ``(..., 6)`` of raw poses."""
     if raw.shape[-1] != head.raw_dim(n_joints):
-        raise ValueError(f"split_raw_pose: a raw {head.kind} pose has {head.raw_dim(n_joints)} numbers, got "
-                         f"{tuple(raw.shape)}")
+        raise ValueError(
+            f"split_raw_pose: a raw {head.kind} pose has {head.raw_dim(n_joints)} numbers, got "
+            f"{tuple(raw.shape)}"
+        )
     rotations = raw[..., :-ROOT_DIM].unflatten(-1, (n_joints - 1, head.params_per_joint))
     return head.identity_offset(rotations), raw[..., -ROOT_DIM:]
 
 
 def assemble_pose(quaternions: Tensor, root: Tensor) -> Tensor:
-    """A pose vector ``(..., (J - 1) * 4 + 6)`` from joint quaternions ``(..., J - 1, 4)`` and root channels."""
+    """A pose vector ``(..., (J - 1) * 4 + 6)`` from joint quaternions ``(..., J - 1, 4)`` and root
+    channels."""
     return torch.cat([quaternions.flatten(-2), root], dim=-1)
 
 
 class PosePrediction(NamedTuple):
-    """Predicted pose vectors ``(B, T, 90)`` and the rotation outputs before projection ``(B, T, J - 1, p)``."""
+    """Predicted pose vectors ``(B, T, 90)`` and the rotation outputs before projection ``(B, T, J - 1,
+    p)``."""
 
     poses: Tensor
     rotation_params: Tensor

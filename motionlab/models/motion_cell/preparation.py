@@ -29,7 +29,8 @@ from motionlab.train import TensorBatches, TrainConfig, TrainResult
 #: thread, 17 s on two; the denoised clips had the same fingerprint on one and on two threads).
 DENOISER_THREADS = 2
 
-#: Seeds of the capture noise on the training split and of the denoiser's noisy copies of the validation split.
+#: Seeds of the capture noise on the training split and of the denoiser's noisy copies of the validation
+#: split.
 CAPTURE_SEED, DENOISER_DATA_SEED = 1, 2
 
 
@@ -42,7 +43,8 @@ class PreparedData(NamedTuple):
         batches: windows of the denoised training split (:class:`WindowBatches`).
         fingerprint: identifies the denoised data in the models' cache keys.
         denoiser: the trained denoiser; denoiser_result: its training result.
-        errors: mean joint-rotation error (degrees) against the clean clips, ``"captured"`` and ``"denoised"``.
+        errors: mean joint-rotation error (degrees) against the clean clips, ``"captured"`` and
+        ``"denoised"``.
     """
 
     codec: PoseCodec
@@ -58,8 +60,10 @@ def cut_windows(poses: Tensor, length: int) -> Tensor:
     """Consecutive non-overlapping windows ``(N * (T // length), length, D)`` of clips ``(N, T, D)``."""
     n_windows = poses.shape[1] // length
     if n_windows < 1:
-        raise ValueError(f"cut_windows: clips of {poses.shape[1]} frames are shorter than one window of {length}")
-    return poses[:, :n_windows * length].reshape(poses.shape[0] * n_windows, length, poses.shape[2])
+        raise ValueError(
+            f"cut_windows: clips of {poses.shape[1]} frames are shorter than one window of {length}"
+        )
+    return poses[:, : n_windows * length].reshape(poses.shape[0] * n_windows, length, poses.shape[2])
 
 
 def rotation_error_degrees(codec: PoseCodec, poses: Tensor, clean: Tensor) -> float:
@@ -67,31 +71,59 @@ def rotation_error_degrees(codec: PoseCodec, poses: Tensor, clean: Tensor) -> fl
     return float(torch.rad2deg(quat_geodesic(codec.split(poses)[0], codec.split(clean)[0]).mean()))
 
 
-def prepare_training_data(train: MotionSet, val: MotionSet, settings: ChapterSettings,
-                          progress: bool | None = None) -> PreparedData:
-    """Capture the training split with noise, train the denoiser on the validation split, denoise the capture."""
+def prepare_training_data(
+    train: MotionSet, val: MotionSet, settings: ChapterSettings, progress: bool | None = None
+) -> PreparedData:
+    """Capture the training split with noise, train the denoiser on the validation split, denoise the
+    capture."""
     captured = noisy_features(train.rotations, train.positions, CAPTURE_SEED)
     codec = PoseCodec(train.offsets, train.parents.tolist()).fit(captured)
     clean_val = codec.encode(motion_cell_features(val.rotations, val.positions))
     rng = np.random.default_rng(DENOISER_DATA_SEED)
-    noisy_val = torch.cat([codec.encode(noisy_features(val.rotations, val.positions, rng))
-                           for _ in range(settings.denoiser_copies)])
-    pairs = TensorBatches((cut_windows(noisy_val, settings.window),
-                           cut_windows(clean_val.repeat(settings.denoiser_copies, 1, 1), settings.window)))
+    noisy_val = torch.cat(
+        [
+            codec.encode(noisy_features(val.rotations, val.positions, rng))
+            for _ in range(settings.denoiser_copies)
+        ]
+    )
+    pairs = TensorBatches(
+        (
+            cut_windows(noisy_val, settings.window),
+            cut_windows(clean_val.repeat(settings.denoiser_copies, 1, 1), settings.window),
+        )
+    )
     denoiser_cfg = settings.denoiser
     loss_cfg = LossConfig()
-    train_cfg = TrainConfig(steps=settings.denoiser_steps, batch_size=min(settings.denoiser_batch, len(pairs)),
-                            lr=settings.denoiser_lr, checkpoint_every=None)
+    train_cfg = TrainConfig(
+        steps=settings.denoiser_steps,
+        batch_size=min(settings.denoiser_batch, len(pairs)),
+        lr=settings.denoiser_lr,
+        checkpoint_every=None,
+    )
     with config.threads(DENOISER_THREADS):
-        denoiser, result = train_model("mcell_denoiser", denoiser_cfg, codec, denoiser_loss(loss_cfg), pairs, train_cfg,
-                                       data_config={"val": data_fingerprint(noisy_val.numpy()),
-                                                    "codec": data_fingerprint(captured.numpy()),
-                                                    "window": settings.window},
-                                       loss_config=loss_cfg, progress=progress)
+        denoiser, result = train_model(
+            "mcell_denoiser",
+            denoiser_cfg,
+            codec,
+            denoiser_loss(loss_cfg),
+            pairs,
+            train_cfg,
+            data_config={
+                "val": data_fingerprint(noisy_val.numpy()),
+                "codec": data_fingerprint(captured.numpy()),
+                "window": settings.window,
+            },
+            loss_config=loss_cfg,
+            progress=progress,
+        )
     captured_poses = codec.encode(captured)
     denoised = denoiser.denoise(captured_poses)
     clean = codec.encode(motion_cell_features(train.rotations, train.positions))
-    errors = {"captured": rotation_error_degrees(codec, captured_poses, clean),
-              "denoised": rotation_error_degrees(codec, denoised, clean)}
+    errors = {
+        "captured": rotation_error_degrees(codec, captured_poses, clean),
+        "denoised": rotation_error_degrees(codec, denoised, clean),
+    }
     batches = WindowBatches(denoised, train.action, train.body, settings.window)
-    return PreparedData(codec, captured_poses, batches, data_fingerprint(denoised.numpy()), denoiser, result, errors)
+    return PreparedData(
+        codec, captured_poses, batches, data_fingerprint(denoised.numpy()), denoiser, result, errors
+    )

@@ -11,7 +11,7 @@ from typing import NamedTuple
 
 from torch import nn
 
-from motionlab.evaluation.benchmark import Benchmark, cache_benchmark_evaluator, benchmark_evaluator
+from motionlab.evaluation.benchmark import Benchmark, benchmark_evaluator, cache_benchmark_evaluator
 from motionlab.evaluation.evaluator import Evaluator
 from motionlab.models.motion_cell.jobs import Job, chapter_jobs, job_is_cached, train_job, uses_classifier
 from motionlab.models.motion_cell.preparation import PreparedData, prepare_training_data
@@ -45,8 +45,13 @@ class ChapterModels(NamedTuple):
     trained: dict[Job, float]
 
 
-def train_chapter(benchmark: Benchmark, settings: ChapterSettings, jobs: list[Job] | None = None,
-                  processes: int = 2, progress: bool | None = None) -> ChapterModels:
+def train_chapter(
+    benchmark: Benchmark,
+    settings: ChapterSettings,
+    jobs: list[Job] | None = None,
+    processes: int = 2,
+    progress: bool | None = None,
+) -> ChapterModels:
     """Train (or load) everything the chapter needs on the benchmark, using both cores of the course machine.
 
     Every run uses one thread, so ``processes`` run at a time in worker processes (the shared pool): the two
@@ -63,8 +68,16 @@ def train_chapter(benchmark: Benchmark, settings: ChapterSettings, jobs: list[Jo
     for future in evaluators_ready:  # the workers' classifier loss loads the conv evaluator from the cache
         future.result()
     pending = [job for job in jobs if not job_is_cached(job, settings, data)]
-    trained = dict(zip(pending, run_in_workers(_train_in_worker, [(job, settings, data) for job in pending], processes)))
+    trained = dict(
+        zip(pending, run_in_workers(_train_in_worker, [(job, settings, data) for job in pending], processes))
+    )
     conv, gru = benchmark_evaluator("conv"), benchmark_evaluator("gru")
     loaded = {job: train_job(job, settings, data, conv, progress=progress) for job in jobs}
-    return ChapterModels(data, conv, gru, {job: m for job, (m, _) in loaded.items()},
-                         {job: r for job, (_, r) in loaded.items()}, trained)
+    return ChapterModels(
+        data,
+        conv,
+        gru,
+        {job: m for job, (m, _) in loaded.items()},
+        {job: r for job, (_, r) in loaded.items()},
+        trained,
+    )

@@ -31,7 +31,11 @@ def build_model(cfg: ModelConfig, codec: PoseCodec, seed: int = 0) -> nn.Module:
 
     The model gets its own copy of ``codec``, so models never share (and overwrite) buffers.
     """
-    builders = {MotionCellConfig: MotionCellModel, BaselineConfig: FrameBaseline, DenoiserConfig: DenoisingAutoencoder}
+    builders = {
+        MotionCellConfig: MotionCellModel,
+        BaselineConfig: FrameBaseline,
+        DenoiserConfig: DenoisingAutoencoder,
+    }
     if type(cfg) not in builders:
         raise TypeError(f"build_model: unknown config type {type(cfg).__name__}")
     own_codec = PoseCodec(codec.offsets, codec.parents)
@@ -39,7 +43,9 @@ def build_model(cfg: ModelConfig, codec: PoseCodec, seed: int = 0) -> nn.Module:
     return build_seeded(lambda: builders[type(cfg)](cfg, own_codec), seed)
 
 
-def motion_cell_schedules(steps: int, beta: float = 1.0, classifier: float = 0.0, word_drop: float = 0.0) -> dict[str, Schedule]:
+def motion_cell_schedules(
+    steps: int, beta: float = 1.0, classifier: float = 0.0, word_drop: float = 0.0
+) -> dict[str, Schedule]:
     """The Motion Cell's coefficient schedules over a run of ``steps``.
 
     * ``beta``: KL annealing: 0 for the first 10% (warm-up), linear to ``beta`` by 40%, held, then a
@@ -55,28 +61,55 @@ def motion_cell_schedules(steps: int, beta: float = 1.0, classifier: float = 0.0
         return int(round(fraction * steps))
 
     return {
-        "beta": KLAnneal(max_value=beta, warmup=at(0.1), anneal=at(0.3), cooldown_start=at(0.9), cooldown=at(0.1),
-                         cooldown_value=0.5 * beta),
+        "beta": KLAnneal(
+            max_value=beta,
+            warmup=at(0.1),
+            anneal=at(0.3),
+            cooldown_start=at(0.9),
+            cooldown=at(0.1),
+            cooldown_value=0.5 * beta,
+        ),
         "classifier": LinearRamp(at(0.3), at(0.2), 0.0, classifier),
         "word_drop": LinearRamp(at(0.1), at(0.5), 0.0, word_drop),
     }
 
 
-def is_cached(name: str, cfg: ModelConfig, train_config: TrainConfig, data_config: Any | None = None,
-              loss_config: Any | None = None) -> bool:
+def is_cached(
+    name: str,
+    cfg: ModelConfig,
+    train_config: TrainConfig,
+    data_config: Any | None = None,
+    loss_config: Any | None = None,
+) -> bool:
     """Whether :func:`train_model` with these arguments would load from the checkpoint cache."""
     return cache_entry_exists(name, {"model": cfg, "loss": loss_config}, train_config, data_config)
 
 
-def train_model(name: str, cfg: ModelConfig, codec: PoseCodec, loss_fn: LossFn, data: BatchSource,
-                train_config: TrainConfig, data_config: Any | None = None, loss_config: Any | None = None,
-                progress: bool | None = None) -> tuple[nn.Module, TrainResult]:
+def train_model(
+    name: str,
+    cfg: ModelConfig,
+    codec: PoseCodec,
+    loss_fn: LossFn,
+    data: BatchSource,
+    train_config: TrainConfig,
+    data_config: Any | None = None,
+    loss_config: Any | None = None,
+    progress: bool | None = None,
+) -> tuple[nn.Module, TrainResult]:
     """Build ``cfg``'s model (seeded by ``train_config.seed``) and train it, or load it from the cache.
 
     ``data_config`` (what defines the training data) and ``loss_config`` (the loss's fixed weights) go
     into the cache key with the model and training configs.
     """
     model = build_model(cfg, codec, train_config.seed)
-    result = train_or_load(name, {"model": cfg, "loss": loss_config}, model, loss_fn, data, train_config,
-                           data_config=data_config, progress=progress)
+    result = train_or_load(
+        name,
+        {"model": cfg, "loss": loss_config},
+        model,
+        loss_fn,
+        data,
+        train_config,
+        data_config=data_config,
+        progress=progress,
+    )
     return model, result

@@ -23,7 +23,9 @@ def to_words(poses: Tensor, length: int) -> Tensor:
 def from_words(words: Tensor, length: int) -> Tensor:
     """Poses ``(B, N * l, D)`` from words ``(B, N, l * D)`` (the inverse of :func:`to_words`)."""
     if words.dim() != 3 or words.shape[-1] % length:
-        raise ValueError(f"from_words: words must be (B, N, l * D) with l = {length}, got {tuple(words.shape)}")
+        raise ValueError(
+            f"from_words: words must be (B, N, l * D) with l = {length}, got {tuple(words.shape)}"
+        )
     return words.reshape(words.shape[0], words.shape[1] * length, words.shape[2] // length)
 
 

@@ -73,18 +73,29 @@ class ODMOConfig:
             if f.type == "bool" and not isinstance(value, bool):
                 raise ValueError(f"ODMOConfig.{f.name} must be True or False, got {value!r}")
         if self.n_frames < 2 or self.n_joints < 2:
-            raise ValueError(f"ODMOConfig: n_frames and n_joints must be at least 2, got {self.n_frames}, {self.n_joints}")
+            raise ValueError(
+                f"ODMOConfig: n_frames and n_joints must be at least 2, got {self.n_frames}, {self.n_joints}"
+            )
         for name in ("margin", "same_class_slack", "prior_variance", "contrastive_weight", "prior_weight"):
             value = getattr(self, name)
-            if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value) or value < 0:
+            if (
+                isinstance(value, bool)
+                or not isinstance(value, (int, float))
+                or not math.isfinite(value)
+                or value < 0
+            ):
                 raise ValueError(f"ODMOConfig.{name} must be a finite non-negative number, got {value!r}")
         if self.margin == 0 or self.prior_variance == 0:
             raise ValueError("ODMOConfig: margin and prior_variance must be positive")
         if self.prior_target not in PRIOR_TARGETS:
-            raise ValueError(f"ODMOConfig.prior_target must be one of {PRIOR_TARGETS}, got {self.prior_target!r}")
+            raise ValueError(
+                f"ODMOConfig.prior_target must be one of {PRIOR_TARGETS}, got {self.prior_target!r}"
+            )
         if self.use_consistency and not self.use_trajectory_loss:
-            raise ValueError("ODMOConfig: the consistency loss is part of the trajectory losses; "
-                             "-L_traj switches both off (use_consistency=False, use_trajectory_loss=False)")
+            raise ValueError(
+                "ODMOConfig: the consistency loss is part of the trajectory losses; "
+                "-L_traj switches both off (use_consistency=False, use_trajectory_loss=False)"
+            )
 
     @property
     def lmp_dim(self) -> int:

@@ -11,9 +11,11 @@ apart until they are ``α`` apart (the margin, 5 in the paper), and then stop in
 **Prior term**, with the encoder's :math:`q(z \mid x) = \mathcal N(\mu, \mathrm{diag}\, s^2)` and the
 prior variance :math:`\sigma^2` (0.05):
 
-* the paper's equation, ``"code"``: :math:`\mathrm{KL}(\mathcal N(\mu, s^2)\,\Vert\,\mathcal N(0, \sigma^2 I))`,
+* the paper's equation, ``"code"``: :math:`\mathrm{KL}(\mathcal N(\mu, s^2)\,\Vert\,\mathcal N(0, \sigma^2
+I))`,
   which also pulls every :math:`\mu` towards the origin with stiffness :math:`1/\sigma^2 = 20`;
-* the reference implementation, ``"noise"``: :math:`\mathrm{KL}(\mathcal N(0, s^2)\,\Vert\,\mathcal N(0, \sigma^2 I))`,
+* the reference implementation, ``"noise"``: :math:`\mathrm{KL}(\mathcal N(0, s^2)\,\Vert\,\mathcal N(0,
+\sigma^2 I))`,
   the noise alone, so that :math:`\mu` is shaped only by the contrastive term (and the reconstruction);
 * a standard VAE, ``"standard"``: :math:`\mathrm{KL}(\mathcal N(\mu, s^2)\,\Vert\,\mathcal N(0, I))`.
 
@@ -41,11 +43,15 @@ def contrastive_loss(mu_a: Tensor, mu_b: Tensor, same: Tensor, margin: float, sl
     within ``slack`` of each other (the reference implementation uses 0.5).
     """
     if mu_a.shape != mu_b.shape or mu_a.dim() != 2:
-        raise ValueError(f"contrastive_loss: mu_a and mu_b must both be (P, D), got {tuple(mu_a.shape)} and "
-                         f"{tuple(mu_b.shape)}")
+        raise ValueError(
+            f"contrastive_loss: mu_a and mu_b must both be (P, D), got {tuple(mu_a.shape)} and "
+            f"{tuple(mu_b.shape)}"
+        )
     if same.shape != mu_a.shape[:1] or same.dtype != torch.bool:
-        raise ValueError(f"contrastive_loss: same must be a bool tensor ({mu_a.shape[0]},), got {same.dtype} "
-                         f"{tuple(same.shape)}")
+        raise ValueError(
+            f"contrastive_loss: same must be a bool tensor ({mu_a.shape[0]},), got {same.dtype} "
+            f"{tuple(same.shape)}"
+        )
     if not margin > 0:
         raise ValueError(f"contrastive_loss: margin must be positive, got {margin}")
     squared = (mu_a - mu_b).pow(2).sum(dim=-1)
@@ -57,7 +63,8 @@ def contrastive_loss(mu_a: Tensor, mu_b: Tensor, same: Tensor, margin: float, sl
 
 
 def prior_term(mu: Tensor, logvar: Tensor, prior_variance: float, target: str) -> Tensor:
-    """The prior term of each clip ``(B,)`` (KL summed over the ``D`` code dimensions; see the module notes)."""
+    """The prior term of each clip ``(B,)`` (KL summed over the ``D`` code dimensions; see the module
+    notes)."""
     if target not in PRIOR_TARGETS:
         raise ValueError(f"prior_term: target must be one of {PRIOR_TARGETS}, got {target!r}")
     if not prior_variance > 0:
@@ -81,19 +88,27 @@ def balanced_pairs(labels: Tensor, generator: torch.Generator | None = None) -> 
         ``same[k]`` says whether they share a class. The first ``B`` pairs are the same-class ones.
     """
     if labels.dim() != 1 or labels.is_floating_point():
-        raise ValueError(f"balanced_pairs: labels must be a 1-D integer tensor, got {labels.dtype} {tuple(labels.shape)}")
+        raise ValueError(
+            f"balanced_pairs: labels must be a 1-D integer tensor, got {labels.dtype} {tuple(labels.shape)}"
+        )
     classes, counts = labels.unique(return_counts=True)
     if classes.numel() < 2:
-        raise ValueError("balanced_pairs: a batch needs clips of at least 2 classes for different-class pairs")
+        raise ValueError(
+            "balanced_pairs: a batch needs clips of at least 2 classes for different-class pairs"
+        )
     if bool((counts < 2).any()):
-        raise ValueError(f"balanced_pairs: classes {classes[counts < 2].tolist()} have a single clip in the batch; "
-                         "every class needs 2 for a same-class pair")
+        raise ValueError(
+            f"balanced_pairs: classes {classes[counts < 2].tolist()} have a single clip in the batch; "
+            "every class needs 2 for a same-class pair"
+        )
     n = labels.shape[0]
     same_class = labels[:, None] == labels[None, :]
     anchor = torch.arange(n)
     # a uniformly random admissible partner per row: the argmax of random scores over the allowed entries
     scores = torch.rand(2, n, n, generator=generator)
-    partner_same = torch.where(same_class & (anchor[:, None] != anchor[None, :]), scores[0], -1.0).argmax(dim=1)
+    partner_same = torch.where(same_class & (anchor[:, None] != anchor[None, :]), scores[0], -1.0).argmax(
+        dim=1
+    )
     partner_other = torch.where(~same_class, scores[1], -1.0).argmax(dim=1)
     first = torch.cat([anchor, anchor])
     second = torch.cat([partner_same, partner_other])
@@ -110,11 +125,15 @@ class BalancedBatches:
 
     def __init__(self, features: Tensor, labels: Tensor, n_classes: int) -> None:
         if labels.dim() != 1 or labels.shape[0] != features.shape[0]:
-            raise ValueError(f"BalancedBatches: labels must be ({features.shape[0]},), got {tuple(labels.shape)}")
+            raise ValueError(
+                f"BalancedBatches: labels must be ({features.shape[0]},), got {tuple(labels.shape)}"
+            )
         counts = torch.bincount(labels, minlength=n_classes)
         if counts.numel() != n_classes or bool((counts < 2).any()):
-            raise ValueError(f"BalancedBatches: every one of the {n_classes} classes needs at least 2 clips, "
-                             f"got counts {counts.tolist()}")
+            raise ValueError(
+                f"BalancedBatches: every one of the {n_classes} classes needs at least 2 clips, "
+                f"got counts {counts.tolist()}"
+            )
         self.features = features
         self.labels = labels
         self.n_classes = n_classes
@@ -123,16 +142,20 @@ class BalancedBatches:
     def per_class(self, batch_size: int) -> int:
         """Clips of each class in a batch of ``batch_size`` (which must be a multiple of the class count)."""
         if batch_size % self.n_classes or batch_size < 2 * self.n_classes:
-            raise ValueError(f"BalancedBatches: batch_size must be a multiple of {self.n_classes} classes with at "
-                             f"least 2 clips each, got {batch_size}")
+            raise ValueError(
+                f"BalancedBatches: batch_size must be a multiple of {self.n_classes} classes with at "
+                f"least 2 clips each, got {batch_size}"
+            )
         return batch_size // self.n_classes
 
-    def __call__(self, epoch: int, generator: torch.Generator, batch_size: int) -> Iterator[tuple[Tensor, Tensor]]:
+    def __call__(
+        self, epoch: int, generator: torch.Generator, batch_size: int
+    ) -> Iterator[tuple[Tensor, Tensor]]:
         k = self.per_class(batch_size)
         shuffled = [m[torch.randperm(m.numel(), generator=generator)] for m in self.members]
         n_batches = min(m.numel() for m in shuffled) // k
         if n_batches == 0:
             raise ValueError(f"BalancedBatches: the smallest class has fewer than {k} clips for one batch")
         for b in range(n_batches):
-            index = torch.cat([m[b * k:(b + 1) * k] for m in shuffled])
+            index = torch.cat([m[b * k : (b + 1) * k] for m in shuffled])
             yield self.features[index], self.labels[index]

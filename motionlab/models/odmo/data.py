@@ -1,4 +1,5 @@
-"""ODMO's data: benchmark clips as local movement profile + root trajectory, and generated features back to positions.
+"""ODMO's data: benchmark clips as local movement profile + root trajectory, and generated features back to
+positions.
 
 Preparation (:func:`prepare`) does three things to each clip of a :class:`~motionlab.data.store.MotionSet`:
 
@@ -74,19 +75,27 @@ def lowest_first_joint(features: Tensor) -> Tensor:
 
 
 def prepare(data: MotionSet, frame_stride: int = 3, floor_clearance: float | None = None) -> ODMOData:
-    """ODMO features of a motion set (see the module notes); ``floor_clearance`` defaults to this set's own."""
+    """ODMO features of a motion set (see the module notes); ``floor_clearance`` defaults to this set's
+    own."""
     if isinstance(frame_stride, bool) or not isinstance(frame_stride, int) or frame_stride < 1:
         raise ValueError(f"prepare: frame_stride must be a positive integer, got {frame_stride!r}")
     if data.n_frames < 2 * frame_stride:
-        raise ValueError(f"prepare: clips of {data.n_frames} frames are too short for frame_stride {frame_stride}")
+        raise ValueError(
+            f"prepare: clips of {data.n_frames} frames are too short for frame_stride {frame_stride}"
+        )
     positions = face_forward(torch.as_tensor(data.positions), torch.as_tensor(data.rotations))
     features = to_odmo(positions)[:, ::frame_stride].contiguous()
     if floor_clearance is None:
         root_height = torch.as_tensor(data.positions[:, 0, 0, 2])
         floor_clearance = float((root_height + lowest_first_joint(features)).mean())
-    return ODMOData(features.float(), torch.as_tensor(data.action, dtype=torch.int64),
-                    torch.as_tensor(data.mode, dtype=torch.int64), torch.as_tensor(data.body, dtype=torch.int64),
-                    frame_stride, float(floor_clearance))
+    return ODMOData(
+        features.float(),
+        torch.as_tensor(data.action, dtype=torch.int64),
+        torch.as_tensor(data.mode, dtype=torch.int64),
+        torch.as_tensor(data.body, dtype=torch.int64),
+        frame_stride,
+        float(floor_clearance),
+    )
 
 
 def upsample_frames(x: Tensor, factor: int) -> Tensor:
@@ -112,11 +121,12 @@ def to_positions(features: Tensor, frame_stride: int, floor_clearance: float) ->
     """
     check_tensor(features, "features", "to_positions", (None,), min_leading=2)
     if features.dim() != 3 or features.shape[-1] % 3 or features.shape[-1] < 6:
-        raise ValueError(f"to_positions: features must be (N, T, 3 (J - 1) + 3) with J >= 2 joints, got "
-                         f"{tuple(features.shape)}")
+        raise ValueError(
+            f"to_positions: features must be (N, T, 3 (J - 1) + 3) with J >= 2 joints, got "
+            f"{tuple(features.shape)}"
+        )
     height = floor_clearance - lowest_first_joint(features)
     start = torch.zeros(features.shape[0], 3, dtype=features.dtype)
     start[:, 2] = height
     positions = from_odmo(features, RootStart(start, torch.zeros(features.shape[0], dtype=features.dtype)))
     return upsample_frames(positions, frame_stride)
-

@@ -26,8 +26,12 @@ class LMPEncoder(nn.Module):
         self.lstm = nn.LSTM(cfg.lmp_dim, cfg.encoder_hidden, batch_first=True)
         width = cfg.encoder_mlp
         self.head = nn.Sequential(
-            nn.Linear(cfg.encoder_hidden, width), nn.BatchNorm1d(width), nn.PReLU(),
-            nn.Linear(width, width), nn.BatchNorm1d(width), nn.PReLU(),
+            nn.Linear(cfg.encoder_hidden, width),
+            nn.BatchNorm1d(width),
+            nn.PReLU(),
+            nn.Linear(width, width),
+            nn.BatchNorm1d(width),
+            nn.PReLU(),
             nn.Linear(width, 2 * cfg.code_dim),
         )
 

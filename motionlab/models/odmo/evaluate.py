@@ -24,7 +24,15 @@ from torch import Tensor
 from motionlab.data.store import MotionSet
 from motionlab.evaluation.benchmark import feature_metrics, sample_metrics
 from motionlab.evaluation.evaluator import Evaluator
-from motionlab.metrics import Interval, adjusted_rand_index, end_point_error, mean_ci, mode_homogeneity, n_apd, repeat_metric
+from motionlab.metrics import (
+    Interval,
+    adjusted_rand_index,
+    end_point_error,
+    mean_ci,
+    mode_homogeneity,
+    n_apd,
+    repeat_metric,
+)
 from motionlab.models.odmo.customize import end_point_sweep, to_end_point
 from motionlab.models.odmo.data import prepare, to_positions
 from motionlab.models.odmo.modes import ModeSet
@@ -41,8 +49,8 @@ class Reference:
     Attributes:
         evaluator: the frozen GRU evaluation classifier.
         train_features: its features of the training clips ``(N, 30)`` (FID's reference).
-        real_positions: held-out real clips ``(M, T, J, 3)``, starting at the origin facing +x (n-APD's reference).
-        real_action: their actions ``(M,)``.
+        real_positions: held-out real clips ``(M, T, J, 3)``, starting at the origin facing +x (n-APD's
+        reference). real_action: their actions ``(M,)``.
     """
 
     evaluator: Evaluator
@@ -51,57 +59,88 @@ class Reference:
     real_action: np.ndarray
 
     @classmethod
-    def build(cls, evaluator: Evaluator, train: MotionSet, held_out: MotionSet, floor_clearance: float) -> Reference:
-        """FID against the ``train`` clips, n-APD against the ``held_out`` ones (e.g. the validation split)."""
-        return cls(evaluator, evaluator.features(train.positions), canonical_positions(held_out, floor_clearance),
-                   np.asarray(held_out.action))
+    def build(
+        cls, evaluator: Evaluator, train: MotionSet, held_out: MotionSet, floor_clearance: float
+    ) -> Reference:
+        """FID against the ``train`` clips, n-APD against the ``held_out`` ones (e.g. the validation
+        split)."""
+        return cls(
+            evaluator,
+            evaluator.features(train.positions),
+            canonical_positions(held_out, floor_clearance),
+            np.asarray(held_out.action),
+        )
 
 
 def canonical_positions(data: MotionSet, floor_clearance: float) -> Tensor:
-    """Joint positions ``(N, T, J, 3)`` of real clips moved to start at the origin facing +x, like generated ones."""
+    """Joint positions ``(N, T, J, 3)`` of real clips moved to start at the origin facing +x, like generated
+    ones."""
     return to_positions(prepare(data, 1, floor_clearance).features, 1, floor_clearance)
 
 
-def set_metrics(reference: Reference, positions: Tensor | np.ndarray, action: np.ndarray,
-                rng: np.random.Generator) -> dict[str, float]:
+def set_metrics(
+    reference: Reference, positions: Tensor | np.ndarray, action: np.ndarray, rng: np.random.Generator
+) -> dict[str, float]:
     """One row of Tables 1–2 for one set of clips ``(N, T, J, 3)`` of actions ``(N,)``."""
     row = sample_metrics(reference.evaluator, positions, action, reference.train_features, rng)
-    row["n_apd"] = n_apd(torch.as_tensor(positions).flatten(2), action, reference.real_positions.flatten(2),
-                         reference.real_action)
+    row["n_apd"] = n_apd(
+        torch.as_tensor(positions).flatten(2),
+        action,
+        reference.real_positions.flatten(2),
+        reference.real_action,
+    )
     return {name: row[name] for name in METRICS}
 
 
-def metric_row(reference: Reference, sampler: ODMOSampler, n_per_class: int, n_sets: int = 10,
-               seed: int = 0) -> dict[str, Interval]:
-    """One row of Tables 1–2: ``{metric: Interval}`` over ``n_sets`` sample sets of ``n_per_class`` clips per class."""
+def metric_row(
+    reference: Reference, sampler: ODMOSampler, n_per_class: int, n_sets: int = 10, seed: int = 0
+) -> dict[str, Interval]:
+    """One row of Tables 1–2: ``{metric: Interval}`` over ``n_sets`` sample sets of ``n_per_class`` clips per
+    class."""
+
     def draw(generator: torch.Generator) -> tuple[Samples, np.random.Generator]:
         rng = np.random.default_rng(generator.initial_seed())
         return sampler.sample_classes(n_per_class, rng), rng
 
-    return repeat_metric(lambda drawn: set_metrics(reference, drawn[0].positions, drawn[0].action, drawn[1]),
-                         draw, n_sets, seed)
+    return repeat_metric(
+        lambda drawn: set_metrics(reference, drawn[0].positions, drawn[0].action, drawn[1]),
+        draw,
+        n_sets,
+        seed,
+    )
 
 
-def real_row(reference: Reference, test: MotionSet, floor_clearance: float, n_sets: int = 10,
-             seed: int = 0) -> dict[str, Interval]:
+def real_row(
+    reference: Reference, test: MotionSet, floor_clearance: float, n_sets: int = 10, seed: int = 0
+) -> dict[str, Interval]:
     """The "real data" row: the test clips measured like a sample set (n-APD against the reference's clips).
 
     The clips are fixed; the repeats redraw the Diversity and Multimodality pairs.
     """
     positions, action = canonical_positions(test, floor_clearance), np.asarray(test.action)
     features, probs = reference.evaluator.features_and_probs(positions, "action")
-    real_n_apd = n_apd(positions.flatten(2), action, reference.real_positions.flatten(2), reference.real_action)
+    real_n_apd = n_apd(
+        positions.flatten(2), action, reference.real_positions.flatten(2), reference.real_action
+    )
 
-    def row(rng: np.random.Generator) -> dict[str, float]:  # set_metrics, with the fixed clips' parts computed once
-        metrics = {**feature_metrics(features, probs, action, reference.train_features, rng), "n_apd": real_n_apd}
+    def row(
+        rng: np.random.Generator,
+    ) -> dict[str, float]:  # set_metrics, with the fixed clips' parts computed once
+        metrics = {
+            **feature_metrics(features, probs, action, reference.train_features, rng),
+            "n_apd": real_n_apd,
+        }
         return {name: metrics[name] for name in METRICS}
 
     return repeat_metric(row, lambda generator: np.random.default_rng(generator.initial_seed()), n_sets, seed)
 
 
-def mode_homogeneity_interval(reference: Reference, sampler: ODMOSampler, n_per_mode: int, n_sets: int = 10,
-                              seed: int = 0) -> Interval:
-    """Table 3: homogeneity of the true styles (recognised by the evaluator) among clips of each discovered mode."""
+def mode_homogeneity_interval(
+    reference: Reference, sampler: ODMOSampler, n_per_mode: int, n_sets: int = 10, seed: int = 0
+) -> Interval:
+    """Table 3: homogeneity of the true styles (recognised by the evaluator) among clips of each discovered
+    mode."""
+
     def draw(generator: torch.Generator) -> tuple[np.ndarray, np.ndarray]:
         clips = sampler.sample_modes(n_per_mode, np.random.default_rng(generator.initial_seed()))
         found = sampler.modes.global_ids(clips.action, clips.mode)
@@ -110,9 +149,11 @@ def mode_homogeneity_interval(reference: Reference, sampler: ODMOSampler, n_per_
     return repeat_metric(lambda drawn: mode_homogeneity(*drawn), draw, n_sets, seed)
 
 
-def end_point_control(reference: Reference, sampler: ODMOSampler, n_codes: int = 40, n_end_points: int = 10,
-                      seed: int = 0) -> dict[str, Interval]:
-    """Table 4: ``accuracy`` and ``dist_e`` (metres) of end-point customisation, intervals over the code groups.
+def end_point_control(
+    reference: Reference, sampler: ODMOSampler, n_codes: int = 40, n_end_points: int = 10, seed: int = 0
+) -> dict[str, Interval]:
+    """Table 4: ``accuracy`` and ``dist_e`` (metres) of end-point customisation, intervals over the code
+    groups.
 
     For each class, ``n_codes`` training codes are picked at random; each is sent to ``n_end_points`` end
     points from its own clip's end point to that of another random clip of the class. ``dist_e`` is measured
@@ -126,17 +167,26 @@ def end_point_control(reference: Reference, sampler: ODMOSampler, n_codes: int =
         members = np.flatnonzero(modes.action == action)
         source = rng.choice(members, size=n_codes)
         other = rng.choice(members, size=n_codes)
-        targets = np.concatenate([end_point_sweep(modes.end_points[s], modes.end_points[o], n_end_points)
-                                  for s, o in zip(source, other)])
+        targets = np.concatenate(
+            [
+                end_point_sweep(modes.end_points[s], modes.end_points[o], n_end_points)
+                for s, o in zip(source, other)
+            ]
+        )
         clips = to_end_point(sampler, action, np.repeat(modes.codes[source], n_end_points, axis=0), targets)
-        correct = (reference.evaluator.predict(clips.positions).numpy() == action).reshape(n_codes, n_end_points)
+        correct = (reference.evaluator.predict(clips.positions).numpy() == action).reshape(
+            n_codes, n_end_points
+        )
         accuracy.extend(correct.mean(axis=1))
         grouped_targets = targets.reshape(n_codes, n_end_points, 3)
         for paths, found in ((clips.features[..., -3:], distance), (clips.trajectory, trajectory_distance)):
             grouped = paths.numpy().reshape(n_codes, n_end_points, -1, 3)
             found.extend(end_point_error(p, t) for p, t in zip(grouped, grouped_targets))
-    return {"accuracy": _interval(accuracy), "dist_e": _interval(distance),
-            "dist_e_trajectory": _interval(trajectory_distance)}
+    return {
+        "accuracy": _interval(accuracy),
+        "dist_e": _interval(distance),
+        "dist_e_trajectory": _interval(trajectory_distance),
+    }
 
 
 def _interval(values: list[float]) -> Interval:
@@ -148,6 +198,12 @@ def mode_recovery(modes: ModeSet, true_mode: np.ndarray) -> np.ndarray:
     """Adjusted Rand index between discovered and true modes of the training codes, per action ``(A,)``."""
     true_mode = np.asarray(true_mode)
     if true_mode.shape != modes.labels.shape:
-        raise ValueError(f"mode_recovery: true_mode must be ({modes.labels.shape[0]},), got {true_mode.shape}")
-    return np.array([adjusted_rand_index(modes.labels[modes.action == a], true_mode[modes.action == a])
-                     for a in range(len(modes.classes))])
+        raise ValueError(
+            f"mode_recovery: true_mode must be ({modes.labels.shape[0]},), got {true_mode.shape}"
+        )
+    return np.array(
+        [
+            adjusted_rand_index(modes.labels[modes.action == a], true_mode[modes.action == a])
+            for a in range(len(modes.classes))
+        ]
+    )

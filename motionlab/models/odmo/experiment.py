@@ -66,20 +66,34 @@ class Measured(NamedTuple):
     end_point: dict[str, Interval] | None
 
 
-def measure_variant(variant: str, model: ODMO, data: ODMOData, reference: Reference, plan: MeasurePlan) -> Measured:
+def measure_variant(
+    variant: str, model: ODMO, data: ODMOData, reference: Reference, plan: MeasurePlan
+) -> Measured:
     """Build the samplers of a trained ``model`` and measure what ``plan`` asks of ``variant``."""
     codes = encode_clips(model, data)  # once, for every sampler of the variant
     modes = ODMOSampler.from_codes(model, codes, data, kind="modes")
-    samplers = {"table": ODMOSampler.from_codes(model, codes, data, kind="prior") if variant in plan.prior_sampled
-                else modes, "modes": modes}
+    samplers = {
+        "table": ODMOSampler.from_codes(model, codes, data, kind="prior")
+        if variant in plan.prior_sampled
+        else modes,
+        "modes": modes,
+    }
     rows = {variant: metric_row(reference, samplers["table"], plan.n_per_class, plan.n_sets)}
     if variant in plan.conventional:
         samplers["conventional"] = ODMOSampler.from_codes(model, codes, data, kind="conventional")
-        rows[f"{variant}_conv"] = metric_row(reference, samplers["conventional"], plan.n_per_class, plan.n_sets)
-    homogeneity = (mode_homogeneity_interval(reference, modes, plan.n_per_mode, plan.n_sets)
-                   if variant in plan.homogeneity else None)
-    end_point = (end_point_control(reference, modes, plan.n_codes, plan.n_end_points)
-                 if variant in plan.end_point else None)
+        rows[f"{variant}_conv"] = metric_row(
+            reference, samplers["conventional"], plan.n_per_class, plan.n_sets
+        )
+    homogeneity = (
+        mode_homogeneity_interval(reference, modes, plan.n_per_mode, plan.n_sets)
+        if variant in plan.homogeneity
+        else None
+    )
+    end_point = (
+        end_point_control(reference, modes, plan.n_codes, plan.n_end_points)
+        if variant in plan.end_point
+        else None
+    )
     return Measured(samplers, rows, homogeneity, end_point)
 
 
@@ -89,26 +103,42 @@ def _train_in_worker(variant: str, cfg: ODMOConfig, data: ODMOData, training: OD
     return result.metrics["train_seconds"]
 
 
-def _measure_in_worker(variant: str, cfg: ODMOConfig, data: ODMOData, training: ODMOTraining, reference: Reference,
-                       plan: MeasurePlan) -> Measured:
+def _measure_in_worker(
+    variant: str,
+    cfg: ODMOConfig,
+    data: ODMOData,
+    training: ODMOTraining,
+    reference: Reference,
+    plan: MeasurePlan,
+) -> Measured:
     """Body of a worker call: load a trained variant from the cache (its chain trained it) and measure it."""
     model, _ = train_odmo(variant, cfg, data, training, progress=False)
     return measure_variant(variant, model, data, reference, plan)
 
 
-def train_and_measure(configs: dict[str, ODMOConfig], data: ODMOData, training: ODMOTraining, reference: Reference,
-                      plan: MeasurePlan, processes: int = 2
-                      ) -> tuple[dict[str, ODMO], dict[str, TrainResult], dict[str, float], dict[str, Measured]]:
+def train_and_measure(
+    configs: dict[str, ODMOConfig],
+    data: ODMOData,
+    training: ODMOTraining,
+    reference: Reference,
+    plan: MeasurePlan,
+    processes: int = 2,
+) -> tuple[dict[str, ODMO], dict[str, TrainResult], dict[str, float], dict[str, Measured]]:
     """Train (or load) every ``{variant: config}`` and measure it, ``processes`` calls at a time.
 
     Trainings start in the order of ``configs`` (put one whose measurement is short last). Returns the
     models and training results (loaded here from the cache), the training seconds of the variants trained
     now, and every variant's :class:`Measured`; all keyed like ``configs``.
     """
-    trainings = {variant: (_train_in_worker, (variant, cfg, data, training)) for variant, cfg in configs.items()
-                 if not is_cached(run_name(variant), cfg, training.train_config(), odmo_data_config(data))}
-    measurements = {variant: (_measure_in_worker, (variant, cfg, data, training, reference, plan))
-                    for variant, cfg in configs.items()}
+    trainings = {
+        variant: (_train_in_worker, (variant, cfg, data, training))
+        for variant, cfg in configs.items()
+        if not is_cached(run_name(variant), cfg, training.train_config(), odmo_data_config(data))
+    }
+    measurements = {
+        variant: (_measure_in_worker, (variant, cfg, data, training, reference, plan))
+        for variant, cfg in configs.items()
+    }
     seconds, measured = run_paired(trainings, measurements, processes)
     models, results = {}, {}
     for variant, cfg in configs.items():

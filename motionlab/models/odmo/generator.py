@@ -23,7 +23,8 @@ from motionlab.models.odmo.trajectory import class_code_condition
 
 
 class MotionGenerator(nn.Module):
-    """``trajectory (B, T, 3)``, ``code (B, D)``, ``action (B,)`` -> motion features ``(B, T, 3 (J - 1) + 3)``."""
+    """``trajectory (B, T, 3)``, ``code (B, D)``, ``action (B,)`` -> motion features ``(B, T, 3 (J - 1) +
+    3)``."""
 
     def __init__(self, cfg: ODMOConfig) -> None:
         super().__init__()
@@ -39,8 +40,15 @@ class MotionGenerator(nn.Module):
         self.decoder = nn.LSTMCell(hidden, hidden)
         self.out = nn.Linear(hidden, cfg.feature_dim)
 
-    def forward(self, trajectory: Tensor, code: Tensor, action: Tensor, target: Tensor | None = None,
-                teacher_forcing: float = 0.0, generator: torch.Generator | None = None) -> Tensor:
+    def forward(
+        self,
+        trajectory: Tensor,
+        code: Tensor,
+        action: Tensor,
+        target: Tensor | None = None,
+        teacher_forcing: float = 0.0,
+        generator: torch.Generator | None = None,
+    ) -> Tensor:
         """Decode a motion; ``target`` ``(B, T, F)`` is needed when ``teacher_forcing > 0``."""
         cfg = self.cfg
         batch = code.shape[0]
@@ -51,15 +59,24 @@ class MotionGenerator(nn.Module):
             raise ValueError(f"MotionGenerator: teacher_forcing must be a probability, got {teacher_forcing}")
         if teacher_forcing > 0:
             if target is None or target.shape != (batch, cfg.n_frames, cfg.feature_dim):
-                raise ValueError(f"MotionGenerator: teacher forcing needs target ({batch}, {cfg.n_frames}, "
-                                 f"{cfg.feature_dim}), got {None if target is None else tuple(target.shape)}")
+                raise ValueError(
+                    f"MotionGenerator: teacher forcing needs target ({batch}, {cfg.n_frames}, "
+                    f"{cfg.feature_dim}), got {None if target is None else tuple(target.shape)}"
+                )
             forced = torch.rand(batch, cfg.n_frames, 1, generator=generator) < teacher_forcing
         _, (h, c) = self.trajectory_encoder(self.trajectory_embed(trajectory))
         h, c = h[0], c[0]
         condition = class_code_condition(code, action, cfg.n_classes)
         time = torch.arange(cfg.n_frames, dtype=code.dtype) / cfg.n_frames
-        per_frame = self.condition_embed(torch.cat([condition[:, None, :].expand(-1, cfg.n_frames, -1),
-                                                    time[None, :, None].expand(batch, -1, 1)], dim=-1))
+        per_frame = self.condition_embed(
+            torch.cat(
+                [
+                    condition[:, None, :].expand(-1, cfg.n_frames, -1),
+                    time[None, :, None].expand(batch, -1, 1),
+                ],
+                dim=-1,
+            )
+        )
         previous = code.new_zeros(batch, cfg.feature_dim)
         frames = []
         for t in range(cfg.n_frames):

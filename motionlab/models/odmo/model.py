@@ -2,8 +2,8 @@ r"""ODMO: the LMP encoder, the trajectory generator and the motion generator, an
 
 A clip ``x`` (local movement profile and root trajectory, see :mod:`.data`, standardised per channel) of
 action ``c`` is encoded to ``q(z | x) = N(μ, s²)``; a code ``z = μ + s ε``, the class and the end point
-``r_e`` of ``x`` give the trajectory ``τ̂``, and ``τ̂``, ``z`` and ``c`` give the motion ``x̂``. With ``E(a, b)`` the squared error
-averaged over channels and summed over frames, the joint objective is
+``r_e`` of ``x`` give the trajectory ``τ̂``, and ``τ̂``, ``z`` and ``c`` give the motion ``x̂``. With ``E(a,
+b)`` the squared error averaged over channels and summed over frames, the joint objective is
 
 .. math::
     L = \underbrace{E(\hat x, x)}_{L_{motion}}
@@ -34,8 +34,8 @@ from motionlab.models.odmo.trajectory import TrajectoryGenerator
 
 
 class ODMOOutput(NamedTuple):
-    """What one pass through ODMO gives: ``mu``, ``logvar``, ``code`` ``(B, D)``; the standardised ``trajectory``
-    ``(B, T, 3)`` and ``motion`` ``(B, T, F)``."""
+    """What one pass through ODMO gives: ``mu``, ``logvar``, ``code`` ``(B, D)``; the standardised
+    ``trajectory`` ``(B, T, 3)`` and ``motion`` ``(B, T, F)``."""
 
     mu: Tensor
     logvar: Tensor
@@ -73,20 +73,31 @@ class ODMO(nn.Module):
         cfg = self.cfg
         check_tensor(features, "features", func, (cfg.n_frames, cfg.feature_dim), min_leading=1)
         if features.dim() != 3:
-            raise ValueError(f"{func}: features must be (B, {cfg.n_frames}, {cfg.feature_dim}), got {tuple(features.shape)}")
+            raise ValueError(
+                f"{func}: features must be (B, {cfg.n_frames}, {cfg.feature_dim}), got "
+                f"{tuple(features.shape)}"
+            )
 
     def encode(self, features: Tensor) -> tuple[Tensor, Tensor]:
-        """``μ`` and ``log s²`` ``(B, D)`` of clips ``(B, T, F)`` in metres (only the local movement profile is read)."""
+        """``μ`` and ``log s²`` ``(B, D)`` of clips ``(B, T, F)`` in metres (only the local movement profile
+        is read)."""
         self._check_features(features, "ODMO.encode")
         return self._encode(self.standardizer.transform(features))
 
     def _encode(self, standardized: Tensor) -> tuple[Tensor, Tensor]:
-        return self.encoder(standardized[..., :self.cfg.lmp_dim])
+        return self.encoder(standardized[..., : self.cfg.lmp_dim])
 
-    def decode(self, code: Tensor, action: Tensor, end_point: Tensor, target: Tensor | None = None,
-                teacher_forcing: float = 0.0) -> tuple[Tensor, Tensor]:
-        """Standardised trajectory ``(B, T, 3)`` and motion ``(B, T, F)`` from codes ``(B, D)``, actions ``(B,)`` and
-        end points ``(B, 3)`` in metres; ``target`` is the standardised clip for teacher forcing."""
+    def decode(
+        self,
+        code: Tensor,
+        action: Tensor,
+        end_point: Tensor,
+        target: Tensor | None = None,
+        teacher_forcing: float = 0.0,
+    ) -> tuple[Tensor, Tensor]:
+        """Standardised trajectory ``(B, T, 3)`` and motion ``(B, T, F)`` from codes ``(B, D)``, actions
+        ``(B,)`` and end points ``(B, 3)`` in metres; ``target`` is the standardised clip for teacher
+        forcing."""
         check_tensor(code, "code", "ODMO.generate", (self.cfg.code_dim,), min_leading=1)
         check_tensor(end_point, "end_point", "ODMO.generate", (3,), min_leading=1)
         mean, std = self.standardizer.mean[-3:].to(code), self.standardizer.std[-3:].to(code)
@@ -114,14 +125,19 @@ class ODMO(nn.Module):
 
 
 def sequence_error(prediction: Tensor, target: Tensor) -> Tensor:
-    """``E(a, b)`` of each clip ``(B,)``: squared error averaged over channels, summed over frames ``(B, T, C)``."""
+    """``E(a, b)`` of each clip ``(B,)``: squared error averaged over channels, summed over frames ``(B, T,
+    C)``."""
     if prediction.shape != target.shape or prediction.dim() != 3:
-        raise ValueError(f"sequence_error: prediction and target must both be (B, T, C), got "
-                         f"{tuple(prediction.shape)} and {tuple(target.shape)}")
+        raise ValueError(
+            f"sequence_error: prediction and target must both be (B, T, C), got "
+            f"{tuple(prediction.shape)} and {tuple(target.shape)}"
+        )
     return (prediction - target).pow(2).mean(dim=-1).sum(dim=-1)
 
 
-def joint_objective(model: ODMO, batch: tuple[Tensor, Tensor], step: int, coeffs: dict[str, float]) -> dict[str, Tensor]:
+def joint_objective(
+    model: ODMO, batch: tuple[Tensor, Tensor], step: int, coeffs: dict[str, float]
+) -> dict[str, Tensor]:
     """Eq. 5 on one class-balanced batch ``(features (B, T, F), action (B,))`` for the training loop.
 
     ``coeffs["teacher_forcing"]`` is the decoder's teacher-forcing probability at this step. Returns the
@@ -136,7 +152,9 @@ def joint_objective(model: ODMO, batch: tuple[Tensor, Tensor], step: int, coeffs
         "motion": sequence_error(out.motion, target).mean(),
         "trajectory": sequence_error(out.trajectory, target[..., -3:]).mean(),
         "consistency": sequence_error(out.motion[..., -3:], out.trajectory).mean(),
-        "contrastive": contrastive_loss(out.mu[first], out.mu[second], same, cfg.margin, cfg.same_class_slack).mean(),
+        "contrastive": contrastive_loss(
+            out.mu[first], out.mu[second], same, cfg.margin, cfg.same_class_slack
+        ).mean(),
         "prior": prior_term(out.mu, out.logvar, cfg.prior_variance, cfg.prior_target).mean(),
     }
     total = terms["motion"] + cfg.prior_weight * terms["prior"]

@@ -33,8 +33,8 @@ SILHOUETTE_RATIO = 0.95
 
 @dataclass(frozen=True, eq=False)
 class ClassModes:
-    """The modes of one class: Gaussian components ``means (K, D)``, ``covariances (K, D, D)``, ``weights (K,)``;
-    ``silhouettes`` maps each tried component count to its score (empty for a fixed sampler)."""
+    """The modes of one class: Gaussian components ``means (K, D)``, ``covariances (K, D, D)``, ``weights
+    (K,)``; ``silhouettes`` maps each tried component count to its score (empty for a fixed sampler)."""
 
     means: np.ndarray
     covariances: np.ndarray
@@ -47,8 +47,13 @@ class ClassModes:
 
     def assign(self, codes: np.ndarray) -> np.ndarray:
         """The most probable mode of each code ``(n, D) -> (n,)`` (weighted Gaussian densities)."""
-        log_density = np.stack([np.log(w) + multivariate_normal(m, c, allow_singular=True).logpdf(codes)
-                                for m, c, w in zip(self.means, self.covariances, self.weights)], axis=-1)
+        log_density = np.stack(
+            [
+                np.log(w) + multivariate_normal(m, c, allow_singular=True).logpdf(codes)
+                for m, c, w in zip(self.means, self.covariances, self.weights)
+            ],
+            axis=-1,
+        )
         return log_density.reshape(len(codes), -1).argmax(axis=-1)
 
 
@@ -69,8 +74,14 @@ class ModeSet:
     labels: np.ndarray
 
     def check_action(self, action: int) -> int:
-        if isinstance(action, bool) or not isinstance(action, (int, np.integer)) or not 0 <= action < len(self.classes):
-            raise ValueError(f"ModeSet: action must be a class index in [0, {len(self.classes)}), got {action!r}")
+        if (
+            isinstance(action, bool)
+            or not isinstance(action, (int, np.integer))
+            or not 0 <= action < len(self.classes)
+        ):
+            raise ValueError(
+                f"ModeSet: action must be a class index in [0, {len(self.classes)}), got {action!r}"
+            )
         return int(action)
 
     def global_ids(self, action: np.ndarray, mode: np.ndarray) -> np.ndarray:
@@ -84,14 +95,21 @@ class ModeSet:
         return self.global_ids(self.action, self.labels)
 
     def nearest_end_points(self, action: int, codes: np.ndarray) -> np.ndarray:
-        """``r_e`` ``(n, 3)`` of the training clips of ``action`` whose codes are nearest to ``codes`` ``(n, D)``."""
+        """``r_e`` ``(n, 3)`` of the training clips of ``action`` whose codes are nearest to ``codes`` ``(n,
+        D)``."""
         action = self.check_action(action)
         members = np.flatnonzero(self.action == action)
         distance = ((codes[:, None, :] - self.codes[members][None, :, :]) ** 2).sum(axis=-1)
         return self.end_points[members[distance.argmin(axis=1)]]
 
-    def sample(self, action: int, n: int, rng: np.random.Generator, probabilities: Sequence[float] | None = None,
-               mode: int | None = None) -> tuple[np.ndarray, np.ndarray]:
+    def sample(
+        self,
+        action: int,
+        n: int,
+        rng: np.random.Generator,
+        probabilities: Sequence[float] | None = None,
+        mode: int | None = None,
+    ) -> tuple[np.ndarray, np.ndarray]:
         """Mode-preserving sampling of ``n`` codes of ``action``: ``codes (n, D)`` and their modes ``(n,)``.
 
         Mode ``k`` gets ``n · p_k`` samples (largest remainders get the leftovers), with ``p`` the mixture
@@ -100,20 +118,30 @@ class ModeSet:
         modes = self.classes[self.check_action(action)]
         if mode is not None:
             if not 0 <= mode < modes.n_modes:
-                raise ValueError(f"ModeSet.sample: action {action} has modes 0..{modes.n_modes - 1}, got {mode}")
+                raise ValueError(
+                    f"ModeSet.sample: action {action} has modes 0..{modes.n_modes - 1}, got {mode}"
+                )
             probabilities = np.eye(modes.n_modes)[mode]
         share = mode_counts(modes.weights if probabilities is None else np.asarray(probabilities, float), n)
         picked = np.repeat(np.arange(modes.n_modes), share)
-        codes = np.concatenate([rng.multivariate_normal(modes.means[k], modes.covariances[k], size=int(count))
-                                for k, count in enumerate(share)], axis=0)
+        codes = np.concatenate(
+            [
+                rng.multivariate_normal(modes.means[k], modes.covariances[k], size=int(count))
+                for k, count in enumerate(share)
+            ],
+            axis=0,
+        )
         return codes, picked
 
 
 def mode_counts(probabilities: np.ndarray, n: int) -> np.ndarray:
-    """Split ``n`` samples over modes in proportion to ``probabilities`` ``(K,)`` (largest remainder method)."""
+    """Split ``n`` samples over modes in proportion to ``probabilities`` ``(K,)`` (largest remainder
+    method)."""
     p = np.asarray(probabilities, dtype=np.float64)
     if p.ndim != 1 or p.size == 0 or not np.all(np.isfinite(p)) or np.any(p < 0) or p.sum() <= 0:
-        raise ValueError(f"mode_counts: probabilities must be non-negative, finite, with a positive sum, got {p}")
+        raise ValueError(
+            f"mode_counts: probabilities must be non-negative, finite, with a positive sum, got {p}"
+        )
     if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or n < 0:
         raise ValueError(f"mode_counts: n must be a non-negative integer, got {n!r}")
     exact = p / p.sum() * n
@@ -123,11 +151,15 @@ def mode_counts(probabilities: np.ndarray, n: int) -> np.ndarray:
     return counts
 
 
-def choose_component_count(k_values: Sequence[int], silhouettes: Sequence[float], ratio: float = SILHOUETTE_RATIO) -> int:
+def choose_component_count(
+    k_values: Sequence[int], silhouettes: Sequence[float], ratio: float = SILHOUETTE_RATIO
+) -> int:
     """The first ``k_i`` with ``S_i > ratio · S_{i+1}`` (the last ``k`` when there is none)."""
     if len(k_values) != len(silhouettes) or not k_values:
-        raise ValueError(f"choose_component_count: need one silhouette per k, got {len(k_values)} k and "
-                         f"{len(silhouettes)} scores")
+        raise ValueError(
+            f"choose_component_count: need one silhouette per k, got {len(k_values)} k and "
+            f"{len(silhouettes)} scores"
+        )
     for i in range(len(k_values) - 1):
         if silhouettes[i] > ratio * silhouettes[i + 1]:
             return int(k_values[i])
@@ -135,18 +167,22 @@ def choose_component_count(k_values: Sequence[int], silhouettes: Sequence[float]
 
 
 def _mixture(codes: np.ndarray, k: int, seed: int) -> GaussianMixture:
-    return GaussianMixture(n_components=k, covariance_type="full", reg_covar=1e-4, n_init=1,
-                           random_state=seed).fit(codes)
+    return GaussianMixture(
+        n_components=k, covariance_type="full", reg_covar=1e-4, n_init=1, random_state=seed
+    ).fit(codes)
 
 
-def fit_class_modes(codes: np.ndarray, k_values: Sequence[int] = K_VALUES, min_share: float = 0.05,
-                    seed: int = 0) -> ClassModes:
+def fit_class_modes(
+    codes: np.ndarray, k_values: Sequence[int] = K_VALUES, min_share: float = 0.05, seed: int = 0
+) -> ClassModes:
     """The modes of one class's codes ``(n, D)`` (see the module notes)."""
     codes = np.asarray(codes, dtype=np.float64)
     if codes.ndim != 2 or not np.all(np.isfinite(codes)):
         raise ValueError(f"fit_class_modes: codes must be a finite (n, D) array, got shape {codes.shape}")
     if codes.shape[0] <= max(k_values):
-        raise ValueError(f"fit_class_modes: {codes.shape[0]} codes are too few for up to {max(k_values)} components")
+        raise ValueError(
+            f"fit_class_modes: {codes.shape[0]} codes are too few for up to {max(k_values)} components"
+        )
     if not 0 <= min_share < 1:
         raise ValueError(f"fit_class_modes: min_share must lie in [0, 1), got {min_share}")
     fits, scores = {}, {}
@@ -162,7 +198,9 @@ def fit_class_modes(codes: np.ndarray, k_values: Sequence[int] = K_VALUES, min_s
     return ClassModes(best.means_[keep], best.covariances_[keep], weights, scores)
 
 
-def _mode_set(classes: list[ClassModes], codes: np.ndarray, action: np.ndarray, end_points: np.ndarray) -> ModeSet:
+def _mode_set(
+    classes: list[ClassModes], codes: np.ndarray, action: np.ndarray, end_points: np.ndarray
+) -> ModeSet:
     labels = np.zeros(len(codes), dtype=np.int64)
     for c, modes in enumerate(classes):
         members = action == c
@@ -170,28 +208,42 @@ def _mode_set(classes: list[ClassModes], codes: np.ndarray, action: np.ndarray, 
     return ModeSet(tuple(classes), codes, action, end_points, labels)
 
 
-def _check_codes(codes: np.ndarray, action: np.ndarray, end_points: np.ndarray, n_classes: int, func: str) -> tuple:
+def _check_codes(
+    codes: np.ndarray, action: np.ndarray, end_points: np.ndarray, n_classes: int, func: str
+) -> tuple:
     codes = np.asarray(codes, dtype=np.float64)
     action = np.asarray(action, dtype=np.int64)
     end_points = np.asarray(end_points, dtype=np.float64)
     if codes.ndim != 2 or action.shape != codes.shape[:1] or end_points.shape != (codes.shape[0], 3):
-        raise ValueError(f"{func}: need codes (N, D), action (N,) and end_points (N, 3), got {codes.shape}, "
-                         f"{action.shape} and {end_points.shape}")
+        raise ValueError(
+            f"{func}: need codes (N, D), action (N,) and end_points (N, 3), got {codes.shape}, "
+            f"{action.shape} and {end_points.shape}"
+        )
     missing = sorted(set(range(n_classes)) - set(action.tolist()))
     if missing:
         raise ValueError(f"{func}: classes {missing} have no codes")
     return codes, action, end_points
 
 
-def discover_modes(codes: np.ndarray, action: np.ndarray, end_points: np.ndarray, n_classes: int,
-                   k_values: Sequence[int] = K_VALUES, min_share: float = 0.05, seed: int = 0) -> ModeSet:
-    """Per-class Gaussian mixtures over training codes ``(N, D)`` with silhouette-chosen sizes (ODMO's modes)."""
+def discover_modes(
+    codes: np.ndarray,
+    action: np.ndarray,
+    end_points: np.ndarray,
+    n_classes: int,
+    k_values: Sequence[int] = K_VALUES,
+    min_share: float = 0.05,
+    seed: int = 0,
+) -> ModeSet:
+    """Per-class Gaussian mixtures over training codes ``(N, D)`` with silhouette-chosen sizes (ODMO's
+    modes)."""
     codes, action, end_points = _check_codes(codes, action, end_points, n_classes, "discover_modes")
     classes = [fit_class_modes(codes[action == c], k_values, min_share, seed) for c in range(n_classes)]
     return _mode_set(classes, codes, action, end_points)
 
 
-def single_gaussian_modes(codes: np.ndarray, action: np.ndarray, end_points: np.ndarray, n_classes: int) -> ModeSet:
+def single_gaussian_modes(
+    codes: np.ndarray, action: np.ndarray, end_points: np.ndarray, n_classes: int
+) -> ModeSet:
     """One Gaussian per class, fitted to its training codes (the conventional sampler, ``ODMO_conv``)."""
     codes, action, end_points = _check_codes(codes, action, end_points, n_classes, "single_gaussian_modes")
     classes = []
@@ -203,7 +255,8 @@ def single_gaussian_modes(codes: np.ndarray, action: np.ndarray, end_points: np.
 
 
 def prior_modes(codes: np.ndarray, action: np.ndarray, end_points: np.ndarray, n_classes: int) -> ModeSet:
-    """The standard-VAE sampler: the prior ``N(0, I)`` for every class (end points still from the nearest code)."""
+    """The standard-VAE sampler: the prior ``N(0, I)`` for every class (end points still from the nearest
+    code)."""
     codes, action, end_points = _check_codes(codes, action, end_points, n_classes, "prior_modes")
     dim = codes.shape[1]
     classes = [ClassModes(np.zeros((1, dim)), np.eye(dim)[None], np.ones(1), {}) for _ in range(n_classes)]

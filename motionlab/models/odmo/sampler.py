@@ -25,10 +25,10 @@ SAMPLERS = ("modes", "conventional", "prior")
 
 
 class Samples(NamedTuple):
-    """Generated clips: ``positions (N, T, J, 3)`` at the data's frame rate, ``features (N, T_model, F)`` (metres),
-    the trajectory generator's ``trajectory (N, T_model, 3)`` (metres; the motion's own root path is in
-    ``features``), ``codes (N, D)``, ``action (N,)``, ``mode (N,)`` (the mode each code was drawn from, within
-    its class), ``end_points (N, 3)``."""
+    """Generated clips: ``positions (N, T, J, 3)`` at the data's frame rate, ``features (N, T_model, F)``
+    (metres), the trajectory generator's ``trajectory (N, T_model, 3)`` (metres; the motion's own root path is
+    in ``features``), ``codes (N, D)``, ``action (N,)``, ``mode (N,)`` (the mode each code was drawn from,
+    within its class), ``end_points (N, 3)``."""
 
     positions: Tensor
     features: Tensor
@@ -65,7 +65,8 @@ def build_modes(kind: str, codes: np.ndarray, data: ODMOData, n_classes: int, se
 
 @dataclass(frozen=True, eq=False)
 class ODMOSampler:
-    """A trained model with its modes and the decoding settings of its data (frame stride, floor clearance)."""
+    """A trained model with its modes and the decoding settings of its data (frame stride, floor
+    clearance)."""
 
     model: ODMO
     modes: ModeSet
@@ -78,22 +79,31 @@ class ODMOSampler:
         return cls.from_codes(model, encode_clips(model, data), data, kind, seed)
 
     @classmethod
-    def from_codes(cls, model: ODMO, codes: np.ndarray, data: ODMOData, kind: str = "modes",
-                   seed: int = 0) -> ODMOSampler:
-        """:meth:`from_data` with the training clips' codes ``(N, D)`` (:func:`encode_clips`) already computed."""
-        return cls(model, build_modes(kind, codes, data, model.cfg.n_classes, seed), data.frame_stride,
-                   data.floor_clearance)
+    def from_codes(
+        cls, model: ODMO, codes: np.ndarray, data: ODMOData, kind: str = "modes", seed: int = 0
+    ) -> ODMOSampler:
+        """:meth:`from_data` with the training clips' codes ``(N, D)`` (:func:`encode_clips`) already
+        computed."""
+        return cls(
+            model,
+            build_modes(kind, codes, data, model.cfg.n_classes, seed),
+            data.frame_stride,
+            data.floor_clearance,
+        )
 
-    def generate(self, codes: np.ndarray | Tensor, action: np.ndarray | Tensor,
-                 end_points: np.ndarray | Tensor) -> tuple[Tensor, Tensor, Tensor]:
+    def generate(
+        self, codes: np.ndarray | Tensor, action: np.ndarray | Tensor, end_points: np.ndarray | Tensor
+    ) -> tuple[Tensor, Tensor, Tensor]:
         """Positions ``(N, T, J, 3)``, features ``(N, T_model, F)`` and the trajectory generator's trajectory
         ``(N, T_model, 3)`` for codes ``(N, D)``, actions ``(N,)`` and end points ``(N, 3)``."""
         code = torch.as_tensor(np.asarray(codes), dtype=torch.float32)
         act = torch.as_tensor(np.asarray(action), dtype=torch.int64)
         end = torch.as_tensor(np.asarray(end_points), dtype=torch.float32)
         if code.dim() != 2 or act.shape != code.shape[:1] or end.shape != (code.shape[0], 3):
-            raise ValueError(f"ODMOSampler.generate: need codes (N, D), action (N,) and end_points (N, 3), got "
-                             f"{tuple(code.shape)}, {tuple(act.shape)} and {tuple(end.shape)}")
+            raise ValueError(
+                f"ODMOSampler.generate: need codes (N, D), action (N,) and end_points (N, 3), got "
+                f"{tuple(code.shape)}, {tuple(act.shape)} and {tuple(end.shape)}"
+            )
         was_training = self.model.training
         self.model.eval()
         try:
@@ -102,9 +112,16 @@ class ODMOSampler:
             self.model.train(was_training)
         return to_positions(features, self.frame_stride, self.floor_clearance), features, trajectory
 
-    def sample(self, action: int, n: int, rng: np.random.Generator, probabilities: Sequence[float] | None = None,
-               mode: int | None = None) -> Samples:
-        """``n`` clips of ``action`` drawn mode by mode (see :meth:`ModeSet.sample`), end points from the nearest codes."""
+    def sample(
+        self,
+        action: int,
+        n: int,
+        rng: np.random.Generator,
+        probabilities: Sequence[float] | None = None,
+        mode: int | None = None,
+    ) -> Samples:
+        """``n`` clips of ``action`` drawn mode by mode (see :meth:`ModeSet.sample`), end points from the
+        nearest codes."""
         codes, modes = self.modes.sample(action, n, rng, probabilities, mode)
         ends = self.modes.nearest_end_points(action, codes)
         actions = np.full(n, action, dtype=np.int64)
@@ -112,12 +129,19 @@ class ODMOSampler:
 
     def sample_classes(self, n_per_class: int, rng: np.random.Generator) -> Samples:
         """``n_per_class`` clips of every class (mode-preserving within each), generated in one batch."""
-        return self._batch([(c, self.modes.sample(c, n_per_class, rng)) for c in range(len(self.modes.classes))])
+        return self._batch(
+            [(c, self.modes.sample(c, n_per_class, rng)) for c in range(len(self.modes.classes))]
+        )
 
     def sample_modes(self, n_per_mode: int, rng: np.random.Generator) -> Samples:
         """``n_per_mode`` clips of every discovered mode of every class, generated in one batch."""
-        return self._batch([(c, self.modes.sample(c, n_per_mode, rng, mode=k))
-                            for c, modes in enumerate(self.modes.classes) for k in range(modes.n_modes)])
+        return self._batch(
+            [
+                (c, self.modes.sample(c, n_per_mode, rng, mode=k))
+                for c, modes in enumerate(self.modes.classes)
+                for k in range(modes.n_modes)
+            ]
+        )
 
     def _batch(self, drawn: list[tuple[int, tuple[np.ndarray, np.ndarray]]]) -> Samples:
         codes = np.concatenate([d[1][0] for d in drawn])

@@ -1,4 +1,5 @@
-"""TrajeVAE (Kania, Kowalski & Trzciński 2021): full-body motion completed from an initial pose and joint trajectories.
+"""TrajeVAE (Kania, Kowalski & Trzciński 2021): full-body motion completed from an initial pose and joint
+trajectories.
 
 Modules, in the order the chapter uses them: :mod:`.masks` (structured joint masks, ``Y = X ⊙ M``),
 :mod:`.dct` (the orthonormal DCT-II over time), :mod:`.config` (the model config with the ablation switches),

@@ -26,5 +26,7 @@ def ladder(full: TrajeVAEConfig) -> dict[str, TrajeVAEConfig]:
     """
     if not isinstance(full, TrajeVAEConfig):
         raise TypeError(f"ladder: expected a TrajeVAEConfig, got {type(full).__name__}")
-    return {name: replace(full, **{switch: index < rung for index, switch in enumerate(SWITCHES)})
-            for rung, name in enumerate(RUNGS)}
+    return {
+        name: replace(full, **{switch: index < rung for index, switch in enumerate(SWITCHES)})
+        for rung, name in enumerate(RUNGS)
+    }

@@ -21,8 +21,14 @@ import torch
 from torch import Tensor, nn
 
 from motionlab.models.gaussian import reparameterize
-from motionlab.models.trajevae.config import (WindowShape, check_flags, check_non_negative, check_positive_int,
-                                              check_probability, check_seed)
+from motionlab.models.trajevae.config import (
+    WindowShape,
+    check_flags,
+    check_non_negative,
+    check_positive_int,
+    check_probability,
+    check_seed,
+)
 from motionlab.models.trajevae.inputs import check_masks, check_sampling, check_task, check_windows
 from motionlab.models.trajevae.masks import KEEP_PROBABILITY, given_trajectories
 from motionlab.models.trajevae.model import Gaussian
@@ -65,7 +71,8 @@ class RecurrentConfig(WindowShape):
 
 
 class TaskContext(nn.Module):
-    """Bidirectional GRU over ``[Y_t, x_0]``, averaged over time and mixed: ``(B, F, J*3), (B, J*3) -> (B, H)``."""
+    """Bidirectional GRU over ``[Y_t, x_0]``, averaged over time and mixed: ``(B, F, J*3), (B, J*3) -> (B,
+    H)``."""
 
     def __init__(self, n_channels: int, hidden: int) -> None:
         super().__init__()
@@ -79,7 +86,8 @@ class TaskContext(nn.Module):
 
 
 class OffsetDecoder(nn.Module):
-    """Forward GRU over ``[Y_t, context, z]`` emitting offsets accumulated from ``x_0``: → ``(B, F, J * 3)``."""
+    """Forward GRU over ``[Y_t, context, z]`` emitting offsets accumulated from ``x_0``: → ``(B, F, J *
+    3)``."""
 
     def __init__(self, n_channels: int, hidden: int, latent_dim: int) -> None:
         super().__init__()
@@ -104,8 +112,10 @@ class _RecurrentCompletion(nn.Module):
         if not isinstance(cfg, RecurrentConfig):
             raise TypeError(f"{type(self).__name__} needs a RecurrentConfig, got {type(cfg).__name__}")
         if (cfg.latent_dim > 0) != stochastic:
-            raise ValueError(f"{type(self).__name__} needs RecurrentConfig.latent_dim "
-                             f"{'>= 1' if stochastic else '= 0'}, got {cfg.latent_dim}")
+            raise ValueError(
+                f"{type(self).__name__} needs RecurrentConfig.latent_dim "
+                f"{'>= 1' if stochastic else '= 0'}, got {cfg.latent_dim}"
+            )
         self.cfg = cfg
         generator_state = torch.random.get_rng_state()
         torch.manual_seed(cfg.seed)
@@ -130,7 +140,8 @@ class GRUCompletion(_RecurrentCompletion):
         super().__init__(cfg, stochastic=False)
 
     def complete(self, initial_pose: Tensor, trajectories: Tensor) -> Tensor:
-        """The completion ``(B, F, J * 3)`` of initial poses ``(B, J * 3)`` and trajectories ``(B, F, J * 3)``."""
+        """The completion ``(B, F, J * 3)`` of initial poses ``(B, J * 3)`` and trajectories ``(B, F, J *
+        3)``."""
         return self.decoder(trajectories, initial_pose, self.context(trajectories, initial_pose))
 
     def forward(self, windows: Tensor, mask: Tensor) -> Tensor:
@@ -139,9 +150,16 @@ class GRUCompletion(_RecurrentCompletion):
         return self.complete(initial_pose, trajectories)
 
     @torch.no_grad()
-    def sample(self, initial_pose: Tensor, trajectories: Tensor, n_samples: int, temperature: float = 1.0,
-               generator: torch.Generator | None = None) -> Tensor:
-        """``(B, K, F, J * 3)``: the one deterministic completion repeated ``K`` times (temperature, generator unused)."""
+    def sample(
+        self,
+        initial_pose: Tensor,
+        trajectories: Tensor,
+        n_samples: int,
+        temperature: float = 1.0,
+        generator: torch.Generator | None = None,
+    ) -> Tensor:
+        """``(B, K, F, J * 3)``: the one deterministic completion repeated ``K`` times (temperature, generator
+        unused)."""
         func = "GRUCompletion.sample"
         check_task(initial_pose, trajectories, self.cfg.n_future, self.cfg.n_channels, func)
         check_sampling(n_samples, temperature, func)
@@ -160,12 +178,15 @@ class CVAERNN(_RecurrentCompletion):
         self.posterior_head = nn.Linear(2 * self.cfg.hidden, 2 * self.cfg.latent_dim)
 
     def posterior(self, future: Tensor, context: Tensor) -> Gaussian:
-        """``q(z | X, context)``: mean and log-variance ``(B, L)`` each from the true frames ``(B, F, J * 3)``."""
+        """``q(z | X, context)``: mean and log-variance ``(B, L)`` each from the true frames ``(B, F, J *
+        3)``."""
         _, last = self.posterior_rnn(future)
         mu, logvar = self.posterior_head(torch.cat([last[-1], context], dim=-1)).chunk(2, dim=-1)
         return Gaussian(mu, logvar)
 
-    def forward(self, windows: Tensor, mask: Tensor, generator: torch.Generator | None = None) -> tuple[Tensor, Gaussian]:
+    def forward(
+        self, windows: Tensor, mask: Tensor, generator: torch.Generator | None = None
+    ) -> tuple[Tensor, Gaussian]:
         """Reconstruction ``(B, F, J * 3)`` through a posterior sample, and the posterior."""
         initial_pose, future, trajectories = self._check_batch(windows, mask, "CVAERNN.forward")
         context = self.context(trajectories, initial_pose)
@@ -174,15 +195,25 @@ class CVAERNN(_RecurrentCompletion):
         return self.decoder(trajectories, initial_pose, torch.cat([context, z], dim=-1)), posterior
 
     @torch.no_grad()
-    def sample(self, initial_pose: Tensor, trajectories: Tensor, n_samples: int, temperature: float = 1.0,
-               generator: torch.Generator | None = None) -> Tensor:
-        """Completions ``(B, K, F, J * 3)`` with ``z ~ N(0, temperature² I)`` (``K = 1``: ``z = 0``, the prior mean)."""
+    def sample(
+        self,
+        initial_pose: Tensor,
+        trajectories: Tensor,
+        n_samples: int,
+        temperature: float = 1.0,
+        generator: torch.Generator | None = None,
+    ) -> Tensor:
+        """Completions ``(B, K, F, J * 3)`` with ``z ~ N(0, temperature² I)`` (``K = 1``: ``z = 0``, the prior
+        mean)."""
         func = "CVAERNN.sample"
         batch = check_task(initial_pose, trajectories, self.cfg.n_future, self.cfg.n_channels, func)
         check_sampling(n_samples, temperature, func)
         context = self.context(trajectories, initial_pose).repeat_interleave(n_samples, dim=0)
         shape = (batch * n_samples, self.cfg.latent_dim)
         z = torch.zeros(shape) if n_samples == 1 else temperature * torch.randn(shape, generator=generator)
-        poses = self.decoder(trajectories.repeat_interleave(n_samples, dim=0),
-                             initial_pose.repeat_interleave(n_samples, dim=0), torch.cat([context, z], dim=-1))
+        poses = self.decoder(
+            trajectories.repeat_interleave(n_samples, dim=0),
+            initial_pose.repeat_interleave(n_samples, dim=0),
+            torch.cat([context, z], dim=-1),
+        )
         return poses.unflatten(0, (batch, n_samples))

@@ -22,7 +22,12 @@ def check_probability(owner: str, name: str, value: float) -> None:
 
 def check_non_negative(owner: str, name: str, value: float) -> None:
     """Raise ``ValueError`` unless ``value`` is a finite number >= 0."""
-    if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value) or value < 0:
+    if (
+        isinstance(value, bool)
+        or not isinstance(value, (int, float))
+        or not math.isfinite(value)
+        or value < 0
+    ):
         raise ValueError(f"{owner}.{name} must be a finite non-negative number, got {value!r}")
 
 
@@ -100,17 +105,26 @@ class TrajeVAEConfig(WindowShape):
         for name in ("n_joints", "n_frames", "width", "latent_dim", "dct_components", "heads", "layers"):
             check_positive_int(owner, name, getattr(self, name))
         if self.n_frames < 2:
-            raise ValueError(f"{owner}.n_frames must be at least 2 (an initial pose and one frame), got {self.n_frames}")
+            raise ValueError(
+                f"{owner}.n_frames must be at least 2 (an initial pose and one frame), got {self.n_frames}"
+            )
         if self.dct_components > self.n_frames - 1:
-            raise ValueError(f"{owner}.dct_components ({self.dct_components}) cannot exceed the {self.n_frames - 1} "
-                             "completed frames")
+            raise ValueError(
+                f"{owner}.dct_components ({self.dct_components}) cannot exceed the {self.n_frames - 1} "
+                "completed frames"
+            )
         if (2 * self.width) % self.heads:
-            raise ValueError(f"{owner}: the token size 2 * width = {2 * self.width} must be divisible by heads={self.heads}")
+            raise ValueError(
+                f"{owner}: the token size 2 * width = {2 * self.width} must be divisible by "
+                f"heads={self.heads}"
+            )
         check_non_negative(owner, "beta", self.beta)
         check_probability(owner, "keep_probability", self.keep_probability)
         check_flags(owner, self, ("use_dct", "learnable_prior", "augment", "mask_future_poses"))
         if self.mask_future_poses and not self.learnable_prior:
-            raise ValueError(f"{owner}: mask_future_poses masks the posterior's input, so it needs learnable_prior=True")
+            raise ValueError(
+                f"{owner}: mask_future_poses masks the posterior's input, so it needs learnable_prior=True"
+            )
         check_seed(owner, self.seed)
 
     @property

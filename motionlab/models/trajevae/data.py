@@ -24,7 +24,6 @@ from motionlab.data.augment import random_yaw
 from motionlab.data.representations import check_tensor, to_trajevae
 from motionlab.models.trajevae.masks import KEEP_PROBABILITY, given_trajectories, sample_joint_masks
 
-
 #: Every FRAME_STEP-th frame of the 30 fps clips is kept.
 FRAME_STEP = 2
 
@@ -33,7 +32,8 @@ FPS = 15
 
 
 def decimate(clips: np.ndarray | Tensor) -> Tensor:
-    """Every :data:`FRAME_STEP`-th frame of clips ``(N, T, ...)`` as a float32 tensor ``(N, ceil(T / 2), ...)``."""
+    """Every :data:`FRAME_STEP`-th frame of clips ``(N, T, ...)`` as a float32 tensor ``(N, ceil(T / 2),
+    ...)``."""
     clips = torch.as_tensor(clips, dtype=torch.float32)
     if clips.dim() < 2:
         raise ValueError(f"decimate: clips need a frame axis (N, T, ...), got shape {tuple(clips.shape)}")
@@ -42,10 +42,17 @@ def decimate(clips: np.ndarray | Tensor) -> Tensor:
 
 def completion_windows(positions: np.ndarray | Tensor) -> Tensor:
     """Clips ``(N, T, J, 3)`` (global positions, metres) as windows ``(N, T, J * 3)`` float32."""
-    positions = check_tensor(torch.as_tensor(positions, dtype=torch.float32), "positions", "completion_windows",
-                             (None, 3), min_leading=2)
+    positions = check_tensor(
+        torch.as_tensor(positions, dtype=torch.float32),
+        "positions",
+        "completion_windows",
+        (None, 3),
+        min_leading=2,
+    )
     if positions.dim() != 4:
-        raise ValueError(f"completion_windows: positions must have shape (N, T, J, 3), got {tuple(positions.shape)}")
+        raise ValueError(
+            f"completion_windows: positions must have shape (N, T, J, 3), got {tuple(positions.shape)}"
+        )
     return to_trajevae(positions)
 
 
@@ -54,7 +61,8 @@ def completion_task(windows: Tensor, mask: Tensor) -> tuple[Tensor, Tensor]:
 
     Args:
         windows: ``(B, T, J * 3)`` ground-truth windows.
-        mask: ``(B, J)`` or ``(J,)`` bool, True for joints whose trajectory is given (``(J,)`` applies to all).
+        mask: ``(B, J)`` or ``(J,)`` bool, True for joints whose trajectory is given (``(J,)`` applies to
+        all).
     """
     if mask.dim() == 1:
         mask = mask.expand(windows.shape[0], -1)
@@ -63,7 +71,8 @@ def completion_task(windows: Tensor, mask: Tensor) -> tuple[Tensor, Tensor]:
 
 @dataclass(frozen=True, eq=False)
 class CompletionBatches:
-    """The training batch source: shuffled clips, each with a random joint mask, optionally turned by a random yaw.
+    """The training batch source: shuffled clips, each with a random joint mask, optionally turned by a random
+    yaw.
 
     Called by the training loop as ``batches(epoch, generator, batch_size)``; yields ``(windows, mask)``
     with windows ``(B, T, J * 3)`` and masks ``(B, J)`` bool. All randomness (order, yaw, masks) comes from
@@ -83,24 +92,32 @@ class CompletionBatches:
 
     def __post_init__(self) -> None:
         func = "CompletionBatches"
-        positions = check_tensor(torch.as_tensor(self.positions, dtype=torch.float32), "positions", func, (None, 3))
-        rotations = check_tensor(torch.as_tensor(self.rotations, dtype=torch.float32), "rotations", func, (None, 4))
+        positions = check_tensor(
+            torch.as_tensor(self.positions, dtype=torch.float32), "positions", func, (None, 3)
+        )
+        rotations = check_tensor(
+            torch.as_tensor(self.rotations, dtype=torch.float32), "rotations", func, (None, 4)
+        )
         if positions.dim() != 4 or positions.shape[:-1] != rotations.shape[:-1]:
-            raise ValueError(f"{func}: positions (N, T, J, 3) and rotations (N, T, J, 4) must share N, T, J; got "
-                             f"{tuple(positions.shape)} and {tuple(rotations.shape)}")
+            raise ValueError(
+                f"{func}: positions (N, T, J, 3) and rotations (N, T, J, 4) must share N, T, J; got "
+                f"{tuple(positions.shape)} and {tuple(rotations.shape)}"
+            )
         object.__setattr__(self, "positions", positions)
         object.__setattr__(self, "rotations", rotations)
 
     def __len__(self) -> int:
         return int(self.positions.shape[0])
 
-    def __call__(self, epoch: int, generator: torch.Generator, batch_size: int) -> Iterator[tuple[Tensor, Tensor]]:
+    def __call__(
+        self, epoch: int, generator: torch.Generator, batch_size: int
+    ) -> Iterator[tuple[Tensor, Tensor]]:
         n = len(self)
         if not 1 <= batch_size <= n:
             raise ValueError(f"CompletionBatches: batch_size must lie in [1, {n}], got {batch_size}")
         order = torch.randperm(n, generator=generator)
         for begin in range(0, n - n % batch_size, batch_size):
-            index = order[begin:begin + batch_size]
+            index = order[begin : begin + batch_size]
             positions = self.positions[index]
             if self.augment:
                 positions, _ = random_yaw(positions, self.rotations[index], generator)

@@ -68,7 +68,8 @@ def dct(x: Tensor, dim: int = -2, n_components: int | None = None) -> Tensor:
 
 
 def idct(coefficients: Tensor, n_frames: int, dim: int = -2) -> Tensor:
-    """Inverse of :func:`dct`: ``n_frames`` frames from the ``C <= n_frames`` lowest coefficients along ``dim``.
+    """Inverse of :func:`dct`: ``n_frames`` frames from the ``C <= n_frames`` lowest coefficients along
+    ``dim``.
 
     Missing high frequencies count as zero, so ``idct(dct(x, n_components=C), T)`` is ``x`` low-pass
     filtered to ``C`` components, and ``idct(dct(x), T)`` is ``x``.

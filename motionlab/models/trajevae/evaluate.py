@@ -18,8 +18,8 @@ left hand, the paper's Table 1 and Figure 6; up to all 22 joints).
 
 **Other sequences' trajectories** (the paper's Table 5): the initial pose of window ``i`` with the ``k``
 trajectories of another window ``j`` (the one whose given joints start closest), each trajectory moved so that
-it starts where that joint is in ``i``'s initial pose. We measure how far the completions' given joints stay from
-the requested trajectories, their APD, and which action the evaluation classifier recognises.
+it starts where that joint is in ``i``'s initial pose. We measure how far the completions' given joints stay
+from the requested trajectories, their APD, and which action the evaluation classifier recognises.
 """
 
 from __future__ import annotations
@@ -61,16 +61,28 @@ Sweep = dict[int, dict[str, tuple[float, float]]]
 class Completer(Protocol):
     """What the evaluation needs from a model: ``sample`` (TrajeVAE, GRUCompletion and CVAERNN have it)."""
 
-    def sample(self, initial_pose: Tensor, trajectories: Tensor, n_samples: int, temperature: float = 1.0,
-               generator: torch.Generator | None = None) -> Tensor: ...
+    def sample(
+        self,
+        initial_pose: Tensor,
+        trajectories: Tensor,
+        n_samples: int,
+        temperature: float = 1.0,
+        generator: torch.Generator | None = None,
+    ) -> Tensor: ...
 
 
 def _windows(windows: Tensor, func: str) -> Tensor:
     return check_finite_tensor(windows, "windows", func, (None, None, None))
 
 
-def complete(model: Completer, initial_pose: Tensor, trajectories: Tensor, n_samples: int,
-             generator: torch.Generator, temperature: float = 1.0) -> Tensor:
+def complete(
+    model: Completer,
+    initial_pose: Tensor,
+    trajectories: Tensor,
+    n_samples: int,
+    generator: torch.Generator,
+    temperature: float = 1.0,
+) -> Tensor:
     """Completed windows ``(N, K, T, J * 3)`` (frame 0 the initial pose), sampled in chunks of :data:`CHUNK`.
 
     Args:
@@ -78,14 +90,15 @@ def complete(model: Completer, initial_pose: Tensor, trajectories: Tensor, n_sam
     """
     parts = []
     for begin in range(0, initial_pose.shape[0], CHUNK):
-        start, given = initial_pose[begin:begin + CHUNK], trajectories[begin:begin + CHUNK]
+        start, given = initial_pose[begin : begin + CHUNK], trajectories[begin : begin + CHUNK]
         future = model.sample(start, given, n_samples, temperature, generator)
         parts.append(torch.cat([start[:, None, None, :].expand(-1, n_samples, 1, -1), future], dim=2))
     return torch.cat(parts)
 
 
 def multimodal_futures(windows: Tensor, threshold: float = MULTIMODAL_THRESHOLD) -> list[np.ndarray]:
-    """DLow's multimodal ground truth of each window: the futures ``(M_i, F, J * 3)`` of windows starting alike."""
+    """DLow's multimodal ground truth of each window: the futures ``(M_i, F, J * 3)`` of windows starting
+    alike."""
     windows = _windows(windows, "multimodal_futures")
     return multimodal_ground_truth(windows[:, 0].numpy(), windows[:, 1:].numpy(), threshold)
 
@@ -94,8 +107,8 @@ def dlow_metrics(samples: Tensor, windows: Tensor, multimodal: Sequence[np.ndarr
     """Per-window APD, ADE, FDE, MMADE, MMFDE: ``{name: (N,)}``.
 
     Args:
-        samples: completed windows ``(N, K, T, J * 3)`` (frame 0 is skipped); windows: the truth ``(N, T, J * 3)``;
-        multimodal: :func:`multimodal_futures` of the windows.
+        samples: completed windows ``(N, K, T, J * 3)`` (frame 0 is skipped); windows: the truth ``(N, T, J *
+        3)``; multimodal: :func:`multimodal_futures` of the windows.
     """
     samples, windows = _windows_pair(samples, windows)
     if len(multimodal) != windows.shape[0]:
@@ -114,7 +127,9 @@ def dlow_metrics(samples: Tensor, windows: Tensor, multimodal: Sequence[np.ndarr
 
 def _windows_pair(samples: Tensor, windows: Tensor) -> tuple[Tensor, Tensor]:
     windows = _windows(windows, "dlow_metrics")
-    samples = check_finite_tensor(samples, "samples", "dlow_metrics", (windows.shape[0], None) + tuple(windows.shape[1:]))
+    samples = check_finite_tensor(
+        samples, "samples", "dlow_metrics", (windows.shape[0], None) + tuple(windows.shape[1:])
+    )
     return samples.detach().float(), windows.float()
 
 
@@ -123,12 +138,19 @@ def summarise(values: dict[str, np.ndarray]) -> dict[str, tuple[float, float]]:
     return {name: mean_ci(v) if v.shape[0] > 1 else (float(v.mean()), 0.0) for name, v in values.items()}
 
 
-def sweep_given_joints(model: Completer, windows: Tensor, ks: Sequence[int] = PAPER_KS, n_samples: int = N_SAMPLES,
-                       seed: int = 0, multimodal: Sequence[np.ndarray] | None = None,
-                       order: Sequence[str] = FULL_ORDER) -> Sweep:
+def sweep_given_joints(
+    model: Completer,
+    windows: Tensor,
+    ks: Sequence[int] = PAPER_KS,
+    n_samples: int = N_SAMPLES,
+    seed: int = 0,
+    multimodal: Sequence[np.ndarray] | None = None,
+    order: Sequence[str] = FULL_ORDER,
+) -> Sweep:
     """DLow metrics with ``k`` given trajectories for each ``k`` in ``ks``: ``{k: {metric: (mean, ci95)}}``.
 
-    The samples of ``k`` come from a generator seeded with ``(seed, k)``, so a row does not depend on the others.
+    The samples of ``k`` come from a generator seeded with ``(seed, k)``, so a row does not depend on the
+    others.
     """
     windows = _windows(windows, "sweep_given_joints")
     multimodal = multimodal_futures(windows) if multimodal is None else multimodal
@@ -142,7 +164,8 @@ def sweep_given_joints(model: Completer, windows: Tensor, ks: Sequence[int] = PA
 
 
 def ratio_and_worst_step(values: Sequence[float]) -> tuple[float, float]:
-    """For a metric listed against k = 0, 1, ...: ``values[-1] / values[0]`` and the largest ``values[k+1] / values[k]``."""
+    """For a metric listed against k = 0, 1, ...: ``values[-1] / values[0]`` and the largest ``values[k+1] /
+    values[k]``."""
     values = [float(v) for v in values]
     if len(values) < 2 or any(v <= 0 for v in values):
         raise ValueError(f"ratio_and_worst_step: needs at least two positive values, got {values}")
@@ -180,7 +203,8 @@ def borrowed_trajectories(windows: Tensor, mask: Tensor) -> tuple[Tensor, Tensor
 
 
 def follow_error(samples: Tensor, trajectories: Tensor, mask: Tensor) -> np.ndarray:
-    """Mean distance (metres) between the completions' given joints and the requested trajectories, per window.
+    """Mean distance (metres) between the completions' given joints and the requested trajectories, per
+    window.
 
     Args:
         samples: ``(N, K, T, J * 3)`` (frame 0 skipped); trajectories: ``(N, F, J * 3)``; mask: ``(J,)`` bool.
@@ -194,13 +218,15 @@ def follow_error(samples: Tensor, trajectories: Tensor, mask: Tensor) -> np.ndar
 def upsample_frames(windows: Tensor, factor: int) -> Tensor:
     """Linear interpolation to ``factor`` times the frame rate: ``(..., T, C) -> (..., factor * T, C)``.
 
-    Frame ``factor * t + s`` lies ``s / factor`` of the way from frame ``t`` to ``t + 1``; after the last frame
-    the motion continues with its last velocity (so a window keeps its duration).
+    Frame ``factor * t + s`` lies ``s / factor`` of the way from frame ``t`` to ``t + 1``; after the last
+    frame the motion continues with its last velocity (so a window keeps its duration).
     """
     if isinstance(factor, bool) or not isinstance(factor, int) or factor < 1:
         raise ValueError(f"upsample_frames: factor must be a positive integer, got {factor!r}")
     if windows.dim() < 2 or windows.shape[-2] < 2:
-        raise ValueError(f"upsample_frames: windows need a frame axis of at least 2 frames, got {tuple(windows.shape)}")
+        raise ValueError(
+            f"upsample_frames: windows need a frame axis of at least 2 frames, got {tuple(windows.shape)}"
+        )
     following = torch.cat([windows[..., 1:, :], 2 * windows[..., -1:, :] - windows[..., -2:-1, :]], dim=-2)
     weights = torch.arange(factor, dtype=windows.dtype) / factor
     frames = windows[..., None, :] + weights[:, None] * (following - windows)[..., None, :]

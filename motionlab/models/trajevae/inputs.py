@@ -11,7 +11,8 @@ from motionlab.data.representations import check_tensor
 
 
 def check_finite_tensor(x: Tensor, name: str, func: str, shape: tuple[int | None, ...]) -> Tensor:
-    """Check that ``x`` is a finite floating tensor of exactly ``shape`` (``None`` accepts any size); return it."""
+    """Check that ``x`` is a finite floating tensor of exactly ``shape`` (``None`` accepts any size); return
+    it."""
     if isinstance(x, Tensor) and x.dim() != len(shape):
         layout = "(" + ", ".join("*" if size is None else str(size) for size in shape) + ")"
         raise ValueError(f"{func}: {name} must have shape {layout}, got {tuple(x.shape)}")
@@ -26,8 +27,10 @@ def check_windows(windows: Tensor, n_frames: int, n_channels: int, func: str) ->
 def check_masks(mask: Tensor, batch: int, n_joints: int, func: str) -> Tensor:
     """Joint masks ``(batch, n_joints)`` of dtype bool."""
     if not isinstance(mask, Tensor) or mask.dtype != torch.bool:
-        raise ValueError(f"{func}: mask must be a bool tensor ({batch}, {n_joints}), got "
-                         f"{getattr(mask, 'dtype', type(mask).__name__)}")
+        raise ValueError(
+            f"{func}: mask must be a bool tensor ({batch}, {n_joints}), got "
+            f"{getattr(mask, 'dtype', type(mask).__name__)}"
+        )
     if tuple(mask.shape) != (batch, n_joints):
         raise ValueError(f"{func}: mask must have shape ({batch}, {n_joints}), got {tuple(mask.shape)}")
     return mask
@@ -50,6 +53,10 @@ def check_sampling(n_samples: int, temperature: float, func: str) -> None:
     """``n_samples`` a positive int, ``temperature`` a finite number >= 0."""
     if isinstance(n_samples, bool) or not isinstance(n_samples, int) or n_samples < 1:
         raise ValueError(f"{func}: n_samples must be a positive integer, got {n_samples!r}")
-    if isinstance(temperature, bool) or not isinstance(temperature, (int, float)) \
-            or not math.isfinite(temperature) or temperature < 0:
+    if (
+        isinstance(temperature, bool)
+        or not isinstance(temperature, (int, float))
+        or not math.isfinite(temperature)
+        or temperature < 0
+    ):
         raise ValueError(f"{func}: temperature must be a finite number >= 0, got {temperature!r}")

@@ -14,15 +14,21 @@ def frame_mlp(n_in: int, n_out: int) -> nn.Sequential:
     ``(..., n_in) -> (..., n_out)``.
     """
     return nn.Sequential(
-        nn.Linear(n_in, n_out), nn.LayerNorm(n_out), nn.LeakyReLU(0.1),
-        nn.Linear(n_out, n_out), nn.LayerNorm(n_out), nn.LeakyReLU(0.1),
+        nn.Linear(n_in, n_out),
+        nn.LayerNorm(n_out),
+        nn.LeakyReLU(0.1),
+        nn.Linear(n_out, n_out),
+        nn.LayerNorm(n_out),
+        nn.LeakyReLU(0.1),
     )
 
 
 def output_mlp(n_in: int, n_hidden: int, n_out: int) -> nn.Sequential:
-    """Linear → LayerNorm → LeakyReLU(0.1) → Linear: ``(..., n_in) -> (..., n_out)`` with an unbounded output."""
-    return nn.Sequential(nn.Linear(n_in, n_hidden), nn.LayerNorm(n_hidden), nn.LeakyReLU(0.1),
-                         nn.Linear(n_hidden, n_out))
+    """Linear → LayerNorm → LeakyReLU(0.1) → Linear: ``(..., n_in) -> (..., n_out)`` with an unbounded
+    output."""
+    return nn.Sequential(
+        nn.Linear(n_in, n_hidden), nn.LayerNorm(n_hidden), nn.LeakyReLU(0.1), nn.Linear(n_hidden, n_out)
+    )
 
 
 def sinusoidal_encoding(n_positions: int, dim: int) -> Tensor:
@@ -46,11 +52,12 @@ def attention_block(dim: int, heads: int, layers: int) -> nn.TransformerEncoder:
     closed by a LayerNorm.
 
     ``(B, N, dim) -> (B, N, dim)``, attending over all ``N`` tokens (frames or DCT components). The final norm
-    matters after the DCT: the first coefficient is ``sqrt(F)`` times the mean frame, and without it that scale
-    would reach the Gaussian heads unnormalised.
+    matters after the DCT: the first coefficient is ``sqrt(F)`` times the mean frame, and without it that
+    scale would reach the Gaussian heads unnormalised.
     """
-    layer = nn.TransformerEncoderLayer(dim, heads, dim_feedforward=2 * dim, dropout=0.0, batch_first=True,
-                                       norm_first=True)
+    layer = nn.TransformerEncoderLayer(
+        dim, heads, dim_feedforward=2 * dim, dropout=0.0, batch_first=True, norm_first=True
+    )
     return nn.TransformerEncoder(layer, layers, norm=nn.LayerNorm(dim), enable_nested_tensor=False)
 
 

@@ -1,12 +1,15 @@
-r"""Loss functions of the completion models, in the training loop's form ``loss_fn(model, batch, step, coeffs)``.
+r"""Loss functions of the completion models, in the training loop's form ``loss_fn(model, batch, step,
+coeffs)``.
 
-A batch is ``(windows (B, T, J * 3), mask (B, J))`` from :class:`~motionlab.models.trajevae.data.CompletionBatches`.
-The reconstruction term is the mean squared error over the ``F`` completed frames and ``J * 3`` channels (m²);
-the KL is summed over latent steps and numbers (nats); both are averaged over the ``B`` sequences:
+A batch is ``(windows (B, T, J * 3), mask (B, J))`` from
+:class:`~motionlab.models.trajevae.data.CompletionBatches`. The reconstruction term is the mean squared error
+over the ``F`` completed frames and ``J * 3`` channels (m²); the KL is summed over latent steps and numbers
+(nats); both are averaged over the ``B`` sequences:
 
 .. math::
     \mathcal L = \frac1B \sum_b \Big( \frac{1}{F \cdot 3J} \sum_{t, c} (\hat x_{btc} - x_{btc})^2
-                 + \beta \, \mathrm{KL}\big(q_\text{pose}(z \mid X \odot (1 - M)) \,\|\, p_\text{traj}(z \mid Y)\big) \Big).
+                 + \beta \, \mathrm{KL}\big(q_\text{pose}(z \mid X \odot (1 - M)) \,\|\, p_\text{traj}(z \mid
+                 Y)\big) \Big).
 
 This is the literal "MSE" of the method's description. The paper's code sums the squared errors instead,
 which weights the KL (β = 0.01) about ``F * 3J`` ≈ 3900 times less against the reconstruction; with our
@@ -28,13 +31,16 @@ from motionlab.models.trajevae.model import CompletionOutput, TrajeVAE
 
 
 def squared_error_terms(predicted: Tensor, target: Tensor, mask: Tensor) -> dict[str, Tensor]:
-    """Mean squared error ``recon`` over all elements, split into ``recon_given`` + ``recon_hidden`` by the mask.
+    """Mean squared error ``recon`` over all elements, split into ``recon_given`` + ``recon_hidden`` by the
+    mask.
 
     Args:
         predicted, target: ``(B, F, J * 3)``; mask: ``(B, J)`` bool, True where the trajectory was given.
     """
     if predicted.shape != target.shape:
-        raise ValueError(f"squared_error_terms: predicted {tuple(predicted.shape)} and target {tuple(target.shape)} differ")
+        raise ValueError(
+            f"squared_error_terms: predicted {tuple(predicted.shape)} and target {tuple(target.shape)} differ"
+        )
     squared = (predicted - target) ** 2
     given = channel_mask(mask)[:, None, :].to(squared.dtype)
     count = squared.numel()
@@ -57,7 +63,9 @@ def latent_kl(output: CompletionOutput) -> Tensor:
     return kl.sum() / kl.shape[0]
 
 
-def trajevae_loss(model: TrajeVAE, batch: tuple[Tensor, Tensor], step: int, coeffs: dict[str, float]) -> dict[str, Tensor]:
+def trajevae_loss(
+    model: TrajeVAE, batch: tuple[Tensor, Tensor], step: int, coeffs: dict[str, float]
+) -> dict[str, Tensor]:
     """TrajeVAE's loss: MSE of the completed frames + ``model.cfg.beta`` · KL (see the module docstring)."""
     windows, mask = batch
     output = model(windows, mask)
@@ -66,14 +74,18 @@ def trajevae_loss(model: TrajeVAE, batch: tuple[Tensor, Tensor], step: int, coef
     return {"loss": terms["recon"] + model.cfg.beta * kl, **terms, "kl": kl}
 
 
-def gru_loss(model: GRUCompletion, batch: tuple[Tensor, Tensor], step: int, coeffs: dict[str, float]) -> dict[str, Tensor]:
+def gru_loss(
+    model: GRUCompletion, batch: tuple[Tensor, Tensor], step: int, coeffs: dict[str, float]
+) -> dict[str, Tensor]:
     """The deterministic GRU's loss: the mean squared error alone."""
     windows, mask = batch
     terms = squared_error_terms(model(windows, mask), windows[:, 1:], mask)
     return {"loss": terms["recon"], **terms}
 
 
-def cvae_rnn_loss(model: CVAERNN, batch: tuple[Tensor, Tensor], step: int, coeffs: dict[str, float]) -> dict[str, Tensor]:
+def cvae_rnn_loss(
+    model: CVAERNN, batch: tuple[Tensor, Tensor], step: int, coeffs: dict[str, float]
+) -> dict[str, Tensor]:
     """The CVAE-RNN's loss: mean squared error + ``model.cfg.beta`` · KL(q(z | X) || N(0, I))."""
     windows, mask = batch
     poses, posterior = model(windows, mask)

@@ -27,16 +27,36 @@ KEEP_PROBABILITY = 0.15
 #: The paper's order of adding trajectories (Table 1, Figure 4): right foot, left foot, right hand, left hand.
 PAPER_ORDER: tuple[str, ...] = ("right_foot", "left_foot", "right_wrist", "left_wrist")
 
-#: All 22 joints: the paper's four first, then the head and pelvis, then the rest from the extremities inwards.
+#: All 22 joints: the paper's four first, then the head and pelvis, then the rest from the extremities
+#: inwards.
 FULL_ORDER: tuple[str, ...] = PAPER_ORDER + (
-    "head", "pelvis", "right_elbow", "left_elbow", "right_knee", "left_knee", "right_ankle", "left_ankle",
-    "right_shoulder", "left_shoulder", "neck", "spine3", "spine2", "spine1", "right_hip", "left_hip",
-    "right_collar", "left_collar",
+    "head",
+    "pelvis",
+    "right_elbow",
+    "left_elbow",
+    "right_knee",
+    "left_knee",
+    "right_ankle",
+    "left_ankle",
+    "right_shoulder",
+    "left_shoulder",
+    "neck",
+    "spine3",
+    "spine2",
+    "spine1",
+    "right_hip",
+    "left_hip",
+    "right_collar",
+    "left_collar",
 )
 
 
-def sample_joint_masks(n_sequences: int, generator: torch.Generator, n_joints: int = len(JOINT_NAMES),
-                       keep_probability: float = KEEP_PROBABILITY) -> Tensor:
+def sample_joint_masks(
+    n_sequences: int,
+    generator: torch.Generator,
+    n_joints: int = len(JOINT_NAMES),
+    keep_probability: float = KEEP_PROBABILITY,
+) -> Tensor:
     """Random structured masks ``(n_sequences, n_joints)`` bool: each joint given with ``keep_probability``.
 
     One ``torch.rand`` draw of ``(n_sequences, n_joints)`` from ``generator``.
@@ -76,17 +96,25 @@ def first_joints(k: int, order: Sequence[str] = FULL_ORDER) -> Tensor:
 
 def _check_poses_and_mask(poses: Tensor, mask: Tensor, func: str) -> tuple[int, int]:
     if not isinstance(poses, Tensor) or not poses.is_floating_point() or poses.dim() < 2:
-        raise ValueError(f"{func}: poses must be a floating tensor (..., T, J * 3), got "
-                         f"{type(poses).__name__} {tuple(getattr(poses, 'shape', ()))}")
+        raise ValueError(
+            f"{func}: poses must be a floating tensor (..., T, J * 3), got "
+            f"{type(poses).__name__} {tuple(getattr(poses, 'shape', ()))}"
+        )
     if not isinstance(mask, Tensor) or mask.dtype != torch.bool:
-        raise ValueError(f"{func}: mask must be a bool tensor (..., J), got {getattr(mask, 'dtype', type(mask).__name__)}")
+        raise ValueError(
+            f"{func}: mask must be a bool tensor (..., J), got {getattr(mask, 'dtype', type(mask).__name__)}"
+        )
     n_joints = mask.shape[-1]
     if poses.shape[-1] != 3 * n_joints:
-        raise ValueError(f"{func}: poses have {poses.shape[-1]} channels but the mask has {n_joints} joints "
-                         f"(expected {3 * n_joints} = J * 3 channels)")
+        raise ValueError(
+            f"{func}: poses have {poses.shape[-1]} channels but the mask has {n_joints} joints "
+            f"(expected {3 * n_joints} = J * 3 channels)"
+        )
     if mask.shape[:-1] != poses.shape[:-2]:
-        raise ValueError(f"{func}: mask {tuple(mask.shape)} must have the leading shape of poses "
-                         f"{tuple(poses.shape[:-2])} plus the joint axis")
+        raise ValueError(
+            f"{func}: mask {tuple(mask.shape)} must have the leading shape of poses "
+            f"{tuple(poses.shape[:-2])} plus the joint axis"
+        )
     return n_joints, poses.shape[-2]
 
 
@@ -102,6 +130,7 @@ def given_trajectories(poses: Tensor, mask: Tensor) -> Tensor:
 
 
 def hidden_poses(poses: Tensor, mask: Tensor) -> Tensor:
-    """``X ⊙ (1 - M)``: poses ``(..., T, J * 3)`` with the given joints set to zero (what the posterior sees)."""
+    """``X ⊙ (1 - M)``: poses ``(..., T, J * 3)`` with the given joints set to zero (what the posterior
+    sees)."""
     _check_poses_and_mask(poses, mask, "hidden_poses")
     return poses * (~channel_mask(mask))[..., None, :].to(poses.dtype)

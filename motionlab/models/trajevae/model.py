@@ -1,4 +1,5 @@
-r"""TrajeVAE (Kania, Kowalski, Trzciński 2021): full-body motion completed from an initial pose and trajectories.
+r"""TrajeVAE (Kania, Kowalski, Trzciński 2021): full-body motion completed from an initial pose and
+trajectories.
 
 Shapes: ``B`` sequences, ``T`` frames per window (frame 0 is the initial pose :math:`x_0`), ``F = T - 1``
 frames to complete, ``J`` joints, poses as ``J * 3`` global coordinates in metres (the TrajeVAE
@@ -36,7 +37,13 @@ from motionlab.models.gaussian import reparameterize
 from motionlab.models.trajevae.config import TrajeVAEConfig
 from motionlab.models.trajevae.dct import dct, idct
 from motionlab.models.trajevae.inputs import check_masks, check_sampling, check_task, check_windows
-from motionlab.models.trajevae.layers import GaussianBranch, attention_block, frame_mlp, output_mlp, sinusoidal_encoding
+from motionlab.models.trajevae.layers import (
+    GaussianBranch,
+    attention_block,
+    frame_mlp,
+    output_mlp,
+    sinusoidal_encoding,
+)
 from motionlab.models.trajevae.masks import given_trajectories, hidden_poses
 
 
@@ -62,7 +69,8 @@ class CompletionOutput(NamedTuple):
 
 
 class TrajeVAEDecoder(nn.Module):
-    """Latents ``(B, C, L)`` + initial pose ``(B, J * 3)`` and its embedding ``(B, d)`` → frames ``(B, F, J * 3)``."""
+    """Latents ``(B, C, L)`` + initial pose ``(B, J * 3)`` and its embedding ``(B, d)`` → frames ``(B, F, J *
+    3)``."""
 
     def __init__(self, cfg: TrajeVAEConfig) -> None:
         super().__init__()
@@ -71,7 +79,9 @@ class TrajeVAEDecoder(nn.Module):
         self.mix = output_mlp(cfg.latent_dim + cfg.width, token, token)
         self.attention = attention_block(token, cfg.heads, cfg.layers)
         self.offsets = output_mlp(token, token, cfg.n_channels)
-        nn.init.zeros_(self.offsets[-1].weight)  # start from a still pose: zero offsets, the initial pose held
+        nn.init.zeros_(
+            self.offsets[-1].weight
+        )  # start from a still pose: zero offsets, the initial pose held
         nn.init.zeros_(self.offsets[-1].bias)
         self.register_buffer("frame_code", sinusoidal_encoding(cfg.n_future, token), persistent=False)
 
@@ -98,8 +108,9 @@ class TrajeVAE(nn.Module):
         self.before_dct = attention_block(token, cfg.heads, cfg.layers)
         self.after_dct = attention_block(token, cfg.heads, cfg.layers)
         self.prior_branch = GaussianBranch(token, cfg.latent_dim, cfg.heads, cfg.layers)
-        self.posterior_branch = (GaussianBranch(token, cfg.latent_dim, cfg.heads, cfg.layers)
-                                 if cfg.learnable_prior else None)
+        self.posterior_branch = (
+            GaussianBranch(token, cfg.latent_dim, cfg.heads, cfg.layers) if cfg.learnable_prior else None
+        )
         self.decoder = TrajeVAEDecoder(cfg)
         torch.random.set_rng_state(generator_state)
         self.register_buffer("frame_code", sinusoidal_encoding(cfg.n_future, token), persistent=False)
@@ -107,7 +118,8 @@ class TrajeVAE(nn.Module):
 
     # --- encoder -------------------------------------------------------------------------------------
     def trunk(self, sequence: Tensor, initial_embedding: Tensor) -> Tensor:
-        """The shared encoder: frames ``(B, F, J * 3)`` and ``(B, d)`` → tokens per latent step ``(B, C, 2 d)``."""
+        """The shared encoder: frames ``(B, F, J * 3)`` and ``(B, d)`` → tokens per latent step ``(B, C, 2
+        d)``."""
         context = initial_embedding[:, None, :].expand(-1, sequence.shape[1], -1)
         tokens = self.before_dct(torch.cat([self.frame_encoder(sequence), context], dim=-1) + self.frame_code)
         if self.cfg.use_dct:
@@ -121,12 +133,17 @@ class TrajeVAE(nn.Module):
     def posterior(self, seen_poses: Tensor, initial_embedding: Tensor) -> Gaussian:
         """``q_pose(z | ·, x_0)`` from the poses the posterior sees ``(B, F, J * 3)``."""
         if self.posterior_branch is None:
-            raise RuntimeError("TrajeVAE.posterior: this configuration has no learnable prior, hence no posterior")
+            raise RuntimeError(
+                "TrajeVAE.posterior: this configuration has no learnable prior, hence no posterior"
+            )
         return Gaussian(*self.posterior_branch(self.trunk(seen_poses, initial_embedding)))
 
     # --- training pass -------------------------------------------------------------------------------
-    def forward(self, windows: Tensor, mask: Tensor, generator: torch.Generator | None = None) -> CompletionOutput:
-        """Reconstruct windows ``(B, T, J * 3)`` given joint masks ``(B, J)`` bool (True: trajectory given)."""
+    def forward(
+        self, windows: Tensor, mask: Tensor, generator: torch.Generator | None = None
+    ) -> CompletionOutput:
+        """Reconstruct windows ``(B, T, J * 3)`` given joint masks ``(B, J)`` bool (True: trajectory
+        given)."""
         func = "TrajeVAE.forward"
         check_windows(windows, self.cfg.n_frames, self.cfg.n_channels, func)
         check_masks(mask, windows.shape[0], self.cfg.n_joints, func)
@@ -144,15 +161,21 @@ class TrajeVAE(nn.Module):
 
     # --- sampling ------------------------------------------------------------------------------------
     @torch.no_grad()
-    def sample(self, initial_pose: Tensor, trajectories: Tensor, n_samples: int, temperature: float = 1.0,
-               generator: torch.Generator | None = None) -> Tensor:
+    def sample(
+        self,
+        initial_pose: Tensor,
+        trajectories: Tensor,
+        n_samples: int,
+        temperature: float = 1.0,
+        generator: torch.Generator | None = None,
+    ) -> Tensor:
         """Completions ``(B, K, F, J * 3)`` from the prior, ``K = n_samples``.
 
         Args:
-            initial_pose: ``(B, J * 3)``; trajectories: ``(B, F, J * 3)``, ``Y = X ⊙ M`` (zeros where unknown).
-            n_samples: ``K``; with ``K = 1`` the prior means are decoded (the deterministic prediction).
-            temperature: scales the prior's standard deviation (0 decodes the means for every sample).
-            generator: the noise's ``torch.Generator`` (same seed, bitwise-identical samples).
+            initial_pose: ``(B, J * 3)``; trajectories: ``(B, F, J * 3)``, ``Y = X ⊙ M`` (zeros where
+            unknown). n_samples: ``K``; with ``K = 1`` the prior means are decoded (the deterministic
+            prediction). temperature: scales the prior's standard deviation (0 decodes the means for every
+            sample). generator: the noise's ``torch.Generator`` (same seed, bitwise-identical samples).
         """
         func = "TrajeVAE.sample"
         batch = check_task(initial_pose, trajectories, self.cfg.n_future, self.cfg.n_channels, func)
@@ -165,6 +188,9 @@ class TrajeVAE(nn.Module):
         else:
             std = torch.exp(0.5 * prior.logvar).repeat_interleave(n_samples, dim=0)
             z = mu + temperature * std * torch.randn(mu.shape, generator=generator, dtype=mu.dtype)
-        poses = self.decoder(z, initial_pose.repeat_interleave(n_samples, dim=0),
-                             initial_embedding.repeat_interleave(n_samples, dim=0))
+        poses = self.decoder(
+            z,
+            initial_pose.repeat_interleave(n_samples, dim=0),
+            initial_embedding.repeat_interleave(n_samples, dim=0),
+        )
         return poses.unflatten(0, (batch, n_samples))

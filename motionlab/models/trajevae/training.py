@@ -1,13 +1,13 @@
-"""Build the chapter's completion models from their configs and train them (or load them) through the one loop."""
+"""Build the chapter's completion models from their configs and train them (or load them) through the one
+loop."""
 
 from __future__ import annotations
 
-from typing import NamedTuple, Union
+from typing import NamedTuple
 
 from torch import Tensor, nn
 
 from motionlab import config
-
 from motionlab.evaluation.evaluator import data_fingerprint
 from motionlab.models.trajevae.baselines import CVAERNN, GRUCompletion, RecurrentConfig
 from motionlab.models.trajevae.config import TrajeVAEConfig
@@ -17,7 +17,7 @@ from motionlab.models.trajevae.model import TrajeVAE
 from motionlab.train import PiecewiseLinear, TrainConfig, TrainResult, train_or_load
 from motionlab.train.loop import LossFn
 
-ModelConfig = Union[TrajeVAEConfig, RecurrentConfig]
+ModelConfig = TrajeVAEConfig | RecurrentConfig
 
 
 class ChapterSetup(NamedTuple):
@@ -47,18 +47,30 @@ def chapter_setup(profile: str | None = None) -> ChapterSetup:
         raise ValueError(f"chapter_setup: profile must be 'quick' or 'full', got {profile!r}")
     quick = config.is_quick() if profile is None else profile == "quick"
     steps = 30 if quick else 400
-    trajevae = TrajeVAEConfig(n_frames=60, width=8 if quick else 32, latent_dim=4 if quick else 8,
-                              dct_components=4 if quick else 8, heads=2)
+    trajevae = TrajeVAEConfig(
+        n_frames=60,
+        width=8 if quick else 32,
+        latent_dim=4 if quick else 8,
+        dct_components=4 if quick else 8,
+        heads=2,
+    )
     gru = RecurrentConfig(n_frames=60, hidden=8 if quick else 64)
     cvae_rnn = RecurrentConfig(n_frames=60, hidden=8 if quick else 48, latent_dim=4 if quick else 16)
     schedule = PiecewiseLinear(((0, 0.05), (steps // 8, 1.0), (steps, 0.05)))
-    train = TrainConfig(steps=steps, batch_size=16 if quick else 32, lr=2e-3, grad_clip=None, lr_schedule=schedule,
-                        checkpoint_every=None if quick else 100)
+    train = TrainConfig(
+        steps=steps,
+        batch_size=16 if quick else 32,
+        lr=2e-3,
+        grad_clip=None,
+        lr_schedule=schedule,
+        checkpoint_every=None if quick else 100,
+    )
     return ChapterSetup(trajevae, gru, cvae_rnn, train, 12 if quick else 48)
 
 
 def build_model(cfg: ModelConfig) -> nn.Module:
-    """TrajeVAE for a :class:`TrajeVAEConfig`; the GRU (``latent_dim == 0``) or CVAE-RNN for a :class:`RecurrentConfig`."""
+    """TrajeVAE for a :class:`TrajeVAEConfig`; the GRU (``latent_dim == 0``) or CVAE-RNN for a
+    :class:`RecurrentConfig`."""
     if isinstance(cfg, TrajeVAEConfig):
         return TrajeVAE(cfg)
     if isinstance(cfg, RecurrentConfig):
@@ -75,23 +87,39 @@ def loss_function(cfg: ModelConfig) -> LossFn:
     raise TypeError(f"loss_function: expected a TrajeVAEConfig or RecurrentConfig, got {type(cfg).__name__}")
 
 
-def train_completion_model(name: str, cfg: ModelConfig, positions: Tensor, rotations: Tensor,
-                           train_config: TrainConfig, progress: bool | None = None) -> tuple[nn.Module, TrainResult]:
+def train_completion_model(
+    name: str,
+    cfg: ModelConfig,
+    positions: Tensor,
+    rotations: Tensor,
+    train_config: TrainConfig,
+    progress: bool | None = None,
+) -> tuple[nn.Module, TrainResult]:
     """Train the model of ``cfg`` on clips (or load it from the checkpoint cache); returns it in eval mode.
 
     Args:
         name: the run's cache name, e.g. ``"trajevae"``.
         positions, rotations: the training clips ``(N, T, J, 3)`` and ``(N, T, J, 4)`` at the chapter's frame
-            rate (:func:`motionlab.models.trajevae.data.decimate`); their fingerprint is part of the cache key.
+            rate (:func:`motionlab.models.trajevae.data.decimate`); their fingerprint is part of the cache
+            key.
         train_config: steps, batch size, learning rate, ... of the one training loop.
     """
     model = build_model(cfg)
     batches = CompletionBatches(positions, rotations, cfg.augment, cfg.keep_probability)
-    result = train_or_load(name, cfg, model, loss_function(cfg), batches, train_config,
-                           data_config=completion_data_config(batches.positions), progress=progress)
+    result = train_or_load(
+        name,
+        cfg,
+        model,
+        loss_function(cfg),
+        batches,
+        train_config,
+        data_config=completion_data_config(batches.positions),
+        progress=progress,
+    )
     return model, result
 
 
 def completion_data_config(positions: Tensor) -> dict:
-    """What defines a completion model's training data (part of its cache key): the clips and the frame step."""
+    """What defines a completion model's training data (part of its cache key): the clips and the frame
+    step."""
     return {"clips": data_fingerprint(positions), "frame_step": FRAME_STEP}
