@@ -7,6 +7,7 @@ and the trained classifiers are cached under ``build/``, so only the first chapt
 
 from __future__ import annotations
 
+from dataclasses import dataclass
 from typing import Literal, NamedTuple
 
 import numpy as np
@@ -15,8 +16,10 @@ import torch
 from motionlab import config
 from motionlab.data.store import MotionSet
 from motionlab.data.synthetic import load_splits
-from motionlab.evaluation.evaluator import Evaluator, load_evaluator
+from motionlab.evaluation.evaluator import Evaluator, evaluator_is_cached, load_evaluator
 from motionlab.metrics import diversity, fid, inception_score, mean_ci, multimodality
+from motionlab.train import TrainResult
+from motionlab.train.many import PendingTraining, start_training
 
 #: The benchmark's seed; each split draws from its own random streams of this seed.
 BENCHMARK_SEED = 0
@@ -52,9 +55,31 @@ def benchmark_evaluator(kind: Literal["conv", "gru"] = "gru", progress: bool | N
     return evaluator
 
 
-def cache_benchmark_evaluator(kind: Literal["conv", "gru"]) -> None:
-    """Train the benchmark's evaluator of ``kind`` into the cache (or find it there); for worker processes."""
-    benchmark_evaluator(kind, progress=False)
+@dataclass(frozen=True)
+class EvaluatorRun:
+    """The training run of the benchmark's evaluator of ``kind`` (a :class:`~motionlab.train.many.Run`)."""
+
+    kind: Literal["conv", "gru"]
+
+    def is_cached(self) -> bool:
+        train = load_benchmark().train
+        return evaluator_is_cached(train.positions, labels_of(train), kind=self.kind)
+
+    def train(self, progress: bool | None = None) -> tuple[Evaluator, TrainResult]:
+        train = load_benchmark().train
+        return load_evaluator(train.positions, labels_of(train), kind=self.kind, progress=progress)
+
+
+def prepare_evaluators(
+    kinds: tuple[Literal["conv", "gru"], ...] = ("gru", "conv"), processes: int = 2
+) -> PendingTraining:
+    """Start training the benchmark's evaluators that are not cached yet, in worker processes.
+
+    Any chapter that measures with them may call this first; it returns at once, so the chapter can go on
+    with its own work. ``.result()`` waits and returns ``{kind: Trained}`` (the evaluators loaded here);
+    :func:`benchmark_evaluator` loads them from the cache afterwards.
+    """
+    return start_training({kind: EvaluatorRun(kind) for kind in kinds}, processes)
 
 
 def sample_metrics(

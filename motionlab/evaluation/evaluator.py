@@ -13,7 +13,7 @@ from __future__ import annotations
 
 import hashlib
 from dataclasses import dataclass
-from typing import Literal
+from typing import Any, Literal
 
 import numpy as np
 import torch
@@ -24,7 +24,7 @@ from motionlab import config
 from motionlab.data.datasets import Standardizer
 from motionlab.evaluation.inputs import EVAL_FEATURES, body_frame_features
 from motionlab.models.classifiers import HEADS, ClassifierConfig, MotionClassifier
-from motionlab.train import TrainConfig, TrainResult, train_or_load
+from motionlab.train import TrainConfig, TrainResult, is_cached, train_or_load
 
 #: Clips are evaluated in chunks of this many to bound memory.
 CHUNK = 256
@@ -169,6 +169,60 @@ def data_fingerprint(positions: np.ndarray | Tensor) -> str:
     return hashlib.sha256(array.tobytes()).hexdigest()[:16] + f"-{array.shape}"
 
 
+def _training_tensors(
+    positions: np.ndarray | Tensor, labels: dict[str, np.ndarray | Tensor]
+) -> tuple[Tensor, dict[str, Tensor]]:
+    """The training clips as float32 and the labels as int64 tensors, checked against each other."""
+    unknown = set(labels) - set(HEADS)
+    if unknown:
+        raise ValueError(f"load_evaluator: unknown label heads {sorted(unknown)}; use {HEADS}")
+    positions = torch.as_tensor(np.asarray(positions), dtype=torch.float32)
+    label_tensors = {
+        name: torch.as_tensor(np.asarray(value), dtype=torch.int64) for name, value in labels.items()
+    }
+    for name, value in label_tensors.items():
+        if value.shape != positions.shape[:1]:
+            raise ValueError(
+                f"load_evaluator: labels[{name!r}] has shape {tuple(value.shape)}, expected "
+                f"({positions.shape[0]},)"
+            )
+    return positions, label_tensors
+
+
+def _training_identity(
+    positions: Tensor, labels: dict[str, Tensor], cfg: EvaluatorConfig
+) -> tuple[str, dict[str, Any], TrainConfig, dict[str, Any]]:
+    """What names an evaluator's training run in the checkpoint cache: its name, model config, training
+    config and data config (computed without building the model, so without touching the global RNG)."""
+    classes = {name: int(value.max()) + 1 for name, value in labels.items()}
+    classifier_cfg = ClassifierConfig(cfg.kind, EVAL_FEATURES, classes, cfg.hidden, cfg.feature_dim)
+    train_cfg = TrainConfig(
+        steps=cfg.steps,
+        batch_size=min(cfg.batch_size, positions.shape[0]),
+        lr=cfg.lr,
+        grad_clip=1.0,
+        seed=cfg.seed,
+        checkpoint_every=None,
+    )
+    data_config = {
+        "positions": data_fingerprint(positions),
+        "labels": {k: data_fingerprint(v.numpy()) for k, v in labels.items()},
+    }
+    return f"evaluator_{cfg.kind}", {"evaluator": cfg, "classifier": classifier_cfg}, train_cfg, data_config
+
+
+def evaluator_is_cached(
+    positions: np.ndarray | Tensor,
+    labels: dict[str, np.ndarray | Tensor],
+    cfg: EvaluatorConfig | None = None,
+    kind: Literal["conv", "gru"] = "gru",
+) -> bool:
+    """Whether :func:`load_evaluator` with these arguments would load from the cache (and not train)."""
+    cfg = default_evaluator_config(kind) if cfg is None else cfg
+    positions, label_tensors = _training_tensors(positions, labels)
+    return is_cached(*_training_identity(positions, label_tensors, cfg))
+
+
 def load_evaluator(
     positions: np.ndarray | Tensor,
     labels: dict[str, np.ndarray | Tensor],
@@ -188,45 +242,21 @@ def load_evaluator(
         The frozen :class:`Evaluator` (eval mode, no gradients needed) and the training result.
     """
     cfg = default_evaluator_config(kind) if cfg is None else cfg
-    unknown = set(labels) - set(HEADS)
-    if unknown:
-        raise ValueError(f"load_evaluator: unknown label heads {sorted(unknown)}; use {HEADS}")
-    positions = torch.as_tensor(np.asarray(positions), dtype=torch.float32)
-    label_tensors = {
-        name: torch.as_tensor(np.asarray(value), dtype=torch.int64) for name, value in labels.items()
-    }
-    for name, value in label_tensors.items():
-        if value.shape != positions.shape[:1]:
-            raise ValueError(
-                f"load_evaluator: labels[{name!r}] has shape {tuple(value.shape)}, expected "
-                f"({positions.shape[0]},)"
-            )
+    positions, label_tensors = _training_tensors(positions, labels)
+    name, model_config, train_cfg, data_config = _training_identity(positions, label_tensors, cfg)
     features = body_frame_features(positions)
     standardizer = Standardizer(EVAL_FEATURES).fit(features)
-    classes = {name: int(value.max()) + 1 for name, value in label_tensors.items()}
-    classifier_cfg = ClassifierConfig(cfg.kind, EVAL_FEATURES, classes, cfg.hidden, cfg.feature_dim)
     torch.manual_seed(cfg.seed)
-    evaluator = Evaluator(MotionClassifier(classifier_cfg), standardizer)
-    train_cfg = TrainConfig(
-        steps=cfg.steps,
-        batch_size=min(cfg.batch_size, positions.shape[0]),
-        lr=cfg.lr,
-        grad_clip=1.0,
-        seed=cfg.seed,
-        checkpoint_every=None,
-    )
+    evaluator = Evaluator(MotionClassifier(model_config["classifier"]), standardizer)
     batches = _crop_batches(standardizer.transform(features), label_tensors, cfg.min_crop)
     result = train_or_load(
-        f"evaluator_{cfg.kind}",
-        {"evaluator": cfg, "classifier": classifier_cfg},
+        name,
+        model_config,
         evaluator,
         lambda model, batch, step, coeffs: _classification_loss(model.classifier, batch, step, coeffs),
         batches,
         train_cfg,
-        data_config={
-            "positions": data_fingerprint(positions),
-            "labels": {k: data_fingerprint(v.numpy()) for k, v in label_tensors.items()},
-        },
+        data_config=data_config,
         progress=progress,
     )
     evaluator.requires_grad_(False)
