@@ -11,8 +11,8 @@ import math
 
 import torch
 
-from motionlab.geometry._checks import check_finite, check_shape
 from motionlab.geometry.quaternion import safely_scaled
+from motionlab.validation import check_finite, check_tensor
 
 
 def axis_angle_to_quat(rotvec: torch.Tensor) -> torch.Tensor:
@@ -21,9 +21,9 @@ def axis_angle_to_quat(rotvec: torch.Tensor) -> torch.Tensor:
     ``q = (cos(θ/2), sin(θ/2)/θ · r)`` with ``θ = |r|``; ``sin(θ/2)/θ = sinc(θ / 2π) / 2`` (``torch.sinc``
     is the normalised sinc), exact and differentiable at ``θ = 0``.
     """
-    check_shape(rotvec, (3,), "axis_angle_to_quat", "rotvec")
+    check_tensor(rotvec, "rotvec", "axis_angle_to_quat", trailing=(3,), finite=False)
     angle = torch.linalg.vector_norm(rotvec, dim=-1, keepdim=True)
-    check_finite(angle[..., 0], "axis_angle_to_quat", "rotvec")
+    check_finite(angle[..., 0], "rotvec", "axis_angle_to_quat")
     return torch.cat([torch.cos(angle / 2), rotvec * (0.5 * torch.sinc(angle / (2 * math.pi)))], dim=-1)
 
 
@@ -35,7 +35,7 @@ def quat_to_axis_angle(q: torch.Tensor) -> torch.Tensor:
     At ``s = 0`` the factor ``θ / s`` is replaced by its limit ``2 / w``, so the identity has a finite
     gradient too.
     """
-    check_shape(q, (4,), "quat_to_axis_angle", "q")
+    check_tensor(q, "q", "quat_to_axis_angle", trailing=(4,), finite=False)
     q, _ = safely_scaled(q, "quat_to_axis_angle", "the squared norm of q")
     q = torch.where(q[..., :1] < 0, -q, q)
     w, vec = q[..., :1], q[..., 1:]

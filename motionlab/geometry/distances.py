@@ -21,16 +21,17 @@ from __future__ import annotations
 
 import torch
 
-from motionlab.geometry._checks import check_finite, check_positive_finite, check_shape, promote_and_broadcast
+from motionlab.geometry.broadcast import promote_and_broadcast
 from motionlab.geometry.quaternion import safely_scaled
+from motionlab.validation import check_finite, check_positive_finite, check_tensor
 
 
 def _check_pair(q: torch.Tensor, r: torch.Tensor, where: str) -> torch.Tensor:
     """Check shapes and return the dot product ``<q, r>`` ``(...)`` (finite iff all inputs are finite)."""
-    check_shape(q, (4,), where, "q")
-    check_shape(r, (4,), where, "r")
+    check_tensor(q, "q", where, trailing=(4,), finite=False)
+    check_tensor(r, "r", where, trailing=(4,), finite=False)
     dot = (q * r).sum(-1)
-    check_finite(dot, where, "<q, r> (so q or r)")
+    check_finite(dot, "<q, r> (so q or r)", where)
     return dot
 
 
@@ -52,7 +53,7 @@ def quat_geodesic(q: torch.Tensor, r: torch.Tensor) -> torch.Tensor:
     )
     sin_part = torch.linalg.vector_norm(vec, dim=-1)
     # |q* ⊗ r|^2 = |q|^2 |r|^2: zero exactly when q or r is zero
-    check_positive_finite(dot * dot + sin_part * sin_part, "quat_geodesic", "|q| |r|")
+    check_positive_finite(dot * dot + sin_part * sin_part, "|q| |r|", "quat_geodesic")
     return 2 * torch.atan2(sin_part, dot.abs())
 
 
@@ -84,10 +85,10 @@ def matrix_geodesic(m1: torch.Tensor, m2: torch.Tensor) -> torch.Tensor:
     every angle, with finite gradients at 0 and π (``arccos((tr - 1)/2)`` has neither). ``M`` is never
     formed: ``tr M = Σ m1 ∘ m2`` and the skew vector is ``Σ_rows m2_row × m1_row``.
     """
-    check_shape(m1, (3, 3), "matrix_geodesic", "m1")
-    check_shape(m2, (3, 3), "matrix_geodesic", "m2")
+    check_tensor(m1, "m1", "matrix_geodesic", trailing=(3, 3), finite=False)
+    check_tensor(m2, "m2", "matrix_geodesic", trailing=(3, 3), finite=False)
     trace = (m1 * m2).sum((-2, -1))
-    check_finite(trace, "matrix_geodesic", "tr(m1ᵀ m2) (so m1 or m2)")
+    check_finite(trace, "tr(m1ᵀ m2) (so m1 or m2)", "matrix_geodesic")
     m1, m2 = promote_and_broadcast(m1, m2)
     skew = torch.linalg.cross(m2, m1, dim=-1).sum(-2)
     return torch.atan2(torch.linalg.vector_norm(skew, dim=-1), trace - 1)

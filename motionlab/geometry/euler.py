@@ -36,9 +36,9 @@ import math
 
 import torch
 
-from motionlab.geometry._checks import check_finite, check_shape
 from motionlab.geometry._numerics import safe_hypot
 from motionlab.geometry.quaternion import hamilton_product, safely_scaled
+from motionlab.validation import check_finite, check_tensor
 
 _AXES = {"x": 0, "y": 1, "z": 2}
 _EVEN_PERMUTATIONS = ((0, 1, 2), (1, 2, 0), (2, 0, 1))
@@ -75,8 +75,8 @@ def euler_to_quat(angles: torch.Tensor, order: str) -> torch.Tensor:
     """Unit quaternions ``(..., 4)`` of Euler angles ``(..., 3)`` (radians) in ``order`` (e.g. ``"XYZ"``,
     ``"zxz"``)."""
     axes, intrinsic = _parse_order(order, "euler_to_quat")
-    check_shape(angles, (3,), "euler_to_quat", "angles")
-    check_finite(angles, "euler_to_quat", "angles")
+    check_tensor(angles, "angles", "euler_to_quat", trailing=(3,), finite=False)
+    check_finite(angles, "angles", "euler_to_quat")
     first, second, third = (_elementary(angles[..., n], axis) for n, axis in enumerate(axes))
     if intrinsic:
         return hamilton_product(hamilton_product(first, second), third)
@@ -91,7 +91,7 @@ def quat_to_euler(q: torch.Tensor, order: str) -> torch.Tensor:
     Differentiable, with finite gradients everywhere (also in gimbal lock).
     """
     axes, intrinsic = _parse_order(order, "quat_to_euler")
-    check_shape(q, (4,), "quat_to_euler", "q")
+    check_tensor(q, "q", "quat_to_euler", trailing=(4,), finite=False)
     # An extrinsic order is the intrinsic order of the reversed axes, with the angles reversed.
     i, j, k = axes if intrinsic else axes[::-1]
     proper = i == k

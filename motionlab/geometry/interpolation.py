@@ -11,15 +11,15 @@ from typing import NamedTuple
 
 import torch
 
-from motionlab.geometry._checks import check_finite, check_shape
 from motionlab.geometry.quaternion import normalized
+from motionlab.validation import check_finite, check_tensor
 
 
 def _endpoints(q0: torch.Tensor, q1: torch.Tensor, t: torch.Tensor | float, where: str):
-    check_shape(q0, (4,), where, "q0")
-    check_shape(q1, (4,), where, "q1")
+    check_tensor(q0, "q0", where, trailing=(4,), finite=False)
+    check_tensor(q1, "q1", where, trailing=(4,), finite=False)
     t = torch.as_tensor(t, dtype=q0.dtype, device=q0.device)
-    check_finite(t, where, "t")
+    check_finite(t, "t", where)
     q0, q1 = normalized(q0, where, "q0"), normalized(q1, where, "q1")
     q1 = torch.where((q0 * q1).sum(-1, keepdim=True) < 0, -q1, q1)
     return q0, q1, t.unsqueeze(-1)
@@ -74,7 +74,7 @@ def interpolation_paths(q0: torch.Tensor, q1: torch.Tensor, n: int = 50) -> Inte
     """
     if not isinstance(n, int) or n < 2:
         raise ValueError(f"interpolation_paths: n must be an integer >= 2, got {n!r}")
-    check_shape(q0, (4,), "interpolation_paths", "q0")
+    check_tensor(q0, "q0", "interpolation_paths", trailing=(4,), finite=False)
     t = torch.linspace(0, 1, n, dtype=q0.dtype, device=q0.device)
     t_batched = t.reshape((n,) + (1,) * (q0.dim() - 1))
     return InterpolationPaths(t, quat_slerp(q0, q1, t_batched), quat_nlerp(q0, q1, t_batched))

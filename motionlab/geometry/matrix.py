@@ -7,8 +7,8 @@ from __future__ import annotations
 
 import torch
 
-from motionlab.geometry._checks import check_finite, check_shape
 from motionlab.geometry.quaternion import safely_scaled
+from motionlab.validation import check_finite, check_tensor
 
 
 def quat_to_matrix(q: torch.Tensor) -> torch.Tensor:
@@ -24,7 +24,7 @@ def quat_to_matrix(q: torch.Tensor) -> torch.Tensor:
     (:func:`~motionlab.geometry.quaternion.safely_scaled`). Raises ``ValueError`` for a zero or non-finite
     quaternion (checked on ``|q|^2``, which is needed anyway).
     """
-    check_shape(q, (4,), "quat_to_matrix", "q")
+    check_tensor(q, "q", "quat_to_matrix", trailing=(4,), finite=False)
     q, norm_sq = safely_scaled(q, "quat_to_matrix", "the squared norm of q")
     w, x, y, z = q.unbind(-1)
     s = 2.0 / norm_sq
@@ -54,8 +54,8 @@ def matrix_to_quat(matrix: torch.Tensor) -> torch.Tensor:
     result is differentiable wherever the chosen row does not switch. For a slightly non-orthogonal
     input the result is still a unit quaternion.
     """
-    check_shape(matrix, (3, 3), "matrix_to_quat", "matrix")
-    check_finite(matrix, "matrix_to_quat", "matrix")
+    check_tensor(matrix, "matrix", "matrix_to_quat", trailing=(3, 3), finite=False)
+    check_finite(matrix, "matrix", "matrix_to_quat")
     m00, m01, m02, m10, m11, m12, m20, m21, m22 = matrix.flatten(-2).unbind(-1)
     d_x, d_y, d_z = m21 - m12, m02 - m20, m10 - m01
     s_xy, s_xz, s_yz = m10 + m01, m02 + m20, m21 + m12

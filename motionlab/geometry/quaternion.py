@@ -16,7 +16,8 @@ from __future__ import annotations
 
 import torch
 
-from motionlab.geometry._checks import check_finite, check_positive_finite, check_shape, promote_and_broadcast
+from motionlab.geometry.broadcast import promote_and_broadcast
+from motionlab.validation import check_finite, check_positive_finite, check_tensor
 
 
 def quat_identity(
@@ -48,17 +49,17 @@ def quat_mul(q1: torch.Tensor, q2: torch.Tensor) -> torch.Tensor:
 
     As rotations: apply ``q2`` first, then ``q1``.
     """
-    check_shape(q1, (4,), "quat_mul", "q1")
-    check_shape(q2, (4,), "quat_mul", "q2")
-    check_finite(q1, "quat_mul", "q1")
-    check_finite(q2, "quat_mul", "q2")
+    check_tensor(q1, "q1", "quat_mul", trailing=(4,), finite=False)
+    check_tensor(q2, "q2", "quat_mul", trailing=(4,), finite=False)
+    check_finite(q1, "q1", "quat_mul")
+    check_finite(q2, "q2", "quat_mul")
     return hamilton_product(q1, q2)
 
 
 def quat_conjugate(q: torch.Tensor) -> torch.Tensor:
     """Conjugate ``(w, -x, -y, -z)``; for a unit quaternion this is the inverse rotation."""
-    check_shape(q, (4,), "quat_conjugate", "q")
-    check_finite(q, "quat_conjugate", "q")
+    check_tensor(q, "q", "quat_conjugate", trailing=(4,), finite=False)
+    check_finite(q, "q", "quat_conjugate")
     return q * q.new_tensor([1.0, -1.0, -1.0, -1.0])
 
 
@@ -68,7 +69,7 @@ def quat_normalize(q: torch.Tensor) -> torch.Tensor:
     Raises ``ValueError`` for a zero or non-finite quaternion instead of returning NaNs. The gradient
     of the result is orthogonal to ``q``: normalising says nothing about how long ``q`` should be.
     """
-    check_shape(q, (4,), "quat_normalize", "q")
+    check_tensor(q, "q", "quat_normalize", trailing=(4,), finite=False)
     return normalized(q, "quat_normalize", "q")
 
 
@@ -99,7 +100,7 @@ def safely_scaled(q: torch.Tensor, where: str, what: str) -> tuple[torch.Tensor,
     if bool(smallest >= info.tiny / info.eps) and bool(largest <= info.eps / info.tiny):  # NaN fails both
         return q, norm_sq
     largest_component = q.detach().abs().amax(dim=-1, keepdim=True)
-    check_positive_finite(largest_component[..., 0], where, what)
+    check_positive_finite(largest_component[..., 0], what, where)
     q = q / largest_component
     return q, (q * q).sum(-1)
 
@@ -116,8 +117,8 @@ def normalized(q: torch.Tensor, where: str, name: str) -> torch.Tensor:
 
 def quat_standardize(q: torch.Tensor) -> torch.Tensor:
     """Pick the representative with ``w >= 0`` (``q`` and ``-q`` are the same rotation)."""
-    check_shape(q, (4,), "quat_standardize", "q")
-    check_finite(q, "quat_standardize", "q")
+    check_tensor(q, "q", "quat_standardize", trailing=(4,), finite=False)
+    check_finite(q, "q", "quat_standardize")
     return torch.where(q[..., :1] < 0, -q, q)
 
 
@@ -128,9 +129,9 @@ def quat_apply(q: torch.Tensor, v: torch.Tensor) -> torch.Tensor:
     ``s = 2 / |q|^2``, ``u = vec(q)`` and ``t = u × v``, the result is ``v + s (w t + u × t)`` (for a tiny
     or huge ``q``, of ``q`` rescaled by :func:`safely_scaled`).
     """
-    check_shape(q, (4,), "quat_apply", "q")
-    check_shape(v, (3,), "quat_apply", "v")
-    check_finite(v, "quat_apply", "v")
+    check_tensor(q, "q", "quat_apply", trailing=(4,), finite=False)
+    check_tensor(v, "v", "quat_apply", trailing=(3,), finite=False)
+    check_finite(v, "v", "quat_apply")
     q, norm_sq = safely_scaled(q, "quat_apply", "the squared norm of q")
     w, u = q[..., :1], q[..., 1:]
     u, v = promote_and_broadcast(u, v)
@@ -147,12 +148,12 @@ def quat_from_two_vectors(a: torch.Tensor, b: torch.Tensor) -> torch.Tensor:
     (``|h|`` at rounding level) every axis orthogonal to ``a`` works; we take the half turn about
     ``â × e``, with ``e`` the coordinate axis least aligned with ``a``.
     """
-    check_shape(a, (3,), "quat_from_two_vectors", "a")
-    check_shape(b, (3,), "quat_from_two_vectors", "b")
+    check_tensor(a, "a", "quat_from_two_vectors", trailing=(3,), finite=False)
+    check_tensor(b, "b", "quat_from_two_vectors", trailing=(3,), finite=False)
     norm_a = torch.linalg.vector_norm(a, dim=-1, keepdim=True)
     norm_b = torch.linalg.vector_norm(b, dim=-1, keepdim=True)
-    check_positive_finite(norm_a[..., 0], "quat_from_two_vectors", "the norm of a")
-    check_positive_finite(norm_b[..., 0], "quat_from_two_vectors", "the norm of b")
+    check_positive_finite(norm_a[..., 0], "the norm of a", "quat_from_two_vectors")
+    check_positive_finite(norm_b[..., 0], "the norm of b", "quat_from_two_vectors")
     unit_a, unit_b = promote_and_broadcast(a / norm_a, b / norm_b)
     halfway = unit_a + unit_b
     turned = torch.cat(

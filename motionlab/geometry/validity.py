@@ -11,16 +11,16 @@ from __future__ import annotations
 
 import torch
 
-from motionlab.geometry._checks import check_finite, check_shape
+from motionlab.validation import check_finite, check_tensor
 
 
 def orthogonality_penalty(matrix: torch.Tensor) -> torch.Tensor:
     """``|Mᵀ M - I|²_F`` for ``(..., 3, 3)`` matrices: zero iff the columns are orthonormal."""
-    check_shape(matrix, (3, 3), "orthogonality_penalty", "matrix")
+    check_tensor(matrix, "matrix", "orthogonality_penalty", trailing=(3, 3), finite=False)
     gram = matrix.transpose(-1, -2) @ matrix
     eye = torch.eye(3, dtype=matrix.dtype, device=matrix.device)
     penalty = ((gram - eye) ** 2).sum((-2, -1))
-    check_finite(penalty, "orthogonality_penalty", "matrix")
+    check_finite(penalty, "matrix", "orthogonality_penalty")
     return penalty
 
 
@@ -29,9 +29,9 @@ def determinant_penalty(matrix: torch.Tensor) -> torch.Tensor:
 
     Orthogonality alone allows reflections (``det = -1``); this term rules them out.
     """
-    check_shape(matrix, (3, 3), "determinant_penalty", "matrix")
+    check_tensor(matrix, "matrix", "determinant_penalty", trailing=(3, 3), finite=False)
     det = (matrix[..., :, 0] * torch.linalg.cross(matrix[..., :, 1], matrix[..., :, 2], dim=-1)).sum(-1)
-    check_finite(det, "determinant_penalty", "matrix")
+    check_finite(det, "matrix", "determinant_penalty")
     return (det - 1) ** 2
 
 
@@ -41,7 +41,7 @@ def quat_norm_penalty(q: torch.Tensor) -> torch.Tensor:
     Its gradient ``2 (|q| - 1) q / |q|`` points along ``q``: exactly the direction that
     normalisation ignores. At ``q = 0`` the gradient is 0 (a subgradient), not NaN.
     """
-    check_shape(q, (4,), "quat_norm_penalty", "q")
+    check_tensor(q, "q", "quat_norm_penalty", trailing=(4,), finite=False)
     norm = torch.linalg.vector_norm(q, dim=-1)
-    check_finite(norm, "quat_norm_penalty", "q")
+    check_finite(norm, "q", "quat_norm_penalty")
     return (norm - 1) ** 2
