@@ -76,6 +76,8 @@ def _load_all(
     trained = {}
     for name, run in runs.items():
         model, result = run.train(progress=progress)
+        if name not in seconds and not result.loaded_from_cache:  # trained here, now (one process)
+            seconds = {**seconds, name: result.metrics["train_seconds"]}
         trained[name] = Trained(model, result, seconds.get(name), measured.get(name))
     return trained
 
