@@ -72,6 +72,16 @@ def output_file(text: str) -> Path:
     return path
 
 
+def existing_directory(text: str) -> Path:
+    """An argparse ``type=`` for a directory to read: it must exist and be a directory."""
+    path = Path(text)
+    if not path.exists():
+        raise argparse.ArgumentTypeError(f"directory {text!r} does not exist")
+    if not path.is_dir():
+        raise argparse.ArgumentTypeError(f"{text!r} is not a directory")
+    return path
+
+
 def run(prog: str, command: Callable[[], int]) -> int:
     """``command()``'s exit status; a :data:`USER_ERRORS` exception is printed as one line and gives status
     2."""

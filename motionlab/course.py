@@ -33,6 +33,7 @@ from nbconvert import HTMLExporter
 
 from motionlab import config
 from motionlab.execution import CellLimits, execute_notebook, read_notebook
+from motionlab.report_assets import install_assets, localize_page
 from motionlab.results import load_results, results_path, update_notebook
 
 #: Wall-clock budgets per chapter in seconds (design notes), as (full, quick).
@@ -109,7 +110,17 @@ def _describe(error: BaseException, cell: int | None) -> str:
     return where + f"{type(error).__name__}: {text.splitlines()[-1] if text else ''}"[:2000]
 
 
-def execute_chapter(path: Path, out_dir: Path) -> ChapterRun:
+def export_html(notebook: nbformat.NotebookNode, assets: dict[str, str] | None = None) -> str:
+    """The HTML page of an executed notebook (nbconvert's JupyterLab template), pointing at the local
+    ``assets`` of :func:`~motionlab.report_assets.install_assets` (MathJax, require.js, the widget manager,
+    Font Awesome) instead of their web addresses."""
+    assets = assets or {}
+    settings = {key: value for key, value in assets.items() if key.endswith("_url")}
+    body, _ = HTMLExporter(template_name="lab", **settings).from_notebook_node(notebook)
+    return localize_page(body, assets)
+
+
+def execute_chapter(path: Path, out_dir: Path, assets: dict[str, str] | None = None) -> ChapterRun:
     """Execute one notebook; write ``<name>.ipynb`` and ``<name>.html`` to ``out_dir`` (even on failure).
 
     A kernel that stops answering is killed and the chapter executed again (:data:`HANG_RETRIES` times);
@@ -133,8 +144,7 @@ def execute_chapter(path: Path, out_dir: Path) -> ChapterRun:
     seconds = execution.seconds
     update_notebook(name, lambda entry: entry.update(seconds=round(seconds, 2), retries=retries))
     nbformat.write(execution.notebook, out_dir / f"{name}.ipynb")
-    body, _ = HTMLExporter(template_name="lab").from_notebook_node(execution.notebook)
-    (out_dir / f"{name}.html").write_text(body, encoding="utf-8")
+    (out_dir / f"{name}.html").write_text(export_html(execution.notebook, assets), encoding="utf-8")
     return ChapterRun(name, seconds, error, tuple(retries))
 
 
@@ -251,10 +261,11 @@ def build(notebook_dir: Path, only: list[str] | None = None) -> list[ChapterRun]
     out_dir = config.course_dir()
     out_dir.mkdir(parents=True, exist_ok=True)
     config.set_threads()
+    assets = install_assets(out_dir)
     runs = []
     for path in chapters:
         print(f"[course] {path.stem} ...", flush=True)
-        run = execute_chapter(path, out_dir)
+        run = execute_chapter(path, out_dir, assets)
         budget = budget_seconds(run.name)
         note = f" (budget {budget:.0f} s)" if budget else ""
         print(
