@@ -130,6 +130,8 @@ def test_bad_input_raises_clear_errors(tiny_model, tiny_batch):
         tiny_model(poses, action, body, word_drop=1.5)
     with pytest.raises(ValueError, match="action values"):
         tiny_model(poses, action + 6, body)
+    with pytest.raises(TypeError, match="action must hold integer class indices"):
+        tiny_model(poses, action.float(), body)
     with pytest.raises(ValueError, match="n_frames"):
         tiny_model.generate(action, body, 0)
     with pytest.raises(ValueError, match="action and body"):

@@ -32,7 +32,7 @@ from motionlab.metrics import mean_ci, repeat_seed
 from motionlab.models.motion_cell.baselines import BaselineConfig
 from motionlab.models.motion_cell.data import PoseCodec
 from motionlab.models.motion_cell.model import MotionCellConfig
-from motionlab.validation import check_scalar
+from motionlab.validation import check_scalar, check_tensor
 
 PROTOCOL_FRAMES = 140
 DISCARDED_FRAMES = 20
@@ -226,6 +226,7 @@ def real_speed_level(
 
 def collapse_ratio(curve: Tensor, real_level: float, frames: tuple[int, int] = COLLAPSE_FRAMES) -> float:
     """Mean of ``curve`` ``(T,)`` over ``frames`` divided by ``real_level`` (1: as lively as real data)."""
+    check_tensor(curve, "curve", "collapse_ratio", ndim=1)
     begin, end = frames
     if not 0 <= begin < end <= curve.shape[0]:
         raise ValueError(f"collapse_ratio: frames {frames} do not fit a curve of {curve.shape[0]} frames")

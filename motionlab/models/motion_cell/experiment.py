@@ -189,9 +189,9 @@ def motion_cell_schedules(
 def build_model(cfg: MotionCellConfig | BaselineConfig, codec: PoseCodec, seed: int = 0) -> nn.Module:
     """A fresh Motion Cell or baseline for ``cfg``, its weights drawn from ``seed`` (the caller's random
     state is untouched); the model gets its own copy of ``codec``."""
-    network = FrameBaseline if isinstance(cfg, BaselineConfig) else MotionCellModel
     if not isinstance(cfg, (MotionCellConfig, BaselineConfig)):
         raise TypeError(f"build_model: cfg must be a MotionCellConfig or BaselineConfig, got {cfg!r}")
+    network = FrameBaseline if isinstance(cfg, BaselineConfig) else MotionCellModel
     own_codec = codec.copy()
     return build_seeded(lambda: network(cfg, own_codec), seed)
 
@@ -202,7 +202,7 @@ class MotionCellRun:
     or output head) or a baseline on the denoised training data.
 
     Attributes:
-        name: the checkpoint's name; model, loss, train: the model, loss and training configs;
+        name: the checkpoint's name; model, loss, train_config: the model, loss and training configs;
         data: the denoised training data (its fingerprint and the window length enter the cache key).
     """
 
@@ -241,9 +241,12 @@ class MotionCellRun:
         )
 
     def train(self, progress: bool | None = None) -> tuple[nn.Module, TrainResult]:
-        """Train the model (or load it from the checkpoint cache). The classifier loss, which needs the conv
-        evaluator (cached by :func:`~motionlab.evaluation.benchmark.prepare_evaluators`), is built only
-        when the run trains."""
+        """Train the model (or load it from the checkpoint cache).
+
+        The classifier loss, which needs the conv evaluator (cached by
+        :func:`~motionlab.evaluation.benchmark.prepare_evaluators`), is built only when the run trains, so
+        loading a model costs no evaluator and no pass over the training clips.
+        """
         if isinstance(self.model, BaselineConfig):
             loss_fn = baseline_loss(self.loss)
         else:

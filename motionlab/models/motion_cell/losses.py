@@ -115,7 +115,8 @@ def kl_loss(
     posterior_mu: Tensor, posterior_logvar: Tensor, prior_mu: Tensor, prior_logvar: Tensor, word_length: int
 ) -> Tensor:
     """KL(q || p) summed over latent dimensions, averaged over words, divided by the word length
-    (nats/frame)."""
+    (nats/frame); the four Gaussians' parameters are ``(B, N, latent_dim)``."""
+    check_scalar(word_length, "word_length", "kl_loss", kind=numbers.Integral, minimum=1)
     return gaussian_kl(posterior_mu, posterior_logvar, prior_mu, prior_logvar).sum(-1).mean() / word_length
 
 

@@ -155,7 +155,14 @@ def bounded_logvar(raw: Tensor) -> Tensor:
 def check_attributes(
     action: Tensor, body: Tensor, n_actions: int, n_bodies: int, where: str
 ) -> tuple[Tensor, Tensor]:
-    """``action`` and ``body`` as int64 ``(B,)`` tensors, checked against the number of classes."""
+    """``action`` and ``body`` as int64 ``(B,)`` tensors, checked against the number of classes.
+
+    Raises ``TypeError`` for floating-point attributes, ``ValueError`` for a wrong shape or a class index
+    out of range (naming ``where``).
+    """
+    for name, value in (("action", action), ("body", body)):
+        if torch.is_tensor(value) and value.is_floating_point():
+            raise TypeError(f"{where}: {name} must hold integer class indices, got dtype {value.dtype}")
     action = torch.as_tensor(action, dtype=torch.int64)
     body = torch.as_tensor(body, dtype=torch.int64)
     if action.dim() != 1 or action.shape != body.shape:
