@@ -5,8 +5,8 @@ import pytest
 import torch
 from test_motion_cell_common import baseline, batch, perturb
 
-from motionlab.models.motion_cell.baselines import baseline_loss
-from motionlab.models.motion_cell.config import BaselineConfig, LossConfig
+from motionlab.models.motion_cell.baselines import BaselineConfig, baseline_loss
+from motionlab.models.motion_cell.losses import LossConfig
 
 
 @pytest.mark.parametrize("kind", ["erd", "quaternet"])

@@ -8,9 +8,10 @@ import torch
 
 from motionlab.data.store import MotionSet
 from motionlab.data.synthetic import generate
-from motionlab.models.motion_cell.config import BaselineConfig, MotionCellConfig
+from motionlab.models.motion_cell.baselines import BaselineConfig
 from motionlab.models.motion_cell.data import PoseCodec, WindowBatch, motion_cell_features
-from motionlab.models.motion_cell.training import build_model
+from motionlab.models.motion_cell.experiment import build_model
+from motionlab.models.motion_cell.model import MotionCellConfig
 
 TINY = MotionCellConfig(word_dim=8, feature_dim=8, latent_dim=4, hidden_dim=8, control_dim=4)
 

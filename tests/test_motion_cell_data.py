@@ -11,8 +11,8 @@ from test_motion_cell_common import clips, codec, features
 from motionlab.data.representations import root_start
 from motionlab.geometry import quat_to_matrix
 from motionlab.models.motion_cell.data import PoseCodec, WindowBatches
-from motionlab.models.motion_cell.output import OutputHead, assemble_pose, split_raw_pose
-from motionlab.models.motion_cell.words import from_words, to_words
+from motionlab.models.motion_cell.heads import OutputHead, assemble_pose, split_raw_pose
+from motionlab.models.motion_cell.model import from_words, to_words
 from motionlab.skeleton import body_skeleton
 
 

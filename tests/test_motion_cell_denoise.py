@@ -4,13 +4,18 @@ import pytest
 import torch
 from test_motion_cell_common import clips, codec, features
 
-from motionlab.models.motion_cell.config import DenoiserConfig, LossConfig
-from motionlab.models.motion_cell.denoise import denoiser_loss, noisy_features
-from motionlab.models.motion_cell.training import build_model
+from motionlab.models.motion_cell.denoise import (
+    DenoiserConfig,
+    DenoisingAutoencoder,
+    denoiser_loss,
+    noisy_features,
+)
+from motionlab.models.motion_cell.losses import LossConfig
+from motionlab.train import build_seeded
 
 
 def _denoiser():
-    return build_model(DenoiserConfig(channels=8, bottleneck=4), codec(), seed=0)
+    return build_seeded(lambda: DenoisingAutoencoder(DenoiserConfig(channels=8, bottleneck=4), codec()), 0)
 
 
 def test_noisy_features_are_seeded_and_close_to_the_clean_ones():

@@ -9,6 +9,7 @@ from motionlab.data.datasets import Standardizer
 from motionlab.evaluation import EVAL_FEATURES, Evaluator, body_frame_features
 from motionlab.models.classifiers import ClassifierConfig, MotionClassifier
 from motionlab.models.motion_cell import evaluate as E
+from motionlab.models.motion_cell.experiment import table_row
 from motionlab.skeleton import average_skeleton
 
 
@@ -98,14 +99,9 @@ def test_evaluate_model_gives_a_reproducible_table_row():
     assert all(np.isfinite(mean) and half >= 0 for mean, half in first.row.values())
     with pytest.raises(ValueError, match="n_repeats"):
         E.evaluate_model(model, evaluator, reference, 1, 1)
-    other = motion_cell()
-    parallel = E.evaluate_models(
-        {"perturbed": model, "plain": other}, evaluator, reference, 1, 2, seed=3, processes=2
-    )
-    assert list(parallel) == ["perturbed", "plain"]
-    assert parallel["perturbed"].row == first.row
-    assert torch.equal(parallel["perturbed"].samples.positions, first.samples.positions)
-    assert parallel["plain"].row == E.evaluate_model(other, evaluator, reference, 1, 2, seed=3).row
+    row = table_row("mcell", model, evaluator, reference, n_per_combination=1, n_repeats=2)
+    assert row.row == E.evaluate_model(model, evaluator, reference, 1, 2, seed=0).row
+    assert table_row("output_matrix", model, evaluator, reference, 1, 2) is None
 
 
 def test_tsne_embedding_shape_and_seed():

@@ -7,9 +7,10 @@ import torch.nn.functional as F
 from scipy.spatial.transform import Rotation
 
 from motionlab.evaluation import EVAL_FEATURES, body_frame_features
-from motionlab.models.motion_cell.config import LossConfig
+from motionlab.models.motion_cell.heads import OutputHead
 from motionlab.models.motion_cell.losses import (
     ClassifierLoss,
+    LossConfig,
     joint_weights,
     kl_loss,
     motion_cell_loss,
@@ -17,7 +18,6 @@ from motionlab.models.motion_cell.losses import (
     root_loss,
     rotation_loss,
 )
-from motionlab.models.motion_cell.output import OutputHead
 from motionlab.skeleton import joint_impact_weights
 
 

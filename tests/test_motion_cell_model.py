@@ -7,8 +7,7 @@ import pytest
 import torch
 from test_motion_cell_common import batch, motion_cell, perturb
 
-from motionlab.models.motion_cell.cell import InitialState, bounded_logvar
-from motionlab.models.motion_cell.config import MotionCellConfig
+from motionlab.models.motion_cell.model import InitialState, MotionCellConfig, bounded_logvar
 
 
 def _quaternion_norms(model, poses):
@@ -121,7 +120,7 @@ def test_bad_input_raises_clear_errors(tiny_model, tiny_batch):
     poses, action, body = tiny_batch
     with pytest.raises(ValueError, match="whole number of words"):
         tiny_model(poses[:, :10], action, body)
-    with pytest.raises(ValueError, match=r"\(B, T, 90\)"):
+    with pytest.raises(ValueError, match=r"\(\.\.\., 90\)"):
         tiny_model(poses[..., :89], action, body)
     bad = poses.clone()
     bad[0, 0, 0] = math.nan
@@ -131,6 +130,8 @@ def test_bad_input_raises_clear_errors(tiny_model, tiny_batch):
         tiny_model(poses, action, body, word_drop=1.5)
     with pytest.raises(ValueError, match="action values"):
         tiny_model(poses, action + 6, body)
+    with pytest.raises(TypeError, match="action must hold integer class indices"):
+        tiny_model(poses, action.float(), body)
     with pytest.raises(ValueError, match="n_frames"):
         tiny_model.generate(action, body, 0)
     with pytest.raises(ValueError, match="action and body"):
@@ -142,6 +143,10 @@ def test_config_validation():
         MotionCellConfig(output="euler")
     with pytest.raises(ValueError, match="word_length"):
         MotionCellConfig(word_length=0)
+    with pytest.raises(TypeError, match="MotionCellConfig: hidden_dim must be an integer"):
+        MotionCellConfig(hidden_dim=16.0)
+    with pytest.raises(TypeError, match="MotionCellConfig: n_joints"):
+        MotionCellConfig(n_joints=True)
 
 
 def test_initial_state_is_a_learned_gaussian_per_attribute_combination():

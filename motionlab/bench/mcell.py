@@ -13,8 +13,7 @@ import torch
 from motionlab import config
 from motionlab.bench._timing import generator_speed, median_seconds
 from motionlab.models.motion_cell.data import PoseCodec
-from motionlab.models.motion_cell.settings import chapter_settings
-from motionlab.models.motion_cell.training import build_model
+from motionlab.models.motion_cell.experiment import ExperimentConfig, build_model
 from motionlab.skeleton import BODY_MEASUREMENTS, PARENTS
 
 FPS = 30
@@ -24,7 +23,7 @@ FRAMES = 4 * FPS
 def run() -> dict:
     """Sampling speed of the Motion Cell (see the module notes)."""
     config.set_threads(1)
-    settings = chapter_settings()
+    settings = ExperimentConfig.current()
     codec = PoseCodec(np.stack([m.offsets() for m in BODY_MEASUREMENTS]), PARENTS)
     codec.root.fit(
         torch.randn(100, 6)

@@ -6,12 +6,14 @@ wires it to ipywidgets and shows several samples side by side, so the variety of
 
 from __future__ import annotations
 
+import numbers
 from collections.abc import Sequence
 
 import ipywidgets as widgets
 import torch
 from torch import Tensor
 
+from motionlab.validation import check_scalar
 from motionlab.viz import animate
 
 
@@ -27,10 +29,8 @@ def sample_motions(
         seed: seeds the sampling; the same seed gives the same motions.
         n_samples: how many samples to draw side by side.
     """
-    if isinstance(n_samples, bool) or not isinstance(n_samples, int) or n_samples < 1:
-        raise ValueError(f"sample_motions: n_samples must be a positive integer, got {n_samples!r}")
-    if isinstance(seed, bool) or not isinstance(seed, int) or seed < 0:
-        raise ValueError(f"sample_motions: seed must be a non-negative integer, got {seed!r}")
+    check_scalar(n_samples, "n_samples", "sample_motions", kind=numbers.Integral, minimum=1)
+    check_scalar(seed, "seed", "sample_motions", kind=numbers.Integral, minimum=0)
     actions = torch.full((n_samples,), int(action), dtype=torch.int64)
     bodies = torch.full((n_samples,), int(body), dtype=torch.int64)
     with torch.no_grad():

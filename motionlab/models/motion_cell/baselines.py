@@ -16,17 +16,58 @@ start pose), with its own remedy for the gap between teacher forcing and free ru
 
 from __future__ import annotations
 
+import numbers
+from dataclasses import dataclass
+
 import torch
 from torch import Tensor, nn
 
-from motionlab.models.motion_cell.cell import ControlEmbedding, InitialState
-from motionlab.models.motion_cell.config import BaselineConfig, LossConfig
-from motionlab.models.motion_cell.data import PoseCodec, WindowBatch
-from motionlab.models.motion_cell.losses import LossFn, joint_weights, norm_loss, root_loss, rotation_loss
-from motionlab.models.motion_cell.output import OutputHead, PosePrediction, assemble_pose, split_raw_pose
-from motionlab.models.motion_cell.words import mlp
+from motionlab.models.motion_cell.data import PoseCodec, WindowBatch, pose_dim
+from motionlab.models.motion_cell.heads import OutputHead, PosePrediction, assemble_pose, split_raw_pose
+from motionlab.models.motion_cell.losses import (
+    LossConfig,
+    LossFn,
+    joint_weights,
+    norm_loss,
+    root_loss,
+    rotation_loss,
+)
+from motionlab.models.motion_cell.model import ControlEmbedding, InitialState, mlp
+from motionlab.validation import check_choice, check_scalar, check_tensor
 
 RecurrentState = Tensor | tuple[Tensor, Tensor]
+
+
+@dataclass(frozen=True)
+class BaselineConfig:
+    """A frame-level deterministic recurrent baseline: ERD or the QuaterNet-style quaternion RNN.
+
+    Attributes:
+        kind: ``"erd"`` (MLP encoder, 2-layer LSTM, MLP decoder; Fragkiadaki et al. 2015) or
+            ``"quaternet"`` (2-layer GRU, quaternion outputs as rotations of the previous pose, trained
+            through forward kinematics; Pavllo et al. 2018).
+        n_joints, n_actions, n_bodies, control_dim: as in :class:`MotionCellConfig`.
+        hidden_dim: recurrent width; encoder_dim: ERD's encoder / decoder width (unused by QuaterNet).
+    """
+
+    kind: str = "erd"
+    n_joints: int = 22
+    hidden_dim: int = 128
+    encoder_dim: int = 128
+    control_dim: int = 32
+    n_actions: int = 6
+    n_bodies: int = 2
+
+    def __post_init__(self) -> None:
+        check_choice(self.kind, "kind", "BaselineConfig", ("erd", "quaternet"))
+        for name in ("hidden_dim", "encoder_dim", "control_dim", "n_actions", "n_bodies"):
+            check_scalar(getattr(self, name), name, "BaselineConfig", kind=numbers.Integral, minimum=1)
+        check_scalar(self.n_joints, "n_joints", "BaselineConfig", kind=numbers.Integral, minimum=2)
+
+    @property
+    def pose_dim(self) -> int:
+        """Channels of one pose vector (:func:`~.data.pose_dim`)."""
+        return pose_dim(self.n_joints)
 
 
 class FrameBaseline(nn.Module):
@@ -94,15 +135,9 @@ class FrameBaseline(nn.Module):
             input_noise: standard deviation of Gaussian noise added to the inputs (ERD's curriculum).
             sampling: probability of feeding the model's own prediction instead of the data (QuaterNet).
         """
-        if poses.dim() != 3 or poses.shape[-1] != self.cfg.pose_dim:
-            raise ValueError(
-                f"FrameBaseline: poses must be (B, T, {self.cfg.pose_dim}), got {tuple(poses.shape)}"
-            )
-        if input_noise < 0 or not 0.0 <= sampling <= 1.0:
-            raise ValueError(
-                f"FrameBaseline: input_noise must be >= 0 and sampling in [0, 1], got {input_noise}, "
-                f"{sampling}"
-            )
+        check_tensor(poses, "poses", "FrameBaseline", ndim=3, trailing=(self.cfg.pose_dim,))
+        check_scalar(input_noise, "input_noise", "FrameBaseline", minimum=0.0)
+        check_scalar(sampling, "sampling", "FrameBaseline", minimum=0.0, maximum=1.0)
         control = self.control(action, body)
         state = self.initial_state(action, body, generator)
         start = self.start_pose.expand(poses.shape[0], 1, -1)
@@ -122,8 +157,7 @@ class FrameBaseline(nn.Module):
         self, action: Tensor, body: Tensor, n_frames: int, generator: torch.Generator | None = None
     ) -> Tensor:
         """Roll out ``n_frames`` pose vectors ``(B, n_frames, 90)`` from a sampled initial state."""
-        if isinstance(n_frames, bool) or not isinstance(n_frames, int) or n_frames < 1:
-            raise ValueError(f"FrameBaseline.generate: n_frames must be a positive integer, got {n_frames!r}")
+        check_scalar(n_frames, "n_frames", "FrameBaseline.generate", kind=numbers.Integral, minimum=1)
         control = self.control(action, body)
         state = self.initial_state(action, body, generator)
         pose = self.start_pose.expand(control.shape[0], 1, -1)

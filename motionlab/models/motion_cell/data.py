@@ -11,6 +11,7 @@ joint positions.
 
 from __future__ import annotations
 
+import numbers
 from collections.abc import Iterator, Sequence
 from typing import NamedTuple
 
@@ -19,9 +20,18 @@ import torch
 from torch import Tensor, nn
 
 from motionlab.data.datasets import Standardizer, gather_windows
-from motionlab.data.representations import RootStart, check_tensor, from_motion_cell, to_motion_cell
-from motionlab.models.motion_cell.config import ROOT_DIM, pose_dim
+from motionlab.data.representations import RootStart, from_motion_cell, to_motion_cell
 from motionlab.skeleton import forward_kinematics
+from motionlab.validation import check_scalar, check_tensor
+
+#: Root channels at the end of every pose vector (:data:`motionlab.data.representations.ROOT_FEATURES`).
+ROOT_DIM = 6
+
+
+def pose_dim(n_joints: int) -> int:
+    """Channels of one pose vector of a ``n_joints`` skeleton: ``J - 1`` quaternions and the 6 root
+    channels."""
+    return (n_joints - 1) * 4 + ROOT_DIM
 
 
 def motion_cell_features(rotations: Tensor | np.ndarray, positions: Tensor | np.ndarray) -> Tensor:
@@ -71,8 +81,14 @@ class PoseCodec(nn.Module):
         self.root.fit(features[..., -ROOT_DIM:])
         return self
 
+    def copy(self) -> PoseCodec:
+        """A new codec with the same skeletons and root statistics (models never share codec buffers)."""
+        twin = PoseCodec(self.offsets, self.parents)
+        twin.load_state_dict(self.state_dict())
+        return twin
+
     def _check(self, x: Tensor, name: str, func: str) -> Tensor:
-        return check_tensor(x, name, f"PoseCodec.{func}", (self.pose_dim,))
+        return check_tensor(x, name, f"PoseCodec.{func}", trailing=(self.pose_dim,))
 
     def encode(self, features: Tensor) -> Tensor:
         """Pose vectors ``(..., 90)`` from Motion Cell features (root channels standardised)."""
@@ -151,9 +167,7 @@ class WindowBatches:
     def __init__(
         self, poses: Tensor, action: Tensor | np.ndarray, body: Tensor | np.ndarray, length: int
     ) -> None:
-        check_tensor(poses, "poses", "WindowBatches", (None,), min_leading=2)
-        if poses.dim() != 3:
-            raise ValueError(f"WindowBatches: poses must be (N, T, D), got {tuple(poses.shape)}")
+        check_tensor(poses, "poses", "WindowBatches", ndim=3)
         self.poses = poses
         self.action = torch.as_tensor(np.asarray(action), dtype=torch.int64)
         self.body = torch.as_tensor(np.asarray(body), dtype=torch.int64)
@@ -162,11 +176,9 @@ class WindowBatches:
                 f"WindowBatches: action and body must be ({poses.shape[0]},), got "
                 f"{tuple(self.action.shape)} and {tuple(self.body.shape)}"
             )
-        if isinstance(length, bool) or not isinstance(length, int) or not 1 <= length <= poses.shape[1]:
-            raise ValueError(
-                f"WindowBatches: length must be an integer in [1, {poses.shape[1]}], got {length!r}"
-            )
-        self.length = length
+        self.length = check_scalar(
+            length, "length", "WindowBatches", kind=numbers.Integral, minimum=1, maximum=poses.shape[1]
+        )
 
     def __len__(self) -> int:
         return int(self.poses.shape[0])
@@ -182,3 +194,15 @@ class WindowBatches:
             yield WindowBatch(
                 gather_windows(self.poses, index, start, self.length), self.action[index], self.body[index]
             )
+
+
+def cut_windows(poses: Tensor, length: int) -> Tensor:
+    """Consecutive non-overlapping windows ``(N * (T // length), length, D)`` of clips ``(N, T, D)``."""
+    check_tensor(poses, "poses", "cut_windows", ndim=3)
+    check_scalar(length, "length", "cut_windows", kind=numbers.Integral, minimum=1)
+    n_windows = poses.shape[1] // length
+    if n_windows < 1:
+        raise ValueError(
+            f"cut_windows: clips of {poses.shape[1]} frames are shorter than one window of {length}"
+        )
+    return poses[:, : n_windows * length].reshape(poses.shape[0] * n_windows, length, poses.shape[2])

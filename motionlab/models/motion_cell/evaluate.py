@@ -16,6 +16,7 @@
 
 from __future__ import annotations
 
+import numbers
 from collections.abc import Sequence
 from typing import NamedTuple, Protocol
 
@@ -26,10 +27,12 @@ from torch import Tensor
 from motionlab.evaluation import body_frame_features
 from motionlab.evaluation.benchmark import sample_metrics
 from motionlab.evaluation.evaluator import Evaluator
+from motionlab.geometry import quat_geodesic
 from motionlab.metrics import mean_ci, repeat_seed
-from motionlab.models.motion_cell.config import BaselineConfig, MotionCellConfig
+from motionlab.models.motion_cell.baselines import BaselineConfig
 from motionlab.models.motion_cell.data import PoseCodec
-from motionlab.train.parallel import run_in_workers
+from motionlab.models.motion_cell.model import MotionCellConfig
+from motionlab.validation import check_scalar, check_tensor
 
 PROTOCOL_FRAMES = 140
 DISCARDED_FRAMES = 20
@@ -74,10 +77,9 @@ class ModelEvaluation(NamedTuple):
 def attribute_grid(n_per_combination: int, n_actions: int = 6, n_bodies: int = 2) -> tuple[Tensor, Tensor]:
     """Actions and body types ``(n_actions * n_bodies * n_per_combination,)``: every combination equally
     often."""
-    if isinstance(n_per_combination, bool) or not isinstance(n_per_combination, int) or n_per_combination < 1:
-        raise ValueError(
-            f"attribute_grid: n_per_combination must be a positive integer, got {n_per_combination!r}"
-        )
+    check_scalar(n_per_combination, "n_per_combination", "attribute_grid", kind=numbers.Integral, minimum=1)
+    check_scalar(n_actions, "n_actions", "attribute_grid", kind=numbers.Integral, minimum=1)
+    check_scalar(n_bodies, "n_bodies", "attribute_grid", kind=numbers.Integral, minimum=1)
     combination = torch.arange(n_actions * n_bodies).repeat_interleave(n_per_combination)
     return combination // n_bodies, combination % n_bodies
 
@@ -109,10 +111,13 @@ def evaluate_model(
     Repeat ``r`` draws its samples with ``torch.Generator().manual_seed(repeat_seed(seed, r))`` and its
     Diversity pairs with ``numpy.random.default_rng([seed, r])``, so the numbers are reproducible.
     """
-    if isinstance(n_repeats, bool) or not isinstance(n_repeats, int) or n_repeats < 2:
-        raise ValueError(
-            f"evaluate_model: n_repeats must be an integer >= 2 (for an interval), got {n_repeats!r}"
-        )
+    check_scalar(
+        n_repeats,
+        "n_repeats (2 or more, for an interval)",
+        "evaluate_model",
+        kind=numbers.Integral,
+        minimum=2,
+    )
     rows, first = [], None
     for r in range(n_repeats):
         samples = protocol_samples(
@@ -131,24 +136,9 @@ def evaluate_model(
     return ModelEvaluation({key: mean_ci([row[key] for row in rows]) for key in rows[0]}, first)
 
 
-def evaluate_models(
-    models: dict[str, MotionGenerator],
-    evaluator: Evaluator,
-    reference_features: Tensor,
-    n_per_combination: int,
-    n_repeats: int,
-    seed: int = 0,
-    processes: int = 2,
-) -> dict[str, ModelEvaluation]:
-    """:func:`evaluate_model` of every model, ``processes`` models at a time in worker processes.
-
-    Each evaluation is seeded by ``seed`` alone, so the numbers are those of an in-process call.
-    """
-    calls = [
-        (model, evaluator, reference_features, n_per_combination, n_repeats, seed)
-        for model in models.values()
-    ]
-    return dict(zip(models, run_in_workers(evaluate_model, calls, processes)))
+def rotation_error_degrees(codec: PoseCodec, poses: Tensor, clean: Tensor) -> float:
+    """Mean angle (degrees) between the joint rotations of two sets of pose vectors ``(..., 90)``."""
+    return float(torch.rad2deg(quat_geodesic(codec.split(poses)[0], codec.split(clean)[0]).mean()))
 
 
 def body_frame_poses(positions: Tensor) -> Tensor:
@@ -236,11 +226,11 @@ def real_speed_level(
 
 def collapse_ratio(curve: Tensor, real_level: float, frames: tuple[int, int] = COLLAPSE_FRAMES) -> float:
     """Mean of ``curve`` ``(T,)`` over ``frames`` divided by ``real_level`` (1: as lively as real data)."""
+    check_tensor(curve, "curve", "collapse_ratio", ndim=1)
     begin, end = frames
     if not 0 <= begin < end <= curve.shape[0]:
         raise ValueError(f"collapse_ratio: frames {frames} do not fit a curve of {curve.shape[0]} frames")
-    if not real_level > 0:
-        raise ValueError(f"collapse_ratio: real_level must be positive, got {real_level}")
+    check_scalar(real_level, "real_level", "collapse_ratio", minimum=0.0, include_minimum=False)
     return float(curve[begin:end].mean()) / real_level
 
 

@@ -17,7 +17,9 @@ Per frame, for predicted pose vectors against the data (all terms are means over
 
 from __future__ import annotations
 
+import numbers
 from collections.abc import Callable
+from dataclasses import dataclass
 
 import torch
 import torch.nn.functional as F
@@ -26,19 +28,62 @@ from torch import Tensor, nn
 from motionlab.evaluation.evaluator import Evaluator
 from motionlab.geometry import quat_geodesic, quat_norm_penalty
 from motionlab.models.gaussian import gaussian_kl
-from motionlab.models.motion_cell.config import JOINT_WEIGHTINGS, LossConfig
 from motionlab.models.motion_cell.data import PoseCodec, WindowBatch
-from motionlab.models.motion_cell.output import OutputHead
+from motionlab.models.motion_cell.heads import OutputHead
 from motionlab.skeleton import joint_impact_weights
+from motionlab.validation import check_choice, check_scalar
+
+#: Joint weights of the reconstruction loss: eq. 23's impact weights, or all ones (the NL ablation).
+JOINT_WEIGHTINGS = ("impact", "uniform")
 
 LossFn = Callable[[nn.Module, WindowBatch, int, dict[str, float]], dict[str, Tensor]]
+
+
+@dataclass(frozen=True)
+class LossConfig:
+    """Fixed weights of the Motion Cell objective (eq. 14); the scheduled ones live in the ``TrainConfig``.
+
+    The schedules the loss reads (``coeffs``): ``"beta"`` (KL weight, :class:`~motionlab.train.KLAnneal`),
+    ``"classifier"`` (lambda_CL, a :class:`~motionlab.train.LinearRamp` that starts after a while) and
+    ``"word_drop"`` (probability of dropping a motion word from the recurrence input).
+
+    Attributes:
+        joint_weights: ``"impact"`` (eq. 23 alpha_k) or ``"uniform"`` (all alpha_k = 1, the NL ablation).
+        root_weight: weight of the squared error on the 6 standardised root channels, per frame.
+        norm_weight: lambda of the quaternion-norm constraint (eq. 26).
+        feature_weight, entropy_weight: weights of the feature-matching and cross-entropy parts of the
+            classifier loss (eq. 24).
+        classifier_clips: clips sampled per step for the classifier loss, with the attributes of the first
+            ``classifier_clips`` clips of the batch (each costs a free-running rollout, forward kinematics and
+            the conv net; a small number keeps a step cheap).
+        classifier_every: the classifier loss is computed every this many steps, with this factor on its
+            weight (the same weight on average, at a fraction of the cost).
+        classifier_truncate: the classifier's gradient stops at the recurrent state between words (it
+            shapes each word's prior and decoder, not the earlier words; through a rollout of tens of words
+            the full gradient explodes and swamps the reconstruction).
+    """
+
+    joint_weights: str = "impact"
+    root_weight: float = 1.0
+    norm_weight: float = 0.1
+    feature_weight: float = 1.0
+    entropy_weight: float = 1.0
+    classifier_clips: int = 8
+    classifier_every: int = 3
+    classifier_truncate: bool = True
+
+    def __post_init__(self) -> None:
+        check_choice(self.joint_weights, "joint_weights", "LossConfig", JOINT_WEIGHTINGS)
+        for name in ("root_weight", "norm_weight", "feature_weight", "entropy_weight"):
+            check_scalar(getattr(self, name), name, "LossConfig", minimum=0.0)
+        for name in ("classifier_clips", "classifier_every"):
+            check_scalar(getattr(self, name), name, "LossConfig", kind=numbers.Integral, minimum=1)
 
 
 def joint_weights(kind: str, n_joints: int = 22) -> Tensor:
     """The non-root joints' weights ``alpha_k`` ``(J - 1,)``, mean 1: ``"impact"`` (eq. 23) or
     ``"uniform"``."""
-    if kind not in JOINT_WEIGHTINGS:
-        raise ValueError(f"joint_weights: kind must be one of {JOINT_WEIGHTINGS}, got {kind!r}")
+    check_choice(kind, "kind", "joint_weights", JOINT_WEIGHTINGS)
     if kind == "uniform":
         return torch.ones(n_joints - 1)
     weights = torch.as_tensor(joint_impact_weights()[1:], dtype=torch.float32)
@@ -70,7 +115,8 @@ def kl_loss(
     posterior_mu: Tensor, posterior_logvar: Tensor, prior_mu: Tensor, prior_logvar: Tensor, word_length: int
 ) -> Tensor:
     """KL(q || p) summed over latent dimensions, averaged over words, divided by the word length
-    (nats/frame)."""
+    (nats/frame); the four Gaussians' parameters are ``(B, N, latent_dim)``."""
+    check_scalar(word_length, "word_length", "kl_loss", kind=numbers.Integral, minimum=1)
     return gaussian_kl(posterior_mu, posterior_logvar, prior_mu, prior_logvar).sum(-1).mean() / word_length
 
 

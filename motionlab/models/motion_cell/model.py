@@ -1,27 +1,268 @@
-"""The full Motion Cell model: motion words, the Motion Cell recurrence and the output head.
+"""The Motion Cell network (Ghorbani et al. 2020): its config, motion words, the cell and the full model.
 
-Training (:meth:`MotionCellModel.forward`) reconstructs windows of pose vectors through the posterior,
-teacher-forced, with *scheduled motion-word dropping*: each word's features are replaced by zeros in the
-recurrence input with probability ``word_drop`` (the posterior still sees the word), which makes the
-state lean on the latents, as it must at generation time. Generation (:meth:`MotionCellModel.generate`)
-draws the initial state and then, word after word, a latent from the prior, decodes it, and feeds the
-generated word back; it runs for any number of frames.
+**Motion words.** A sequence of poses is cut into words of ``l`` consecutive poses. The Motion Cell runs
+its recurrence once per word instead of once per frame (the paper: ``l = 3``), which shortens the
+recurrence threefold and lets one latent variable describe a short movement. ``f_enc^w`` maps the ``l``
+pose vectors of a word to a code; ``f_dec^w`` maps a code back to ``l`` raw poses (the output head of
+:mod:`.heads` turns them into rotations). With ``l = 1`` a word is a single pose (the SL ablation).
+
+**The cell** is one step of a conditional variational RNN over motion words (the paper's Algorithms 1,
+2). At word ``t`` with recurrent state ``h_{t-1}`` (the top of two stacked GRU cells) and control ``c``:
+
+* prior      ``p(z_t | h_{t-1}, c) = N(mu_p, sigma_p^2)``, an MLP of ``[h_{t-1}, f_c(c)]``;
+* posterior  ``q(z_t | w_t, h_{t-1}, c) = N(mu_q, sigma_q^2)``, an MLP of ``[f_w(w_t), h_{t-1}, f_c(c)]``;
+* decoder    the code of word ``t`` from ``[f_z(z_t), h_{t-1}, f_c(c)]`` (then ``f_dec^w`` gives its poses);
+* transition ``h_t = GRU_2(GRU_1([f_w(w_t), f_z(z_t), f_c(c)], h^1_{t-1}), h^2_{t-1})``.
+
+``f_w``, ``f_z`` are feature MLPs of a word code and a latent, ``f_c`` embeds the one-hot action and body
+type. The initial state of both GRU cells is drawn from a learned Gaussian, one per attribute combination.
+
+**The model.** Training (:meth:`MotionCellModel.forward`) reconstructs windows of pose vectors through the
+posterior, teacher-forced, with *scheduled motion-word dropping*: each word's features are replaced by
+zeros in the recurrence input with probability ``word_drop`` (the posterior still sees the word), which
+makes the state lean on the latents, as it must at generation time. Generation
+(:meth:`MotionCellModel.generate`) draws the initial state and then, word after word, a latent from the
+prior, decodes it, and feeds the generated word back; it runs for any number of frames.
 """
 
 from __future__ import annotations
 
 import math
+import numbers
+from dataclasses import dataclass
 from typing import NamedTuple
 
 import torch
+import torch.nn.functional as F
 from torch import Tensor, nn
 
 from motionlab.models.gaussian import reparameterize
-from motionlab.models.motion_cell.cell import MotionCell
-from motionlab.models.motion_cell.config import MotionCellConfig
-from motionlab.models.motion_cell.data import PoseCodec
-from motionlab.models.motion_cell.output import OutputHead, assemble_pose, split_raw_pose
-from motionlab.models.motion_cell.words import WordDecoder, WordEncoder, from_words, to_words
+from motionlab.models.motion_cell.data import PoseCodec, pose_dim
+from motionlab.models.motion_cell.heads import OUTPUT_KINDS, OutputHead, assemble_pose, split_raw_pose
+from motionlab.validation import check_choice, check_scalar, check_tensor
+
+
+@dataclass(frozen=True)
+class MotionCellConfig:
+    """The hierarchical Motion Cell (and its SL ablation with ``word_length=1``).
+
+    Attributes:
+        n_joints: skeleton joints ``J``; a pose vector has ``(J - 1) * 4 + 6`` channels.
+        word_length: poses per motion word ``l`` (the paper: 3; 1 feeds poses directly, the SL ablation).
+        word_dim: size of a motion word's code (output of ``f_enc^w``, input of ``f_dec^w``).
+        feature_dim: output size of the feature MLPs ``f_w`` and ``f_z``.
+        latent_dim: size of the per-word latent ``z_t``.
+        hidden_dim: width of each of the two stacked GRU cells and of the prior / posterior / decoder MLPs.
+        control_dim: size of the control embedding ``f_c(c)`` of action and body type.
+        n_actions, n_bodies: number of action classes and body types (the control attributes).
+        output: rotation output of the decoder, one of :data:`~.heads.OUTPUT_KINDS`.
+    """
+
+    n_joints: int = 22
+    word_length: int = 3
+    word_dim: int = 64
+    feature_dim: int = 64
+    latent_dim: int = 24
+    hidden_dim: int = 128
+    control_dim: int = 32
+    n_actions: int = 6
+    n_bodies: int = 2
+    output: str = "quaternion"
+
+    def __post_init__(self) -> None:
+        for name in (
+            "word_length",
+            "word_dim",
+            "feature_dim",
+            "latent_dim",
+            "hidden_dim",
+            "control_dim",
+            "n_actions",
+            "n_bodies",
+        ):
+            check_scalar(getattr(self, name), name, "MotionCellConfig", kind=numbers.Integral, minimum=1)
+        check_scalar(self.n_joints, "n_joints", "MotionCellConfig", kind=numbers.Integral, minimum=2)
+        check_choice(self.output, "output", "MotionCellConfig", OUTPUT_KINDS)
+
+    @property
+    def pose_dim(self) -> int:
+        """Channels of one pose vector (:func:`~.data.pose_dim`)."""
+        return pose_dim(self.n_joints)
+
+
+def to_words(poses: Tensor, length: int) -> Tensor:
+    """Words ``(B, T / l, l * D)`` from poses ``(B, T, D)``; ``T`` must be a multiple of ``l``."""
+    check_tensor(poses, "poses", "to_words", ndim=3, finite=False)
+    check_scalar(length, "length", "to_words", kind=numbers.Integral, minimum=1)
+    if poses.shape[1] % length:
+        raise ValueError(f"to_words: {poses.shape[1]} frames do not split into words of {length}")
+    return poses.reshape(poses.shape[0], poses.shape[1] // length, length * poses.shape[2])
+
+
+def from_words(words: Tensor, length: int) -> Tensor:
+    """Poses ``(B, N * l, D)`` from words ``(B, N, l * D)`` (the inverse of :func:`to_words`)."""
+    check_tensor(words, "words", "from_words", ndim=3, finite=False)
+    check_scalar(length, "length", "from_words", kind=numbers.Integral, minimum=1)
+    if words.shape[-1] % length:
+        raise ValueError(
+            f"from_words: words must be (B, N, l * D) with l = {length}, got {tuple(words.shape)}"
+        )
+    return words.reshape(words.shape[0], words.shape[1] * length, words.shape[2] // length)
+
+
+def mlp(sizes: list[int]) -> nn.Sequential:
+    """Linear layers of ``sizes`` with ELU between them (none after the last)."""
+    layers: list[nn.Module] = []
+    for fan_in, fan_out in zip(sizes[:-1], sizes[1:]):
+        layers += [nn.Linear(fan_in, fan_out), nn.ELU()]
+    return nn.Sequential(*layers[:-1])
+
+
+class WordEncoder(nn.Module):
+    """``f_enc^w``: a word of ``l`` pose vectors ``(..., l * pose_dim)`` -> its code ``(..., word_dim)``."""
+
+    def __init__(self, pose_dim: int, word_length: int, word_dim: int) -> None:
+        super().__init__()
+        self.net = mlp([pose_dim * word_length, 2 * word_dim, word_dim])
+
+    def forward(self, words: Tensor) -> Tensor:
+        return self.net(words)
+
+
+class WordDecoder(nn.Module):
+    """``f_dec^w``: a code ``(..., word_dim)`` -> ``l`` raw poses ``(..., l * raw_dim)``."""
+
+    def __init__(self, word_dim: int, word_length: int, raw_dim: int) -> None:
+        super().__init__()
+        self.net = mlp([word_dim, 2 * word_dim, raw_dim * word_length])
+        nn.init.zeros_(self.net[-1].weight)  # start at the rest pose (zero raw = identity rotations)
+        nn.init.zeros_(self.net[-1].bias)
+
+    def forward(self, codes: Tensor) -> Tensor:
+        return self.net(codes)
+
+
+#: Log-variances are squashed smoothly into ``(-LOGVAR_BOUND, LOGVAR_BOUND)`` so a bad step cannot overflow
+#: ``exp``.
+LOGVAR_BOUND = 8.0
+
+
+def bounded_logvar(raw: Tensor) -> Tensor:
+    """``LOGVAR_BOUND * tanh(raw / LOGVAR_BOUND)``: the identity near zero, bounded far from it."""
+    return LOGVAR_BOUND * torch.tanh(raw / LOGVAR_BOUND)
+
+
+def check_attributes(
+    action: Tensor, body: Tensor, n_actions: int, n_bodies: int, where: str
+) -> tuple[Tensor, Tensor]:
+    """``action`` and ``body`` as int64 ``(B,)`` tensors, checked against the number of classes.
+
+    Raises ``TypeError`` for floating-point attributes, ``ValueError`` for a wrong shape or a class index
+    out of range (naming ``where``).
+    """
+    for name, value in (("action", action), ("body", body)):
+        if torch.is_tensor(value) and value.is_floating_point():
+            raise TypeError(f"{where}: {name} must hold integer class indices, got dtype {value.dtype}")
+    action = torch.as_tensor(action, dtype=torch.int64)
+    body = torch.as_tensor(body, dtype=torch.int64)
+    if action.dim() != 1 or action.shape != body.shape:
+        raise ValueError(
+            f"{where}: action and body must be (B,) each, got {tuple(action.shape)} and {tuple(body.shape)}"
+        )
+    for name, value, count in (("action", action, n_actions), ("body", body, n_bodies)):
+        if value.numel() and (int(value.min()) < 0 or int(value.max()) >= count):
+            raise ValueError(
+                f"{where}: {name} values must lie in [0, {count}), got {sorted(set(value.tolist()))}"
+            )
+    return action, body
+
+
+class ControlEmbedding(nn.Module):
+    """``f_c``: one-hot action and body type ``(B,)`` each -> an embedding ``(B, control_dim)``."""
+
+    def __init__(self, n_actions: int, n_bodies: int, control_dim: int) -> None:
+        super().__init__()
+        self.n_actions, self.n_bodies = n_actions, n_bodies
+        self.net = nn.Sequential(nn.Linear(n_actions + n_bodies, control_dim), nn.ELU())
+
+    def forward(self, action: Tensor, body: Tensor) -> Tensor:
+        action, body = check_attributes(action, body, self.n_actions, self.n_bodies, "ControlEmbedding")
+        onehot = torch.cat([F.one_hot(action, self.n_actions), F.one_hot(body, self.n_bodies)], dim=-1)
+        return self.net(onehot.float())
+
+
+class InitialState(nn.Module):
+    """A learned Gaussian ``N(mu_c, sigma_c^2)`` over the initial recurrent state, one per (action, body).
+
+    ``forward(action, body, generator)`` draws ``(B, size)`` states by reparameterisation, so the mean and
+    the log-variance are trained with the rest of the model.
+    """
+
+    def __init__(self, n_actions: int, n_bodies: int, size: int, initial_logvar: float = -2.0) -> None:
+        super().__init__()
+        self.n_actions, self.n_bodies = n_actions, n_bodies
+        self.mean = nn.Parameter(torch.zeros(n_actions * n_bodies, size))
+        self.logvar = nn.Parameter(torch.full((n_actions * n_bodies, size), float(initial_logvar)))
+
+    def forward(self, action: Tensor, body: Tensor, generator: torch.Generator | None = None) -> Tensor:
+        action, body = check_attributes(action, body, self.n_actions, self.n_bodies, "InitialState")
+        combo = action * self.n_bodies + body
+        return reparameterize(self.mean[combo], bounded_logvar(self.logvar[combo]), generator)
+
+
+class MotionCell(nn.Module):
+    """The recurrent core of the Motion Cell model (see the module notes for the equations).
+
+    The training pass is split so that everything that does not feed the recurrence runs batched over
+    all words after the loop: :meth:`posterior_input` before it, :meth:`prior` and :meth:`decode` after it.
+    """
+
+    def __init__(self, cfg: MotionCellConfig) -> None:
+        super().__init__()
+        self.cfg = cfg
+        h, f, z, c = cfg.hidden_dim, cfg.feature_dim, cfg.latent_dim, cfg.control_dim
+        self.control = ControlEmbedding(cfg.n_actions, cfg.n_bodies, c)  # f_c
+        self.word_feature = mlp([cfg.word_dim, f, f])  # f_w
+        self.latent_feature = mlp([z, f, f])  # f_z
+        self.prior_net = mlp([h + c, h, 2 * z])
+        self.posterior_in = nn.Linear(f + c, h)  # the posterior's first layer, split: [f_w, f_c] part ...
+        self.posterior_state = nn.Linear(h, h, bias=False)  # ... and h_{t-1} part
+        self.posterior_out = nn.Linear(h, 2 * z)
+        self.decoder_net = mlp([f + h + c, h, cfg.word_dim])
+        self.gru = nn.ModuleList([nn.GRUCell(2 * f + c, h), nn.GRUCell(h, h)])
+        self.initial = InitialState(cfg.n_actions, cfg.n_bodies, 2 * h)
+
+    def initial_state(
+        self, action: Tensor, body: Tensor, generator: torch.Generator | None = None
+    ) -> tuple[Tensor, Tensor]:
+        """Sampled states ``(h^1_0, h^2_0)``, each ``(B, hidden_dim)``."""
+        return tuple(self.initial(action, body, generator).chunk(2, dim=-1))  # type: ignore[return-value]
+
+    def prior(self, state: Tensor, control: Tensor) -> tuple[Tensor, Tensor]:
+        """Prior mean and log-variance ``(..., latent_dim)`` from states and controls ``(..., h)``, ``(...,
+        c)``."""
+        mu, raw = self.prior_net(torch.cat([state, control], dim=-1)).chunk(2, dim=-1)
+        return mu, bounded_logvar(raw)
+
+    def posterior_input(self, word_features: Tensor, control: Tensor) -> Tensor:
+        """The state-independent part of the posterior's first layer, for all words at once."""
+        return self.posterior_in(torch.cat([word_features, control], dim=-1))
+
+    def posterior(self, pre: Tensor, state: Tensor) -> tuple[Tensor, Tensor]:
+        """Posterior mean and log-variance from :meth:`posterior_input` ``pre`` and the state ``h_{t-1}``."""
+        mu, raw = self.posterior_out(F.elu(pre + self.posterior_state(state))).chunk(2, dim=-1)
+        return mu, bounded_logvar(raw)
+
+    def decode(self, latent_features: Tensor, state: Tensor, control: Tensor) -> Tensor:
+        """Word codes ``(..., word_dim)`` from ``f_z(z_t)``, ``h_{t-1}`` and ``f_c(c)``."""
+        return self.decoder_net(torch.cat([latent_features, state, control], dim=-1))
+
+    def transition(
+        self, layers: tuple[Tensor, Tensor], word_features: Tensor, latent_features: Tensor, control: Tensor
+    ) -> tuple[Tensor, Tensor]:
+        """The two stacked GRU cells: ``(h^1_{t-1}, h^2_{t-1}) -> (h^1_t, h^2_t)``."""
+        lower = self.gru[0](torch.cat([word_features, latent_features, control], dim=-1), layers[0])
+        return lower, self.gru[1](lower, layers[1])
 
 
 class MotionCellOutput(NamedTuple):
@@ -69,17 +310,12 @@ class MotionCellModel(nn.Module):
         return self.cell.word_feature(self.word_encoder(to_words(poses, self.cfg.word_length)))
 
     def _check_poses(self, poses: Tensor) -> None:
-        if poses.dim() != 3 or poses.shape[-1] != self.cfg.pose_dim:
-            raise ValueError(
-                f"MotionCellModel: poses must be (B, T, {self.cfg.pose_dim}), got {tuple(poses.shape)}"
-            )
+        check_tensor(poses, "poses", "MotionCellModel", ndim=3, trailing=(self.cfg.pose_dim,))
         if poses.shape[1] % self.cfg.word_length:
             raise ValueError(
                 f"MotionCellModel: {poses.shape[1]} frames are not a whole number of words of "
                 f"{self.cfg.word_length} frames"
             )
-        if not bool(torch.isfinite(poses).all()):
-            raise ValueError("MotionCellModel: poses contain NaN or inf")
 
     def forward(
         self,
@@ -97,8 +333,7 @@ class MotionCellModel(nn.Module):
             generator: draws the initial state, the dropped words and the latents (default: global RNG).
         """
         self._check_poses(poses)
-        if not 0.0 <= word_drop <= 1.0:
-            raise ValueError(f"MotionCellModel: word_drop must lie in [0, 1], got {word_drop}")
+        check_scalar(word_drop, "word_drop", "MotionCellModel", minimum=0.0, maximum=1.0)
         cell = self.cell
         word_features = self.encode_words(poses)
         batch, n_words = word_features.shape[:2]
@@ -155,10 +390,7 @@ class MotionCellModel(nn.Module):
         prior, decoder and word features but not the earlier words through the state (truncated
         back-propagation through time).
         """
-        if isinstance(n_frames, bool) or not isinstance(n_frames, int) or n_frames < 1:
-            raise ValueError(
-                f"MotionCellModel.generate: n_frames must be a positive integer, got {n_frames!r}"
-            )
+        check_scalar(n_frames, "n_frames", "MotionCellModel.generate", kind=numbers.Integral, minimum=1)
         cell = self.cell
         control = cell.control(action, body)
         layers = cell.initial_state(action, body, generator)

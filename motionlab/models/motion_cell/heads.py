@@ -16,7 +16,11 @@ import torch
 from torch import Tensor
 
 from motionlab.geometry import axis_angle_to_quat, gram_schmidt, matrix_to_quat, quat_normalize
-from motionlab.models.motion_cell.config import OUTPUT_KINDS, ROOT_DIM
+from motionlab.models.motion_cell.data import ROOT_DIM
+from motionlab.validation import check_choice, check_tensor
+
+#: Rotation outputs a decoder can produce (compared in the chapter, the paper's Sec. 6.4).
+OUTPUT_KINDS = ("quaternion", "matrix", "axis_angle")
 
 _IDENTITY = {
     "quaternion": (1.0, 0.0, 0.0, 0.0),
@@ -30,14 +34,13 @@ class OutputHead:
     """Raw decoder outputs ``(..., params_per_joint)`` per joint -> unit quaternions ``(..., 4)``.
 
     Attributes:
-        kind: one of :data:`~motionlab.models.motion_cell.config.OUTPUT_KINDS`.
+        kind: one of :data:`OUTPUT_KINDS`.
     """
 
     kind: str
 
     def __post_init__(self) -> None:
-        if self.kind not in OUTPUT_KINDS:
-            raise ValueError(f"OutputHead: kind must be one of {OUTPUT_KINDS}, got {self.kind!r}")
+        check_choice(self.kind, "kind", "OutputHead", OUTPUT_KINDS)
 
     @property
     def params_per_joint(self) -> int:
@@ -50,11 +53,13 @@ class OutputHead:
 
     def identity_offset(self, raw: Tensor) -> Tensor:
         """``raw`` ``(..., params_per_joint)`` moved so that zero means the identity rotation."""
-        if raw.shape[-1] != self.params_per_joint:
-            raise ValueError(
-                f"OutputHead({self.kind}): expected raw outputs (..., {self.params_per_joint}), "
-                f"got {tuple(raw.shape)}"
-            )
+        check_tensor(
+            raw,
+            "raw",
+            f"OutputHead({self.kind}).identity_offset",
+            trailing=(self.params_per_joint,),
+            finite=False,
+        )
         return raw + torch.tensor(_IDENTITY[self.kind], dtype=raw.dtype)
 
     def quaternions(self, params: Tensor) -> Tensor:
