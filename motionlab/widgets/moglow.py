@@ -77,6 +77,7 @@ def steer(
 
     ``sample_seed`` seeds the latents: the same values give the same motion.
     """
+    check_scalar(seconds, "seconds", "steer", minimum=0.0, include_minimum=False)
     control, index = steering_control(library, speed, turn, round(seconds * FPS))
     seed = seed_features(library, [index], model.cfg.history)
     return generate_motion(

@@ -165,8 +165,9 @@ def control_test(
     """``n`` commands spliced from held-out recorded controls: walk, stand (a wave clip), jog, stand.
 
     Args:
-        clips: raw features of held-out clips ``(M, T, ·)`` (e.g. ``clip_features(test, DATA,
-        augment=False)``). action: the action id of each clip ``(M,)``; ``action_names`` maps ids to names.
+        clips: raw features of held-out clips ``(M, T, ·)`` (e.g. ``clip_features(test, cfg.data,
+            augment=False)`` with ``cfg`` the :class:`~.experiment.ExperimentConfig`).
+        action: the action id of each clip ``(M,)``; ``action_names`` maps ids to names.
         n: how many commands (clip ``k * count // n`` of each action for command ``k``).
         history: frames of the seed (taken from the walk clip, right before its piece of control).
         piece_seconds: seconds of each piece; ``blend`` frames of cross-fade at each junction.

@@ -111,6 +111,8 @@ def sample_plain(
             the same frames up to float rounding, faster (:func:`sample_frames`).
     """
     cfg = model.cfg
+    # the random draws, in MoGlow.sample's order: the history dropout flags of every frame (if the model
+    # drops), then every frame's latent z_t ~ N(0, temperature**2 I), shape (B, N, P)
     keep, z = sampling_setup(cfg, control, seed_pose, temperature, generator, "sample_plain")
     layers = list(model.flow.layers)  # K steps of (ActNorm, 1x1 convolution, LSTM coupling)
     states = [None] * cfg.steps  # each coupling's LSTM state, carried from frame to frame
@@ -160,8 +162,15 @@ def autoregressive_sample(
     Raises ``ValueError`` naming the first frame when the generated poses stop being finite (a model can
     diverge on inputs far from its training data).
     """
+    check_tensor(control, "control", "autoregressive_sample", ndim=3)
+    check_tensor(seed_pose, "seed_pose", "autoregressive_sample", ndim=3)
     history = seed_pose.shape[1]
     frames = control.shape[1] - history
+    if control.shape[0] != seed_pose.shape[0] or frames < 1:
+        raise ValueError(
+            f"autoregressive_sample: control must be (B, tau + N, C) with N >= 1 for seed_pose (B, tau, P) = "
+            f"{tuple(seed_pose.shape)}, got {tuple(control.shape)}"
+        )
     if keep is not None and keep.shape != (seed_pose.shape[0], frames, history):
         raise ValueError(
             f"autoregressive_sample: keep must be {(seed_pose.shape[0], frames, history)}, "
