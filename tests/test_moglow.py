@@ -293,6 +293,29 @@ def test_bad_inputs_raise():
         model.sample(control, pose[:, :3], temperature=-0.1)
     with pytest.raises(ValueError, match="dropout"):
         MoGlowConfig(dropout=1.0)
-    with pytest.raises(ValueError):
+    with pytest.raises(ValueError, match="GaussianARConfig: hidden must be at least 1, got 0"):
         GaussianARConfig(hidden=0)
     np.testing.assert_equal(MoGlowConfig().cond_dim, 5 * 64 + 6 * 3)
+
+
+def test_error_policy_type_for_types_value_for_values():
+    model = _moglow(dtype=torch.float32)
+    pose, control = _data(dtype=torch.float32)
+    with pytest.raises(TypeError, match="MoGlowConfig: steps must be an integer, got 2.0"):
+        MoGlowConfig(steps=2.0)
+    with pytest.raises(TypeError, match="MoGlowConfig: dropout must be a real number"):
+        MoGlowConfig(dropout="0.5")
+    with pytest.raises(
+        ValueError, match=r"MoGlowConfig: pose_dim \(a coupling splits it\) must be at least 2"
+    ):
+        MoGlowConfig(pose_dim=1)
+    with pytest.raises(TypeError, match="MoGlow: pose must have a floating-point dtype, got torch.int64"):
+        model(pose.long(), control)
+    with pytest.raises(TypeError, match="MoGlow: control must be a torch.Tensor"):
+        model(pose, control.numpy())
+    with pytest.raises(ValueError, match="MoGlow: pose must be 3-dimensional"):
+        model(pose[0], control)
+    with pytest.raises(ValueError, match="history_keep_mask: dropout must be in"):
+        history_keep_mask(2, 3, 4, 1.5)
+    with pytest.raises(TypeError, match="LSTMAffineCoupling: channels must be an integer"):
+        LSTMAffineCoupling(6.0, cond_channels=3, hidden=8)
