@@ -83,14 +83,10 @@ class GaussianAR(nn.Module):
     def forward(self, pose: Tensor, control: Tensor, generator: torch.Generator | None = None) -> Tensor:
         """Log-likelihood ``(B,)`` (nats) of frames ``tau .. T-1``, as :meth:`MoGlow.forward` (history dropout
         flags drawn from ``generator``)."""
+        cfg = self.cfg
         check_pose_control(
-            pose, control, self.cfg.pose_dim, self.cfg.control_dim, self.cfg.history + 1, "GaussianAR.forward"
+            pose, control, cfg.pose_dim, cfg.control_dim, cfg.history + 1, "GaussianAR.forward", True
         )
-        if control.shape[1] != pose.shape[1]:
-            raise ValueError(
-                f"GaussianAR.forward: pose and control must have the same frames, got {pose.shape[1]} "
-                f"and {control.shape[1]}"
-            )
         batch, frames, _ = pose.shape
         keep = None
         if self.cfg.dropout > 0:

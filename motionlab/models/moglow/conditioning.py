@@ -28,13 +28,19 @@ from motionlab.validation import check_scalar, check_tensor
 
 
 def check_pose_control(
-    pose: Tensor, control: Tensor, pose_dim: int, control_dim: int, min_frames: int, where: str
+    pose: Tensor,
+    control: Tensor,
+    pose_dim: int,
+    control_dim: int,
+    min_frames: int,
+    where: str,
+    same_frames: bool = False,
 ) -> None:
     """Check poses ``(B, T, P)`` and controls ``(B, T', C)``: floating, finite, sized right, one batch.
 
-    ``T >= min_frames`` is required of ``pose``; frame counts of ``control`` are checked by the callers,
-    which differ in what they need. ``TypeError`` for a non-tensor or a non-floating dtype, ``ValueError``
-    for a wrong shape or a NaN or infinite entry.
+    ``T >= min_frames`` is required of ``pose``, and ``T' = T`` with ``same_frames`` (a likelihood reads
+    both of every frame; sampling has its own rule). ``TypeError`` for a non-tensor or a non-floating
+    dtype, ``ValueError`` for a wrong shape or a NaN or infinite entry.
     """
     check_tensor(pose, "pose", where, trailing=(pose_dim,), ndim=3)
     check_tensor(control, "control", where, trailing=(control_dim,), ndim=3)
@@ -45,6 +51,10 @@ def check_pose_control(
         )
     if pose.shape[1] < min_frames:
         raise ValueError(f"{where}: pose needs at least {min_frames} frames, got {pose.shape[1]}")
+    if same_frames and control.shape[1] != pose.shape[1]:
+        raise ValueError(
+            f"{where}: pose and control must have the same frames, got {pose.shape[1]} and {control.shape[1]}"
+        )
 
 
 def check_history_config(cfg: Any, where: str, sizes: tuple[str, ...]) -> None:

@@ -9,6 +9,10 @@ Augmentation as in the paper: **mirroring** (left and right swapped, :mod:`motio
 **time reversal** (the clip played backwards: walking backwards, with the control recomputed from the
 reversed root path), applied before the features are computed, so that the control always matches the
 pose. Both double the data. Standardisation is per channel, fitted on the (augmented) training frames.
+
+The models train on windows of a few seconds (:func:`sequence_windows`); :func:`prepare_data` makes the
+standardised training and test windows of a benchmark, and :func:`data_identity` says what defines them in
+the checkpoint cache key.
 """
 
 from __future__ import annotations

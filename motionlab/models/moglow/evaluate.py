@@ -205,6 +205,9 @@ def control_test(
 def long_clips(n_per_mode: int, seconds: float, seed: int) -> MoGlowFeatures:
     """Raw features of held-out walk and jog clips of ``seconds`` (the stability test's, generated once from
     ``seed`` and cached under ``build/data``)."""
+    check_scalar(n_per_mode, "n_per_mode", "long_clips", kind=numbers.Integral, minimum=1)
+    check_scalar(seconds, "seconds", "long_clips", minimum=0.0, include_minimum=False)
+    check_scalar(seed, "seed", "long_clips", kind=numbers.Integral, minimum=0)
     data = load_or_generate(seed, n_per_mode, seconds=seconds, split="test")
     return clip_features(
         data, MoGlowDataConfig(actions=("walk", "jog"), mirror=False, reverse_time=False), augment=False

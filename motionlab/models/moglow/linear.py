@@ -85,6 +85,7 @@ class LinearPredictor(FlowLayer):
         check_tensor(control, "control", where, ndim=3)
         check_scalar(history, "history", where, kind=numbers.Integral, minimum=1)
         check_scalar(dropout, "dropout", where, minimum=0.0, maximum=1.0, include_maximum=False)
+        check_scalar(seed, "seed", where, kind=numbers.Integral, minimum=0)
         check_scalar(max_windows, "max_windows", where, kind=numbers.Integral, minimum=1)
         if pose.shape[0] > max_windows:
             index = torch.linspace(0, pose.shape[0] - 1, max_windows).long()

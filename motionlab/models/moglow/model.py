@@ -103,16 +103,6 @@ class MoGlow(nn.Module):
         self.flow = FlowSequence(layers)
         self.prior = StandardNormal()
 
-    def _check(self, pose: Tensor, control: Tensor, where: str) -> None:
-        check_pose_control(
-            pose, control, self.cfg.pose_dim, self.cfg.control_dim, self.cfg.history + 1, where
-        )
-        if control.shape[1] != pose.shape[1]:
-            raise ValueError(
-                f"{where}: pose and control must have the same frames, got {pose.shape[1]} and "
-                f"{control.shape[1]}"
-            )
-
     def initialize(self, pose: Tensor, control: Tensor, seed: int = 0) -> float:
         """Fit the linear predictor (:mod:`.linear`) to training windows; returns its RMS residual.
 
@@ -133,7 +123,8 @@ class MoGlow(nn.Module):
             generator: draws the history dropout flags (probability ``cfg.dropout`` per frame and lag);
                 ``None`` uses torch's global generator, which the training loop seeds.
         """
-        self._check(pose, control, "MoGlow")
+        cfg = self.cfg
+        check_pose_control(pose, control, cfg.pose_dim, cfg.control_dim, cfg.history + 1, "MoGlow", True)
         batch, frames, _ = pose.shape
         keep = None
         if self.cfg.dropout > 0:
