@@ -1,4 +1,4 @@
-"""The steering widget's callbacks, the control test and the chapter's experiment (tiny models)."""
+"""The steering widget's callbacks and the control test (tiny models, quick profile)."""
 
 import matplotlib
 
@@ -102,18 +102,3 @@ def test_control_test_pieces(library):
             1,
             history=3,
         )
-
-
-def test_experiment_config_profiles_and_runs():
-    quick, full = experiment.ExperimentConfig.quick(), experiment.ExperimentConfig.full()
-    assert quick.moglow_steps < full.moglow_steps and quick.moglow_train_steps < full.moglow_train_steps
-    assert experiment.ExperimentConfig.current() in (quick, full)
-    assert full.moglow(0.5) == MoGlowConfig(steps=4, hidden=64, cond_features=64, dropout=0.5)
-    named = experiment.runs(quick, data=None)
-    assert list(named) == ["MoGlow p=0.0", "MoGlow p=0.5", "MoGlow p=0.95", experiment.BASELINE]
-    assert named["MoGlow p=0.5"].model_cfg.dropout == 0.5
-    assert named[experiment.BASELINE].cache_name == "moglow_gaussian_ar"
-    with pytest.raises(ValueError, match="ExperimentConfig: window"):
-        experiment.ExperimentConfig(window=0)
-    with pytest.raises(TypeError, match="ExperimentConfig: n_commands"):
-        experiment.ExperimentConfig(n_commands=2.5)
