@@ -21,8 +21,9 @@ from motionlab.models.moglow import (
     held_out_nll,
     history_keep_mask,
     nll_per_frame_loss,
+    sample_plain,
 )
-from motionlab.models.moglow.sampler import sample_frames
+from motionlab.models.moglow.sampling import sample_frames
 
 SMALL = dict(pose_dim=6, control_dim=2, history=3)
 
@@ -125,6 +126,7 @@ def test_sampling_inverts_the_training_pass_exactly(pose_dim):
     for generated in (
         sample,
         sample_frames(model.generation_plan(), control, seed_pose, keep, latents, scripted=False),
+        sample_plain(model, control, seed_pose, temperature=1.0, generator=torch.Generator().manual_seed(4)),
     ):
         full = torch.cat([seed_pose, generated], dim=1)
         cond = autoregressive_conditioning(full, control, 3, keep)
@@ -159,7 +161,7 @@ def test_scripted_generation_loop_matches_plain_python_and_reports_divergence():
         sample_frames(plan, control, seed_pose, keep, noise[:, :8])
     with pytest.raises(ValueError, match=r"plan's tau \* P = 18"):
         sample_frames(plan, control, seed_pose[:, :, :5], keep, noise[:, :, :5])
-    with pytest.raises(ValueError, match="share one dtype"):
+    with pytest.raises(TypeError, match="share one dtype"):
         sample_frames(plan, control.double(), seed_pose.double(), keep, noise.double())
 
     def plan_tensors(p):
@@ -180,6 +182,20 @@ def test_scripted_generation_loop_matches_plain_python_and_reports_divergence():
         ValueError, match="MoGlow.sample: generation diverged: non-finite poses from generated frame"
     ):
         model.sample(control, seed_pose, 1.0, torch.Generator().manual_seed(0))
+
+
+@pytest.mark.parametrize("dropout", [0.0, 0.5])
+def test_plain_generation_loop_gives_the_fused_loops_frames(dropout):
+    model = _moglow(dropout=dropout, dtype=torch.float32)
+    seed_pose = _data(frames=3, dtype=torch.float32)[0]
+    control = _data(frames=3 + 20, seed=1, dtype=torch.float32)[1]
+    for temperature in (0.0, 0.8):
+        fused = model.sample(control, seed_pose, temperature, torch.Generator().manual_seed(7))
+        plain = sample_plain(model, control, seed_pose, temperature, torch.Generator().manual_seed(7))
+        assert plain.shape == fused.shape == (2, 20, 6)
+        torch.testing.assert_close(plain, fused, rtol=1e-5, atol=1e-5)
+    with pytest.raises(ValueError, match="sample_plain: temperature"):
+        sample_plain(model, control, seed_pose, -1.0)
 
 
 def test_likelihood_sums_frame_terms_and_loss_is_per_frame():
@@ -231,8 +247,10 @@ def test_linear_predictor_recovers_a_linear_system_and_is_a_flow_layer():
             cond @ weight.T + 0.5 + 1e-3 * torch.randn(64, 6, generator=generator, dtype=torch.float64)
         )
     model = MoGlow(MoGlowConfig(**SMALL, steps=1, hidden=4, cond_features=3, dropout=0.0)).double()
+    assert model.linear.fit_rms is None
     rms = model.initialize(pose, control)
-    assert rms < 2e-3
+    assert rms < 2e-3 and model.linear.fit_rms == rms
+    assert "fit_rms" not in str(list(model.state_dict()))
     assert torch.allclose(model.linear.weight, weight, atol=0.02)
     assert torch.allclose(model.linear.bias, torch.full((6,), 0.5, dtype=torch.float64), atol=0.02)
     layer = model.linear.eval()
@@ -265,7 +283,7 @@ def test_bad_inputs_raise():
         model(pose, control[:, :-1])
     with pytest.raises(ValueError, match="NaN"):
         model(pose.masked_fill(torch.rand(pose.shape) > 0.5, float("nan")), control)
-    with pytest.raises(ValueError, match=r"\(batch, frames, 6\)"):
+    with pytest.raises(ValueError, match=r"MoGlow: pose must have shape \(\.\.\., 6\)"):
         model(pose[..., :5], control)
     with pytest.raises(ValueError, match="at least 3 frames"):
         model.sample(control, pose[:, :2])
@@ -275,6 +293,29 @@ def test_bad_inputs_raise():
         model.sample(control, pose[:, :3], temperature=-0.1)
     with pytest.raises(ValueError, match="dropout"):
         MoGlowConfig(dropout=1.0)
-    with pytest.raises(ValueError):
+    with pytest.raises(ValueError, match="GaussianARConfig: hidden must be at least 1, got 0"):
         GaussianARConfig(hidden=0)
     np.testing.assert_equal(MoGlowConfig().cond_dim, 5 * 64 + 6 * 3)
+
+
+def test_error_policy_type_for_types_value_for_values():
+    model = _moglow(dtype=torch.float32)
+    pose, control = _data(dtype=torch.float32)
+    with pytest.raises(TypeError, match="MoGlowConfig: steps must be an integer, got 2.0"):
+        MoGlowConfig(steps=2.0)
+    with pytest.raises(TypeError, match="MoGlowConfig: dropout must be a real number"):
+        MoGlowConfig(dropout="0.5")
+    with pytest.raises(
+        ValueError, match=r"MoGlowConfig: pose_dim \(a coupling splits it\) must be at least 2"
+    ):
+        MoGlowConfig(pose_dim=1)
+    with pytest.raises(TypeError, match="MoGlow: pose must have a floating-point dtype, got torch.int64"):
+        model(pose.long(), control)
+    with pytest.raises(TypeError, match="MoGlow: control must be a torch.Tensor"):
+        model(pose, control.numpy())
+    with pytest.raises(ValueError, match="MoGlow: pose must be 3-dimensional"):
+        model(pose[0], control)
+    with pytest.raises(ValueError, match="history_keep_mask: dropout must be in"):
+        history_keep_mask(2, 3, 4, 1.5)
+    with pytest.raises(TypeError, match="LSTMAffineCoupling: channels must be an integer"):
+        LSTMAffineCoupling(6.0, cond_channels=3, hidden=8)

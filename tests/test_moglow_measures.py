@@ -10,6 +10,7 @@ from motionlab.models.flows import Glow
 from motionlab.models.moglow import (
     MoGlowFeatures,
     control_mismatch,
+    experiment,
     fixed_length,
     gait_speed,
     joint_speed,
@@ -78,7 +79,7 @@ def test_fixed_length_helpers():
     features = MoGlowFeatures(torch.randn(3, 120, 64), torch.randn(3, 120, 3))
     x, cond = fixed_length.channels_first(features)
     assert x.shape == (3, 64, 120) and cond.shape == (3, 3, 120) and x.is_contiguous()
-    cfg = fixed_length.glow_config()
+    cfg = fixed_length.glow_config(experiment.ExperimentConfig.quick())
     model = Glow(cfg)
     loss = fixed_length.glow_nll_loss(model, (x, cond), 0, {})
     with torch.no_grad():

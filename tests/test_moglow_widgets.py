@@ -1,4 +1,4 @@
-"""The steering widget's callbacks and the chapter's experiment helpers (tiny models, quick profile)."""
+"""The steering widget's callbacks and the control test (tiny models, quick profile)."""
 
 import matplotlib
 
@@ -16,6 +16,7 @@ from motionlab.models.moglow import (
     MoGlowConfig,
     MoGlowFeatures,
     clip_features,
+    evaluate,
     experiment,
     fit_scalers,
     select_actions,
@@ -27,7 +28,7 @@ from motionlab.widgets.moglow import STAND_SPEED, show_steering, steer, steering
 @pytest.fixture(scope="module")
 def library():
     clips = generate(seed=5, n_per_mode=1, seconds=2.0, split="test")
-    return clips, clip_features(clips, experiment.DATA, augment=False)
+    return clips, clip_features(clips, experiment.ExperimentConfig().data, augment=False)
 
 
 @pytest.fixture(scope="module")
@@ -86,17 +87,15 @@ def test_show_steering_draws(library, model):
 
 def test_control_test_pieces(library):
     clips, features = library
-    chosen = select_actions(clips, experiment.DATA.actions)
-    test = experiment.control_test(
-        features, chosen.action, chosen.action_names, 2, history=3, blend=3, fps=10
-    )
+    chosen = select_actions(clips, experiment.ExperimentConfig().data.actions)
+    test = evaluate.control_test(features, chosen.action, chosen.action_names, 2, history=3, blend=3, fps=10)
     assert test.control.shape == (2, 4 * 30 - 3 * 3, 3)
     assert test.seed.pose.shape == (2, 3, 64)
     walk_speed = float(test.control[:, :20, 0].mean()) * 30
     stand_speed = float(test.control[:, 40:50, 0].abs().mean()) * 30
     assert walk_speed > 0.5 and stand_speed < 0.1
     with pytest.raises(ValueError):
-        experiment.control_test(
+        evaluate.control_test(
             MoGlowFeatures(features.pose[:, :5], features.control[:, :5]),
             chosen.action,
             chosen.action_names,

@@ -1,9 +1,9 @@
 """MoGlow's generation speed: frame-by-frame sampling of a 4-second clip and decoding to joint positions.
 
 The model has the chapter's size in the active profile (``make bench`` runs the default, full profile:
-:func:`motionlab.models.moglow.experiment.moglow_config`, history dropout 0.5, which draws a dropout mask
-every frame); weights are untrained, which does not change the speed. Each clip starts from ``tau`` seed
-frames and generates 120 frames (4 s at 30 fps).
+:meth:`motionlab.models.moglow.experiment.ExperimentConfig.moglow`, history dropout 0.5, which draws a
+dropout mask every frame); weights are untrained, which does not change the speed. Each clip starts
+from ``tau`` seed frames and generates 120 frames (4 s at 30 fps).
 """
 
 from __future__ import annotations
@@ -13,9 +13,9 @@ import torch
 from motionlab import config
 from motionlab.bench._timing import generator_speed
 from motionlab.models.moglow.data import MoGlowFeatures, fit_scalers
-from motionlab.models.moglow.experiment import moglow_config
-from motionlab.models.moglow.generate import generate_motion
+from motionlab.models.moglow.experiment import ExperimentConfig
 from motionlab.models.moglow.model import MoGlow
+from motionlab.models.moglow.sampling import generate_motion
 
 FPS = 30
 SECONDS = 4
@@ -25,7 +25,7 @@ def run() -> dict:
     """``rtf_b1_1thread`` (target >= 100), ``seconds_b1`` and ``frames_per_second_batched``."""
     config.set_threads(1)
     torch.manual_seed(0)
-    model = MoGlow(moglow_config(0.5)).eval()
+    model = MoGlow(ExperimentConfig.current().moglow(0.5)).eval()
     history, frames = model.cfg.history, SECONDS * FPS
     scalers = fit_scalers(
         MoGlowFeatures(torch.randn(16, 30, model.cfg.pose_dim), 0.03 * torch.randn(16, 30, 3))

@@ -10,6 +10,7 @@ speed and the requested turning rate added to its yaw rate. :func:`show_steering
 from __future__ import annotations
 
 import math
+import numbers
 
 import matplotlib.pyplot as plt
 import torch
@@ -17,15 +18,16 @@ from matplotlib.figure import Figure
 from torch import Tensor
 
 from motionlab.models.moglow.data import MoGlowFeatures, Scalers
-from motionlab.models.moglow.generate import (
+from motionlab.models.moglow.evaluate import support_foot_slide
+from motionlab.models.moglow.sampling import (
     AutoregressiveModel,
     GeneratedMotion,
     generate_motion,
     seed_features,
     splice_controls,
 )
-from motionlab.models.moglow.measures import support_foot_slide
 from motionlab.skeleton import PARENTS
+from motionlab.validation import check_scalar
 from motionlab.viz import filmstrip, plot_root_paths
 
 FPS = 30
@@ -40,10 +42,9 @@ def steering_control(library: MoGlowFeatures, speed: float, turn: float, frames:
 
     ``library`` holds recorded clips in physical units ``(N, T, ·)``; frame 0 of each (no control) is skipped.
     """
-    if not (math.isfinite(speed) and math.isfinite(turn)) or speed < 0:
-        raise ValueError(
-            f"steering_control: speed must be finite and >= 0 and turn finite, got {speed!r}, {turn!r}"
-        )
+    check_scalar(speed, "speed", "steering_control", minimum=0.0)
+    check_scalar(turn, "turn", "steering_control")
+    check_scalar(frames, "frames", "steering_control", kind=numbers.Integral, minimum=1)
     recorded = library.control[:, 1:]
     mean_speed = recorded[..., 0].mean(dim=1) * FPS
     if speed < STAND_SPEED:
@@ -76,6 +77,7 @@ def steer(
 
     ``sample_seed`` seeds the latents: the same values give the same motion.
     """
+    check_scalar(seconds, "seconds", "steer", minimum=0.0, include_minimum=False)
     control, index = steering_control(library, speed, turn, round(seconds * FPS))
     seed = seed_features(library, [index], model.cfg.history)
     return generate_motion(

@@ -1,57 +1,55 @@
-"""MoGlow (chapter 06): autoregressive, controllable motion with normalising flows, and its baseline.
+"""MoGlow (chapter 06): autoregressive, controllable motion with normalising flows, and its baselines.
 
-Modules: :mod:`~.data` (features, augmentation, standardisation, windows), :mod:`~.config`,
-:mod:`~.autoregression` (conditioning, history dropout, a frame-by-frame loop), :mod:`~.coupling`
-(the LSTM affine coupling), :mod:`~.model` (MoGlow), :mod:`~.sampler` (MoGlow's generation loop),
-:mod:`~.baseline` (Gaussian autoregressive LSTM), :mod:`~.training` (data splits, loss, held-out NLL),
-:mod:`~.generate` (control programmes, physical units, joint positions), :mod:`~.measures` (support-foot
-slide, joint-speed ratio).
+Modules: :mod:`~.data` (features, augmentation, standardisation, windows), :mod:`~.conditioning` (the
+autoregressive conditioning and its history dropout), :mod:`~.coupling` (the LSTM affine coupling),
+:mod:`~.linear` (the least-squares first layer), :mod:`~.model` (MoGlow and its config), :mod:`~.losses`
+(NLL per frame), :mod:`~.sampling` (generation: the plain loop, the fused loop, physical units, control
+programmes), :mod:`~.baseline` (Gaussian autoregressive LSTM), :mod:`~.fixed_length` (the fixed-length
+Glow of §3.4), :mod:`~.evaluate` (control mismatch, support-foot slide, joint-speed ratio, the control and
+stability tests), :mod:`~.experiment` (the chapter's config, runs and training).
 """
 
-from motionlab.models.moglow.autoregression import (
+from motionlab.models.moglow.baseline import GaussianAR, GaussianARConfig
+from motionlab.models.moglow.conditioning import (
     autoregressive_conditioning,
-    autoregressive_sample,
     frame_conditioning,
     history_keep_mask,
 )
-from motionlab.models.moglow.baseline import GaussianAR
-from motionlab.models.moglow.config import GaussianARConfig, MoGlowConfig
 from motionlab.models.moglow.coupling import LSTMAffineCoupling
 from motionlab.models.moglow.data import (
     LOCOMOTION,
     MoGlowDataConfig,
     MoGlowFeatures,
+    PreparedData,
     Scalers,
     augment_clips,
     clip_features,
+    data_identity,
     fit_scalers,
     moglow_features,
+    prepare_data,
     select_actions,
     sequence_windows,
     standardize,
 )
-from motionlab.models.moglow.generate import (
-    GeneratedMotion,
-    Segment,
-    control_programme,
-    generate_motion,
-    seed_features,
-    splice_controls,
-)
-from motionlab.models.moglow.measures import (
+from motionlab.models.moglow.evaluate import (
     control_mismatch,
     gait_speed,
     joint_speed,
     speed_ratio,
     support_foot_slide,
 )
-from motionlab.models.moglow.model import MoGlow
-from motionlab.models.moglow.training import (
-    PreparedData,
-    data_identity,
-    held_out_nll,
-    nll_per_frame_loss,
-    prepare_data,
+from motionlab.models.moglow.losses import held_out_nll, nll_per_frame_loss
+from motionlab.models.moglow.model import MoGlow, MoGlowConfig
+from motionlab.models.moglow.sampling import (
+    GeneratedMotion,
+    Segment,
+    autoregressive_sample,
+    control_programme,
+    generate_motion,
+    sample_plain,
+    seed_features,
+    splice_controls,
 )
 
 __all__ = [
@@ -84,6 +82,7 @@ __all__ = [
     "moglow_features",
     "nll_per_frame_loss",
     "prepare_data",
+    "sample_plain",
     "seed_features",
     "select_actions",
     "sequence_windows",

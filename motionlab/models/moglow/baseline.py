@@ -1,6 +1,6 @@
 """The Gaussian autoregressive baseline: an LSTM that predicts a mean and a diagonal variance per frame.
 
-It reads exactly MoGlow's conditioning ``c_t`` (:mod:`.autoregression`) and outputs
+It reads exactly MoGlow's conditioning ``c_t`` (:mod:`.conditioning`) and outputs
 ``x_t ~ N(mu_t, diag(sigma_t**2))``. It is the natural "deterministic network plus noise" model that
 MoGlow is compared with: the same inputs and memory, but a unimodal, axis-aligned output distribution.
 """
@@ -8,23 +8,49 @@ MoGlow is compared with: the same inputs and memory, but a unimodal, axis-aligne
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 
 import torch
 from torch import Tensor, nn
 
 from motionlab.models.flows.coupling import zero_init
-from motionlab.models.moglow.autoregression import (
+from motionlab.models.moglow.conditioning import (
     autoregressive_conditioning,
-    autoregressive_sample,
+    check_history_config,
     check_pose_control,
     history_keep_mask,
-    sampling_setup,
 )
-from motionlab.models.moglow.config import GaussianARConfig
+from motionlab.models.moglow.data import CONTROL_DIM, POSE_DIM
 from motionlab.models.moglow.linear import LinearPredictor
+from motionlab.models.moglow.sampling import autoregressive_sample, sampling_setup
 
 #: Bounds on the predicted log standard deviation (standard units), to keep the likelihood finite.
 LOG_STD_RANGE = (-15.0, 5.0)
+
+
+@dataclass(frozen=True)
+class GaussianARConfig:
+    """The baseline: an LSTM over MoGlow's conditioning that outputs a diagonal Gaussian for the next pose.
+
+    Attributes: as :class:`~.model.MoGlowConfig`; ``hidden`` is the LSTM width, ``layers`` its depth.
+    """
+
+    pose_dim: int = POSE_DIM
+    control_dim: int = CONTROL_DIM
+    history: int = 5
+    hidden: int = 256
+    layers: int = 1
+    dropout: float = 0.0
+
+    def __post_init__(self) -> None:
+        check_history_config(
+            self, "GaussianARConfig", ("pose_dim", "control_dim", "history", "hidden", "layers")
+        )
+
+    @property
+    def cond_dim(self) -> int:
+        """Conditioning features per frame: ``tau`` poses and ``tau + 1`` controls."""
+        return self.history * self.pose_dim + (self.history + 1) * self.control_dim
 
 
 class GaussianAR(nn.Module):
@@ -50,20 +76,17 @@ class GaussianAR(nn.Module):
         )
 
     def initialize(self, pose: Tensor, control: Tensor, seed: int = 0) -> float:
-        """Fit the linear predictor (:mod:`.linear`) to training windows; returns its RMS residual."""
+        """Fit the linear predictor (:mod:`.linear`) to training windows; returns its RMS residual (kept as
+        ``self.linear.fit_rms``)."""
         return self.linear.fit(pose, control, self.cfg.history, self.cfg.dropout, seed)
 
     def forward(self, pose: Tensor, control: Tensor, generator: torch.Generator | None = None) -> Tensor:
         """Log-likelihood ``(B,)`` (nats) of frames ``tau .. T-1``, as :meth:`MoGlow.forward` (history dropout
         flags drawn from ``generator``)."""
+        cfg = self.cfg
         check_pose_control(
-            pose, control, self.cfg.pose_dim, self.cfg.control_dim, self.cfg.history + 1, "GaussianAR.forward"
+            pose, control, cfg.pose_dim, cfg.control_dim, cfg.history + 1, "GaussianAR.forward", True
         )
-        if control.shape[1] != pose.shape[1]:
-            raise ValueError(
-                f"GaussianAR.forward: pose and control must have the same frames, got {pose.shape[1]} "
-                f"and {control.shape[1]}"
-            )
         batch, frames, _ = pose.shape
         keep = None
         if self.cfg.dropout > 0:

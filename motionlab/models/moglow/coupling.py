@@ -8,9 +8,12 @@ while each frame's transform stays a plain, exactly invertible affine coupling.
 Over a whole sequence (training, likelihoods) the LSTM runs from a zero state in one call; inverting a
 whole sequence is parallel as well, since ``x_a = y_a`` is known for every frame. Generation is
 different: the conditioning of frame ``t`` contains the pose generated at ``t - 1``, so it inverts one
-frame at a time (:mod:`.sampler`), from the weights that :meth:`LSTMAffineCoupling.frame_weights` hands out.
+frame at a time, carrying the LSTM state (:meth:`LSTMAffineCoupling.inverse_frame`, which the plain loop
+of :mod:`.sampling` calls; the fused loop reads the weights that :meth:`LSTMAffineCoupling.frame_weights`
+hands out).
 """
 
+import numbers
 from typing import (
     NamedTuple,
 )  # TorchScript reads FrameCoupling's annotations: no ``from __future__ import annotations``
@@ -20,6 +23,9 @@ from torch import Tensor, nn
 
 from motionlab.models.flows.base import FlowLayer, check_cond, check_sequence
 from motionlab.models.flows.coupling import SCALE_OFFSET, affine_forward, affine_inverse, zero_init
+from motionlab.validation import check_scalar, check_tensor
+
+LSTMState = tuple[Tensor, Tensor]
 
 
 class FrameCoupling(NamedTuple):
@@ -61,12 +67,10 @@ class LSTMAffineCoupling(FlowLayer):
         self, channels: int, cond_channels: int, hidden: int, scale_offset: float = SCALE_OFFSET
     ) -> None:
         super().__init__()
-        if isinstance(channels, bool) or not isinstance(channels, int) or channels < 2:
-            raise ValueError(f"LSTMAffineCoupling: channels must be an int >= 2, got {channels!r}")
-        if not isinstance(cond_channels, int) or cond_channels < 1:
-            raise ValueError(
-                f"LSTMAffineCoupling: cond_channels must be a positive int, got {cond_channels!r}"
-            )
+        check_scalar(channels, "channels", "LSTMAffineCoupling", kind=numbers.Integral, minimum=2)
+        check_scalar(cond_channels, "cond_channels", "LSTMAffineCoupling", kind=numbers.Integral, minimum=1)
+        check_scalar(hidden, "hidden", "LSTMAffineCoupling", kind=numbers.Integral, minimum=1)
+        check_scalar(scale_offset, "scale_offset", "LSTMAffineCoupling")
         self.channels, self.cond_channels, self.hidden = channels, cond_channels, hidden
         self.n_a = channels // 2
         self.scale_offset = float(scale_offset)
@@ -96,9 +100,27 @@ class LSTMAffineCoupling(FlowLayer):
         y_a, y_b = y[:, : self.n_a], y[:, self.n_a :]
         return torch.cat([y_a, affine_inverse(y_b, self._params(y_a, cond), self.scale_offset)], dim=1)
 
+    def inverse_frame(
+        self, y: Tensor, cond: Tensor, state: LSTMState | None = None
+    ) -> tuple[Tensor, LSTMState]:
+        """Invert one frame ``y`` ``(B, C)`` given its conditioning ``cond`` ``(B, C_c)`` and the LSTM
+        state after the frames before it (``None``: the zero state of the first frame).
+
+        Returns ``(x (B, C), state)``: the frame before the coupling and the state to hand to the next
+        frame. Frame after frame, this is :meth:`inverse` of the whole sequence.
+        """
+        check_tensor(y, "y", "LSTMAffineCoupling.inverse_frame", trailing=(self.channels,), ndim=2)
+        check_tensor(cond, "cond", "LSTMAffineCoupling.inverse_frame", trailing=(self.cond_channels,), ndim=2)
+        y_a, y_b = y[:, : self.n_a], y[:, self.n_a :]
+        inputs = torch.cat([y_a, cond], dim=1)[:, None]  # (B, 1, C_a + C_c): one time step
+        output, state = self.lstm(inputs, state)
+        params = self.out(torch.cat([output, inputs], dim=2))[:, 0]  # (B, 2 C_b)
+        x_b = affine_inverse(y_b[:, :, None], params[:, :, None], self.scale_offset)[:, :, 0]
+        return torch.cat([y_a, x_b], dim=1), state
+
     def frame_weights(self) -> FrameCoupling:
-        """This coupling's weights split by what they read, for generating one frame at a time
-        (:mod:`.sampler`)."""
+        """This coupling's weights split by what they read, for the fused generation loop
+        (:func:`.sampling.generate_frames`)."""
         n_a, hidden = self.n_a, self.hidden
         lstm_input = self.lstm.weight_ih_l0.detach()
         out_weight = self.out.weight.detach().T

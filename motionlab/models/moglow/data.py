@@ -9,13 +9,18 @@ Augmentation as in the paper: **mirroring** (left and right swapped, :mod:`motio
 **time reversal** (the clip played backwards: walking backwards, with the control recomputed from the
 reversed root path), applied before the features are computed, so that the control always matches the
 pose. Both double the data. Standardisation is per channel, fitted on the (augmented) training frames.
+
+The models train on windows of a few seconds (:func:`sequence_windows`); :func:`prepare_data` makes the
+standardised training and test windows of a benchmark, and :func:`data_identity` says what defines them in
+the checkpoint cache key.
 """
 
 from __future__ import annotations
 
+import numbers
 from collections.abc import Sequence
-from dataclasses import dataclass
-from typing import NamedTuple
+from dataclasses import asdict, dataclass
+from typing import Any, NamedTuple
 
 import numpy as np
 import torch
@@ -25,6 +30,9 @@ from motionlab.data.augment import mirror_positions, mirror_rotations
 from motionlab.data.datasets import Standardizer
 from motionlab.data.representations import CONTROL_FEATURES, representation, to_moglow
 from motionlab.data.store import MotionSet
+from motionlab.data.synthetic import generator_fingerprint
+from motionlab.evaluation.benchmark import Benchmark, benchmark_sizes
+from motionlab.validation import check_scalar, check_tensor
 
 #: The actions of the locomotion experiments.
 LOCOMOTION = ("walk", "jog")
@@ -56,10 +64,15 @@ class MoGlowDataConfig:
     reverse_time: bool = True
 
     def __post_init__(self) -> None:
-        if not self.actions or not all(isinstance(a, str) for a in self.actions):
-            raise ValueError(
-                f"MoGlowDataConfig.actions must be a non-empty tuple of action names, got {self.actions!r}"
+        if not isinstance(self.actions, tuple) or not all(isinstance(a, str) for a in self.actions):
+            raise TypeError(
+                f"MoGlowDataConfig: actions must be a tuple of action names, got {self.actions!r}"
             )
+        if not self.actions:
+            raise ValueError("MoGlowDataConfig: actions must name at least one action, got ()")
+        for name in ("mirror", "reverse_time"):
+            if not isinstance(getattr(self, name), bool):
+                raise TypeError(f"MoGlowDataConfig: {name} must be a bool, got {getattr(self, name)!r}")
 
 
 def select_actions(data: MotionSet, actions: Sequence[str]) -> MotionSet:
@@ -80,7 +93,9 @@ def augment_clips(
     Order: the originals, then (with ``mirror``) the mirrored clips; then (with ``reverse_time``) all of
     those again played backwards. Returns ``(positions, rotations)`` with 1, 2 or 4 times ``N`` clips.
     """
-    if positions.dim() != 4 or rotations.dim() != 4 or positions.shape[:3] != rotations.shape[:3]:
+    check_tensor(positions, "positions", "augment_clips", trailing=(None, 3), ndim=4, finite=False)
+    check_tensor(rotations, "rotations", "augment_clips", trailing=(None, 4), ndim=4, finite=False)
+    if positions.shape[:3] != rotations.shape[:3]:
         raise ValueError(
             f"augment_clips: positions (N, T, J, 3) and rotations (N, T, J, 4) must share (N, T, J), "
             f"got {tuple(positions.shape)} and {tuple(rotations.shape)}"
@@ -139,10 +154,52 @@ def sequence_windows(features: MoGlowFeatures, length: int, stride: int, first: 
     ``first = 1`` skips frame 0, whose control is undefined (zero). Returns ``(N * W, length, ·)``.
     """
     n_frames = features.pose.shape[1]
-    if length < 1 or stride < 1 or first < 0 or first + length > n_frames:
+    check_scalar(length, "length", "sequence_windows", kind=numbers.Integral, minimum=1)
+    check_scalar(stride, "stride", "sequence_windows", kind=numbers.Integral, minimum=1)
+    check_scalar(first, "first", "sequence_windows", kind=numbers.Integral, minimum=0)
+    if first + length > n_frames:
         raise ValueError(
-            f"sequence_windows: need length >= 1, stride >= 1 and first + length <= {n_frames} frames, "
-            f"got length={length}, stride={stride}, first={first}"
+            f"sequence_windows: first + length must be at most the clips' {n_frames} frames, "
+            f"got first={first}, length={length}"
         )
     starts = range(first, n_frames - length + 1, stride)
     return MoGlowFeatures(*(torch.cat([x[:, s : s + length] for s in starts]) for x in features))
+
+
+class PreparedData(NamedTuple):
+    """Standardised training windows (augmented), held-out test windows, and the scalers.
+
+    ``train``/``test``: windows ``(M, length, ·)`` (the test windows are not augmented).
+    """
+
+    train: MoGlowFeatures
+    test: MoGlowFeatures
+    scalers: Scalers
+
+
+def prepare_data(benchmark: Benchmark, cfg: MoGlowDataConfig, length: int, stride: int) -> PreparedData:
+    """Windows of ``length`` frames (every ``stride``) from the benchmark's clips of ``cfg.actions``.
+
+    The scalers are fitted on the augmented training clips; frame 0 of every clip (no control) is skipped.
+    The benchmark's validation split is not used: nothing here is tuned on held-out data during training.
+    """
+    train = clip_features(benchmark.train, cfg, augment=True)
+    scalers = fit_scalers(train)
+    test = standardize(clip_features(benchmark.test, cfg, augment=False), scalers)
+    return PreparedData(
+        sequence_windows(standardize(train, scalers), length, stride),
+        sequence_windows(test, length, stride),
+        scalers,
+    )
+
+
+def data_identity(cfg: MoGlowDataConfig, length: int, stride: int) -> dict[str, Any]:
+    """What defines the training data, for the checkpoint cache key (with the benchmark sizes and
+    generator)."""
+    return {
+        "data": asdict(cfg),
+        "length": length,
+        "stride": stride,
+        "sizes": list(benchmark_sizes()),
+        "generator": generator_fingerprint(),
+    }

@@ -1,27 +1,25 @@
-"""Chapter 06's experiment: the data, the model sizes and schedules per profile, and the training calls.
+"""Chapter 06's experiment: one config per profile, the named training runs, and the call that trains them.
 
 The notebook, the benchmark and the tests share these, so the numbers they report belong to the same
-models. Everything here goes through the course's one training loop and its checkpoint cache.
+models. Every run goes through the course's one training loop and its checkpoint cache
+(:func:`motionlab.train.train_or_load`), and :func:`train_all` through
+:func:`motionlab.train.many.train_many`.
 """
 
 from __future__ import annotations
 
-from collections.abc import Sequence
-from typing import NamedTuple
+import numbers
+from dataclasses import dataclass, replace
+from typing import Any
 
-import numpy as np
-import torch
-from torch import Tensor
+from torch import nn
 
 from motionlab import config
-from motionlab.data.synthetic import load_or_generate
 from motionlab.evaluation.benchmark import Benchmark
-from motionlab.models.moglow.baseline import GaussianAR
-from motionlab.models.moglow.config import GaussianARConfig, MoGlowConfig
-from motionlab.models.moglow.data import MoGlowDataConfig, MoGlowFeatures, clip_features
-from motionlab.models.moglow.generate import seed_features, splice_controls
-from motionlab.models.moglow.model import MoGlow
-from motionlab.models.moglow.training import PreparedData, data_identity, nll_per_frame_loss, prepare_data
+from motionlab.models.moglow.baseline import GaussianAR, GaussianARConfig
+from motionlab.models.moglow.data import MoGlowDataConfig, PreparedData, data_identity, prepare_data
+from motionlab.models.moglow.losses import nll_per_frame_loss
+from motionlab.models.moglow.model import MoGlow, MoGlowConfig
 from motionlab.train import (
     PiecewiseLinear,
     TensorBatches,
@@ -31,198 +29,227 @@ from motionlab.train import (
     is_cached,
     train_or_load,
 )
-from motionlab.train.parallel import run_in_workers
+from motionlab.train.many import Trained, train_many
+from motionlab.validation import check_scalar
 
-#: Walk and jog as in the paper, plus wave: the only action of our data set that stands in place, so
-#: that "stand still" is a command the models have seen.
-DATA = MoGlowDataConfig(actions=("walk", "jog", "wave"))
-
-#: Frames per training window (``tau`` history frames, then the frames whose likelihood is trained).
-WINDOW = 45
-STRIDE = 10
-
-#: The dropout rates compared; the paper used 0.95.
-DROPOUT_RATES = (0.0, 0.5, 0.95)
+#: The run name of the Gaussian autoregressive baseline in :func:`runs`.
+BASELINE = "Gaussian AR"
 
 
-def moglow_config(dropout: float) -> MoGlowConfig:
-    """The chapter's MoGlow for the active profile (tiny in the quick profile)."""
-    return MoGlowConfig(
-        steps=config.choose(quick=2, full=4),
-        hidden=config.choose(quick=8, full=64),
-        cond_features=config.choose(quick=8, full=64),
-        dropout=dropout,
+def moglow_name(dropout: float) -> str:
+    """The run name of MoGlow with history dropout ``dropout`` in :func:`runs`, e.g. ``"MoGlow p=0.5"``."""
+    return f"MoGlow p={dropout}"
+
+
+@dataclass(frozen=True)
+class ExperimentConfig:
+    """Every size, step count and schedule of chapter 06 (:meth:`full` is the default, :meth:`quick` tiny).
+
+    Attributes:
+        data: which clips and which augmentation. Walk and jog as in the paper, plus wave: the only action
+            of our data set that stands in place, so that "stand still" is a command the models have seen.
+        window, stride: frames per training window (``tau`` history frames, then the frames whose
+            likelihood is trained) and the step between windows.
+        dropout_rates: MoGlow's history dropout rates compared (the paper used 0.95).
+        moglow_steps, moglow_hidden, cond_features: MoGlow's Glow steps ``K``, LSTM units per coupling and
+            shared conditioning features (:class:`~.model.MoGlowConfig`).
+        baseline_hidden: the Gaussian baseline's LSTM units.
+        moglow_train_steps, moglow_lr, baseline_train_steps, baseline_lr: optimiser steps and learning rates
+            (AdamW; the baseline's LSTM trains faster).
+        batch_size, grad_clip, final_lr_factor: shared by both: windows per batch, gradient-norm clip, and
+            the factor the learning rate decays to, linearly, by the last step.
+        glow_steps_per_level, glow_hidden, glow_train_steps: the fixed-length Glow of :mod:`.fixed_length`
+            (chapter 05 trains it, this chapter compares with it).
+        n_commands: spliced command sequences in the control test (:func:`~.evaluate.control_test`), each
+            of four pieces of ``piece_seconds``.
+        n_long, long_seconds, long_seed: held-out clips per walk/jog style of the stability test, their
+            length and the seed they are generated from (:func:`~.evaluate.long_clips`).
+        n_repeats: sample sets for the evaluation-classifier metrics.
+        bench_batch: the large batch of the chapter's generation-speed measurement.
+    """
+
+    data: MoGlowDataConfig = MoGlowDataConfig(actions=("walk", "jog", "wave"))
+    window: int = 45
+    stride: int = 10
+    dropout_rates: tuple[float, ...] = (0.0, 0.5, 0.95)
+    moglow_steps: int = 4
+    moglow_hidden: int = 64
+    cond_features: int = 64
+    baseline_hidden: int = 256
+    moglow_train_steps: int = 500
+    moglow_lr: float = 2e-3
+    baseline_train_steps: int = 300
+    baseline_lr: float = 1e-3
+    batch_size: int = 32
+    grad_clip: float = 5.0
+    final_lr_factor: float = 0.05
+    glow_steps_per_level: int = 4
+    glow_hidden: int = 64
+    glow_train_steps: int = 300
+    n_commands: int = 8
+    piece_seconds: float = 3.0
+    n_long: int = 2
+    long_seconds: float = 20.0
+    long_seed: int = 1
+    n_repeats: int = 3
+    bench_batch: int = 256
+
+    def __post_init__(self) -> None:
+        where = "ExperimentConfig"
+        if not isinstance(self.data, MoGlowDataConfig):
+            raise TypeError(f"{where}: data must be a MoGlowDataConfig, got {type(self.data).__name__}")
+        for name in (
+            "window",
+            "stride",
+            "moglow_steps",
+            "moglow_hidden",
+            "cond_features",
+            "baseline_hidden",
+            "moglow_train_steps",
+            "baseline_train_steps",
+            "batch_size",
+            "glow_steps_per_level",
+            "glow_hidden",
+            "glow_train_steps",
+            "n_commands",
+            "n_long",
+            "n_repeats",
+            "bench_batch",
+        ):
+            check_scalar(getattr(self, name), name, where, kind=numbers.Integral, minimum=1)
+        check_scalar(self.long_seed, "long_seed", where, kind=numbers.Integral, minimum=0)
+        for name in ("moglow_lr", "baseline_lr", "grad_clip", "piece_seconds", "long_seconds"):
+            check_scalar(getattr(self, name), name, where, minimum=0.0, include_minimum=False)
+        check_scalar(self.final_lr_factor, "final_lr_factor", where, minimum=0.0)
+        if not isinstance(self.dropout_rates, tuple) or not self.dropout_rates:
+            raise TypeError(f"{where}: dropout_rates must be a non-empty tuple, got {self.dropout_rates!r}")
+        for rate in self.dropout_rates:
+            check_scalar(rate, "dropout_rates[i]", where, minimum=0.0, maximum=1.0, include_maximum=False)
+
+    @classmethod
+    def full(cls) -> ExperimentConfig:
+        """The chapter as the course runs it: about a minute of training per model on one CPU thread."""
+        return cls()
+
+    @classmethod
+    def quick(cls) -> ExperimentConfig:
+        """Tiny models and a few steps (the test profile): the code paths, not the numbers."""
+        return replace(
+            cls(),
+            moglow_steps=2,
+            moglow_hidden=8,
+            cond_features=8,
+            baseline_hidden=16,
+            moglow_train_steps=12,
+            baseline_train_steps=12,
+            glow_steps_per_level=1,
+            glow_hidden=8,
+            glow_train_steps=6,
+            n_commands=2,
+            n_long=1,
+            n_repeats=2,
+            bench_batch=8,
+        )
+
+    @classmethod
+    def current(cls) -> ExperimentConfig:
+        """The config of the active profile (:func:`motionlab.config.profile`)."""
+        return cls.quick() if config.is_quick() else cls.full()
+
+    def moglow(self, dropout: float) -> MoGlowConfig:
+        """The chapter's MoGlow with history dropout ``dropout``."""
+        return MoGlowConfig(
+            steps=self.moglow_steps,
+            hidden=self.moglow_hidden,
+            cond_features=self.cond_features,
+            dropout=dropout,
+        )
+
+    def baseline(self) -> GaussianARConfig:
+        """The chapter's Gaussian autoregressive LSTM (no history dropout)."""
+        return GaussianARConfig(hidden=self.baseline_hidden, dropout=0.0)
+
+    def _schedule(self, steps: int, lr: float) -> TrainConfig:
+        return TrainConfig(
+            steps=steps,
+            batch_size=self.batch_size,
+            lr=lr,
+            grad_clip=self.grad_clip,
+            lr_schedule=PiecewiseLinear(((0, 1.0), (steps, self.final_lr_factor))),
+        )
+
+    def moglow_train(self) -> TrainConfig:
+        """MoGlow's training: AdamW, the learning rate decaying linearly to ``final_lr_factor``."""
+        return self._schedule(self.moglow_train_steps, self.moglow_lr)
+
+    def baseline_train(self) -> TrainConfig:
+        """The baseline's training: as :meth:`moglow_train` with its own steps and learning rate."""
+        return self._schedule(self.baseline_train_steps, self.baseline_lr)
+
+    def data_identity(self) -> dict[str, Any]:
+        """What defines the training windows, for the checkpoint cache key (:func:`~.data.data_identity`)."""
+        return data_identity(self.data, self.window, self.stride)
+
+
+def load_data(cfg: ExperimentConfig, benchmark: Benchmark) -> PreparedData:
+    """The chapter's training and test windows and scalers (``cfg.data``, ``cfg.window``, ``cfg.stride``)."""
+    return prepare_data(benchmark, cfg.data, cfg.window, cfg.stride)
+
+
+@dataclass(frozen=True, eq=False)
+class AutoregressiveRun:
+    """One training of MoGlow or of the Gaussian baseline on the chapter's windows (a ``Run`` of
+    :mod:`motionlab.train.many`): build the model seeded, fit its linear predictor, then train or load it.
+
+    The fitted predictor's RMS residual (standard units) stays on the model as ``model.linear.fit_rms``.
+    """
+
+    cache_name: str
+    model_class: type[MoGlow] | type[GaussianAR]
+    model_cfg: MoGlowConfig | GaussianARConfig
+    train_cfg: TrainConfig
+    data: PreparedData
+    data_config: dict[str, Any]
+
+    def is_cached(self) -> bool:
+        """Whether :meth:`train` would load the model from the checkpoint cache."""
+        return is_cached(self.cache_name, self.model_cfg, self.train_cfg, self.data_config)
+
+    def train(self, progress: bool | None = None) -> tuple[nn.Module, TrainResult]:
+        """The trained (or cache-loaded) model, in eval mode, and its :class:`TrainResult`."""
+        model = build_seeded(lambda: self.model_class(self.model_cfg), self.train_cfg.seed)
+        model.initialize(self.data.train.pose, self.data.train.control)
+        result = train_or_load(
+            self.cache_name,
+            self.model_cfg,
+            model,
+            nll_per_frame_loss,
+            TensorBatches((self.data.train.pose, self.data.train.control)),
+            self.train_cfg,
+            data_config=self.data_config,
+            progress=progress,
+        )
+        return model, result
+
+
+def runs(cfg: ExperimentConfig, data: PreparedData) -> dict[str, AutoregressiveRun]:
+    """MoGlow at every rate of ``cfg.dropout_rates`` (:func:`moglow_name`), then the Gaussian baseline
+    (:data:`BASELINE`): the chapter's runs in the order to start them (MoGlow trains longest)."""
+    identity = cfg.data_identity()
+    named = {
+        moglow_name(rate): AutoregressiveRun(
+            "moglow", MoGlow, cfg.moglow(rate), cfg.moglow_train(), data, identity
+        )
+        for rate in cfg.dropout_rates
+    }
+    named[BASELINE] = AutoregressiveRun(
+        "moglow_gaussian_ar", GaussianAR, cfg.baseline(), cfg.baseline_train(), data, identity
     )
-
-
-def baseline_config(dropout: float = 0.0) -> GaussianARConfig:
-    """The chapter's Gaussian autoregressive LSTM for the active profile."""
-    return GaussianARConfig(hidden=config.choose(quick=16, full=256), dropout=dropout)
-
-
-def _train_config(steps: int, lr: float) -> TrainConfig:
-    return TrainConfig(
-        steps=steps,
-        batch_size=32,
-        lr=lr,
-        grad_clip=5.0,
-        lr_schedule=PiecewiseLinear(((0, 1.0), (steps, 0.05))),
-    )
-
-
-def moglow_train_config() -> TrainConfig:
-    """AdamW, linear decay of the learning rate to 5 %; 500 steps in the full profile."""
-    return _train_config(config.choose(quick=12, full=500), 2e-3)
-
-
-def baseline_train_config() -> TrainConfig:
-    """As :func:`moglow_train_config`, with 300 steps and a smaller learning rate (the LSTM trains faster)."""
-    return _train_config(config.choose(quick=12, full=300), 1e-3)
-
-
-def load_data(benchmark: Benchmark) -> PreparedData:
-    """The chapter's training, validation and test windows (:data:`DATA`, :data:`WINDOW`, :data:`STRIDE`)."""
-    return prepare_data(benchmark, DATA, WINDOW, STRIDE)
-
-
-class Trained(NamedTuple):
-    """A trained (or cache-loaded) model, its training result, and the RMS residual of its linear fit."""
-
-    model: MoGlow | GaussianAR
-    result: TrainResult
-    linear_rms: float
-
-
-def _train(
-    name: str,
-    model_class: type[MoGlow] | type[GaussianAR],
-    cfg,
-    data: PreparedData,
-    train_cfg: TrainConfig,
-    progress: bool | None,
-) -> Trained:
-    model = build_seeded(lambda: model_class(cfg), train_cfg.seed)
-    linear_rms = model.initialize(data.train.pose, data.train.control)
-    result = train_or_load(
-        name,
-        cfg,
-        model,
-        nll_per_frame_loss,
-        TensorBatches((data.train.pose, data.train.control)),
-        train_cfg,
-        data_config=data_identity(DATA, WINDOW, STRIDE),
-        progress=progress,
-    )
-    return Trained(model, result, linear_rms)
-
-
-def train_moglow(data: PreparedData, dropout: float, progress: bool | None = None) -> Trained:
-    """Fit the linear predictor, then train (or load) the chapter's MoGlow with history dropout
-    ``dropout``."""
-    cfg = moglow_config(dropout)
-    return _train("moglow", MoGlow, cfg, data, moglow_train_config(), progress)
-
-
-def train_baseline(data: PreparedData, dropout: float = 0.0, progress: bool | None = None) -> Trained:
-    """Fit the linear predictor, then train (or load) the Gaussian autoregressive baseline."""
-    cfg = baseline_config(dropout)
-    return _train("moglow_gaussian_ar", GaussianAR, cfg, data, baseline_train_config(), progress)
-
-
-def _train_in_worker(dropout: float | None, data: PreparedData) -> None:
-    """Body of a worker process: train MoGlow with ``dropout`` (``None``: the baseline) into the cache."""
-    if dropout is None:
-        train_baseline(data, progress=False)
-    else:
-        train_moglow(data, dropout, progress=False)
+    return named
 
 
 def train_all(
-    data: PreparedData, processes: int = 2, progress: bool | None = None
-) -> tuple[dict[float, Trained], Trained]:
-    """MoGlow at every rate of :data:`DROPOUT_RATES` and the Gaussian baseline, ``processes`` runs at a time.
-
-    The runs train in worker processes (:mod:`motionlab.train.parallel`), one thread each, then every model
-    is loaded here from the cache (seeded runs: the weights do not depend on where they were trained).
-    Returns ``({rate: Trained}, baseline)``.
-    """
-    identity = data_identity(DATA, WINDOW, STRIDE)
-    pending = [
-        rate
-        for rate in DROPOUT_RATES
-        if not is_cached("moglow", moglow_config(rate), moglow_train_config(), identity)
-    ]
-    if not is_cached("moglow_gaussian_ar", baseline_config(), baseline_train_config(), identity):
-        pending.append(None)
-    run_in_workers(_train_in_worker, [(rate, data) for rate in pending], processes)
-    runs = {rate: train_moglow(data, rate, progress) for rate in DROPOUT_RATES}
-    return runs, train_baseline(data, progress=progress)
-
-
-#: Seconds of each piece of the control test: walk, stand, jog, stand.
-PIECE_SECONDS = 3.0
-
-#: The 20-second stability test: clip length and the seed of its (generated, held-out) clips.
-LONG_SECONDS = 20.0
-LONG_SEED = 1
-
-
-class ControlTest(NamedTuple):
-    """Spliced command sequences ``control`` ``(N, T, 3)`` (m/frame, rad/frame), the seeds that start them,
-    and the frame ranges of the pieces (walk, stand, jog, stand) within ``control``."""
-
-    control: Tensor
-    seed: MoGlowFeatures
-    pieces: tuple[tuple[int, int], ...]
-
-
-def control_test(
-    clips: MoGlowFeatures,
-    action: np.ndarray,
-    action_names: Sequence[str],
-    n: int,
-    history: int,
-    blend: int = 15,
-    fps: int = 30,
-) -> ControlTest:
-    """``n`` commands spliced from held-out recorded controls: walk, stand (a wave clip), jog, stand.
-
-    Args:
-        clips: raw features of held-out clips ``(M, T, ·)`` (e.g. ``clip_features(test, DATA,
-        augment=False)``). action: the action id of each clip ``(M,)``; ``action_names`` maps ids to names.
-        n: how many commands (clip ``k * count // n`` of each action for command ``k``).
-        history: frames of the seed (taken from the walk clip, right before its piece of control).
-    """
-    names = [str(a) for a in action_names]
-    by_action = {
-        name: np.flatnonzero(np.asarray(action) == names.index(name)) for name in ("walk", "jog", "wave")
-    }
-    if any(len(ids) == 0 for ids in by_action.values()):
-        raise ValueError(
-            f"control_test: needs walk, jog and wave clips, got counts "
-            f"{ {k: len(v) for k, v in by_action.items()} }"
-        )
-    length = round(PIECE_SECONDS * fps)
-    first = 1 + history
-    if clips.control.shape[1] < first + length:
-        raise ValueError(
-            f"control_test: clips of {clips.control.shape[1]} frames are too short for {PIECE_SECONDS} s "
-            f"pieces after {first} frames"
-        )
-    commands, seeds = [], []
-    for k in range(n):
-        walk, jog, wave = (int(by_action[a][k * len(by_action[a]) // n]) for a in ("walk", "jog", "wave"))
-        pieces = [clips.control[i, first : first + length] for i in (walk, wave, jog, wave)]
-        commands.append(splice_controls(pieces, blend))
-        seeds.append(walk)
-    step = length - blend
-    bounds = tuple((i * step, i * step + step) for i in range(4))
-    return ControlTest(torch.stack(commands), seed_features(clips, seeds, history), bounds)
-
-
-def long_clips(n_per_mode: int) -> MoGlowFeatures:
-    """Raw features of held-out 20-second walk and jog clips (generated once, cached under ``build/data``)."""
-    data = load_or_generate(LONG_SEED, n_per_mode, seconds=LONG_SECONDS, split="test")
-    return clip_features(
-        data, MoGlowDataConfig(actions=("walk", "jog"), mirror=False, reverse_time=False), augment=False
-    )
+    cfg: ExperimentConfig, data: PreparedData, processes: int = 2, progress: bool | None = None
+) -> dict[str, Trained]:
+    """Train (or load) every run of :func:`runs`, ``processes`` at a time, and return them by name."""
+    return train_many(runs(cfg, data), processes=processes, progress=progress)

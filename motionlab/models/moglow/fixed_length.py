@@ -14,7 +14,6 @@ from typing import NamedTuple
 import torch
 from torch import Tensor
 
-from motionlab import config
 from motionlab.data.representations import from_moglow
 from motionlab.evaluation.benchmark import Benchmark
 from motionlab.models.flows.glow import Glow, GlowConfig
@@ -25,10 +24,11 @@ from motionlab.models.moglow.data import (
     MoGlowFeatures,
     Scalers,
     clip_features,
+    data_identity,
     fit_scalers,
     standardize,
 )
-from motionlab.models.moglow.training import data_identity
+from motionlab.models.moglow.experiment import ExperimentConfig
 from motionlab.train import (
     PiecewiseLinear,
     TensorBatches,
@@ -37,6 +37,7 @@ from motionlab.train import (
     build_seeded,
     train_or_load,
 )
+from motionlab.validation import check_tensor
 
 #: Frames per clip (the benchmark's 4 s at 30 fps); divisible by 2**levels.
 CLIP_FRAMES = 120
@@ -44,24 +45,26 @@ CLIP_FRAMES = 120
 
 def channels_first(features: MoGlowFeatures) -> tuple[Tensor, Tensor]:
     """Poses ``(N, 64, T)`` and controls ``(N, 3, T)`` (contiguous) from features ``(N, T, ·)``."""
+    check_tensor(features.pose, "features.pose", "channels_first", ndim=3, finite=False)
+    check_tensor(features.control, "features.control", "channels_first", ndim=3, finite=False)
     return features.pose.transpose(1, 2).contiguous(), features.control.transpose(1, 2).contiguous()
 
 
-def glow_config() -> GlowConfig:
-    """The chapter's Glow for the active profile (tiny in the quick profile)."""
+def glow_config(cfg: ExperimentConfig) -> GlowConfig:
+    """The Glow of ``cfg`` (``glow_steps_per_level``, ``glow_hidden``): three levels over 120 frames."""
     return GlowConfig(
         channels=POSE_DIM,
         length=CLIP_FRAMES,
         cond_channels=CONTROL_DIM,
         levels=3,
-        steps_per_level=config.choose(quick=1, full=4),
-        hidden=config.choose(quick=8, full=64),
+        steps_per_level=cfg.glow_steps_per_level,
+        hidden=cfg.glow_hidden,
     )
 
 
-def glow_train_config() -> TrainConfig:
-    """Training schedule for the active profile: AdamW with a linear decay of the learning rate."""
-    steps = config.choose(quick=6, full=300)
+def glow_train_config(cfg: ExperimentConfig) -> TrainConfig:
+    """``cfg.glow_train_steps`` of AdamW with a linear decay of the learning rate."""
+    steps = cfg.glow_train_steps
     return TrainConfig(
         steps=steps,
         batch_size=16,
@@ -93,18 +96,23 @@ class FixedLengthGlow(NamedTuple):
 
 
 def train_fixed_length_glow(
-    benchmark: Benchmark, data_cfg: MoGlowDataConfig | None = None, progress: bool | None = None
+    benchmark: Benchmark,
+    data_cfg: MoGlowDataConfig | None = None,
+    progress: bool | None = None,
+    cfg: ExperimentConfig | None = None,
 ) -> FixedLengthGlow:
     """Train (or load from the cache) the fixed-length Glow on the benchmark's clips of ``data_cfg.actions``.
 
-    Training clips are augmented (mirror, time reversal) as ``data_cfg`` says; the test clips are not.
+    Training clips are augmented (mirror, time reversal) as ``data_cfg`` says (default: walk and jog); the
+    test clips are not. The sizes and schedule come from ``cfg`` (default: the active profile's).
     """
     data_cfg = data_cfg if data_cfg is not None else MoGlowDataConfig()
+    cfg = cfg if cfg is not None else ExperimentConfig.current()
     train = clip_features(benchmark.train, data_cfg, augment=True)
     scalers = fit_scalers(train)
     train_x = channels_first(standardize(train, scalers))
     test_x = channels_first(standardize(clip_features(benchmark.test, data_cfg, augment=False), scalers))
-    model_cfg, train_cfg = glow_config(), glow_train_config()
+    model_cfg, train_cfg = glow_config(cfg), glow_train_config(cfg)
     model = build_seeded(lambda: Glow(model_cfg), train_cfg.seed)
     result = train_or_load(
         "fixed_length_glow",
@@ -124,6 +132,7 @@ def sample_clips(
 ) -> tuple[Tensor, Tensor]:
     """Whole clips for controls ``(B, T, 3)`` (m/frame, rad/frame): poses ``(B, T, 64)`` in metres and world
     joint positions ``(B, T, 22, 3)`` (root path integrated from the control, starting at the origin)."""
+    check_tensor(control, "control", "sample_clips", trailing=(CONTROL_DIM,), ndim=3)
     cond = glow.scalers.control.transform(control).transpose(1, 2).contiguous()
     sample = glow.model.sample(cond, temperature=temperature, generator=generator)
     pose = glow.scalers.pose.inverse(sample.transpose(1, 2))

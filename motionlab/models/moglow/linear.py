@@ -18,11 +18,14 @@ prediction that is accurate to 0.02. ``log_scale`` stays trainable.
 
 from __future__ import annotations
 
+import numbers
+
 import torch
 from torch import Tensor, nn
 
 from motionlab.models.flows.base import FlowLayer, check_cond, check_sequence
-from motionlab.models.moglow.autoregression import autoregressive_conditioning, history_keep_mask
+from motionlab.models.moglow.conditioning import autoregressive_conditioning, history_keep_mask
+from motionlab.validation import check_scalar, check_tensor
 
 #: Ridge penalty of the least-squares fit, relative to the mean diagonal of the normal equations. It is a
 #: trade-off: the nearly unpenalised fit (1e-12) predicts the most predictable channels better and is about
@@ -44,13 +47,18 @@ class LinearPredictor(FlowLayer):
 
     weight: Tensor
     bias: Tensor
+    #: The RMS residual of the last :meth:`fit` (standard units), ``None`` before it (not in the state dict).
+    fit_rms: float | None
 
     def __init__(self, pose_dim: int, cond_dim: int) -> None:
         super().__init__()
+        for name, value in (("pose_dim", pose_dim), ("cond_dim", cond_dim)):
+            check_scalar(value, name, "LinearPredictor", kind=numbers.Integral, minimum=1)
         self.pose_dim, self.cond_dim = pose_dim, cond_dim
         self.register_buffer("weight", torch.zeros(pose_dim, cond_dim))
         self.register_buffer("bias", torch.zeros(pose_dim))
         self.log_scale = nn.Parameter(torch.zeros(pose_dim))
+        self.fit_rms = None
 
     def mean(self, cond: Tensor) -> Tensor:
         """``A c + b`` for conditioning ``(..., D)``, shape ``(..., P)``."""
@@ -72,6 +80,13 @@ class LinearPredictor(FlowLayer):
         Uses at most ``max_windows`` windows, evenly spaced. History dropout flags (probability ``dropout``)
         come from a generator seeded with ``seed``. Returns the root-mean-square residual (standard units).
         """
+        where = "LinearPredictor.fit"
+        check_tensor(pose, "pose", where, trailing=(self.pose_dim,), ndim=3)
+        check_tensor(control, "control", where, ndim=3)
+        check_scalar(history, "history", where, kind=numbers.Integral, minimum=1)
+        check_scalar(dropout, "dropout", where, minimum=0.0, maximum=1.0, include_maximum=False)
+        check_scalar(seed, "seed", where, kind=numbers.Integral, minimum=0)
+        check_scalar(max_windows, "max_windows", where, kind=numbers.Integral, minimum=1)
         if pose.shape[0] > max_windows:
             index = torch.linspace(0, pose.shape[0] - 1, max_windows).long()
             pose, control = pose[index], control[index]
@@ -89,7 +104,8 @@ class LinearPredictor(FlowLayer):
         self.weight.copy_(solution[:-1].T)
         self.bias.copy_(solution[-1])
         self.log_scale.copy_(torch.log(residual.std(dim=0).clamp(min=1e-6)))
-        return float(residual.pow(2).mean().sqrt())
+        self.fit_rms = float(residual.pow(2).mean().sqrt())
+        return self.fit_rms
 
     def forward(self, x: Tensor, cond: Tensor | None = None) -> tuple[Tensor, Tensor]:
         check_sequence(x, "x", "LinearPredictor.forward", self.pose_dim)

@@ -1,24 +1,26 @@
 """MoGlow (Henter, Alexanderson & Beskow, 2020, §4): an autoregressive, causal, controllable flow.
 
 Each frame's pose ``x_t`` ``(P,)`` is the image of a standard-normal ``z_t`` under an invertible map that
-depends on the conditioning ``c_t`` (previous poses and controls, :mod:`.autoregression`) and on the
+depends on the conditioning ``c_t`` (previous poses and controls, :mod:`.conditioning`) and on the
 LSTM states inside the coupling networks, which summarise everything before ``t``::
 
     x_t = f^{-1}(z_t; c_t, h_{t-1}),      log p(x_t | past) = log N(f(x_t); 0, I) + log |det df/dx_t|
 
 ``f`` is ``K`` Glow steps (ActNorm, 1x1 convolution, :class:`~.coupling.LSTMAffineCoupling`) acting on
 one frame at a time, so a clip's exact log-likelihood is the sum over frames, computed for all frames
-in one pass. Generation runs frame by frame, carrying the LSTM states (:mod:`.sampler`).
+in one pass. Generation runs frame by frame, carrying the LSTM states (:mod:`.sampling`).
 
 Two additions to the paper's model, for training on a CPU in about a minute: the first layer (data side)
 subtracts a least-squares linear prediction of ``x_t`` from ``c_t`` and divides by the residual scale
 (:mod:`.linear`), and the couplings read one shared linear projection of ``c_t`` (``cfg.cond_features``
-numbers) instead of ``c_t`` itself (:class:`~.config.MoGlowConfig`).
+numbers) instead of ``c_t`` itself (:class:`MoGlowConfig`).
 
-Everything here is in standard units (see :mod:`.data`); :mod:`.generate` converts to and from metres.
+Everything here is in standard units (see :mod:`.data`); :mod:`.sampling` converts to and from metres.
 """
 
 from __future__ import annotations
+
+from dataclasses import dataclass
 
 import torch
 from torch import Tensor, nn
@@ -27,17 +29,60 @@ from motionlab.models.flows.actnorm import ActNorm
 from motionlab.models.flows.base import FlowSequence
 from motionlab.models.flows.invconv import InvertibleConv1x1
 from motionlab.models.flows.prior import StandardNormal
-from motionlab.models.moglow.autoregression import (
+from motionlab.models.moglow.conditioning import (
     autoregressive_conditioning,
-    check_generated,
+    check_history_config,
     check_pose_control,
     history_keep_mask,
+)
+from motionlab.models.moglow.coupling import LSTMAffineCoupling
+from motionlab.models.moglow.data import CONTROL_DIM, POSE_DIM
+from motionlab.models.moglow.linear import LinearPredictor
+from motionlab.models.moglow.sampling import (
+    GenerationPlan,
+    InverseStep,
+    check_generated,
+    sample_frames,
     sampling_setup,
 )
-from motionlab.models.moglow.config import MoGlowConfig
-from motionlab.models.moglow.coupling import LSTMAffineCoupling
-from motionlab.models.moglow.linear import LinearPredictor
-from motionlab.models.moglow.sampler import GenerationPlan, InverseStep, sample_frames
+from motionlab.validation import check_scalar
+
+
+@dataclass(frozen=True)
+class MoGlowConfig:
+    """MoGlow (§4 of the paper): a next-frame Glow whose couplings are LSTMs over time.
+
+    Attributes:
+        pose_dim: output features per frame (64: root height and 21 joints' xyz).
+        control_dim: control features per frame (3: forward, sideways, yaw velocity).
+        history: ``tau``, the previous poses fed to every coupling (and ``tau + 1`` control frames, the
+            current one included: zero-latency control).
+        steps: Glow steps ``K`` (ActNorm, 1x1 convolution, LSTM affine coupling).
+        hidden: LSTM units in each coupling network.
+        cond_features: size of the shared linear projection of the conditioning that every coupling reads
+            (our deviation from the paper, where each coupling reads the raw conditioning: on a CPU the
+            first LSTM layer's input weights dominate both training and generation time; sharing one
+            projection makes them ``K`` times cheaper).
+        dropout: probability of zeroing each previous pose in the conditioning during training.
+    """
+
+    pose_dim: int = POSE_DIM
+    control_dim: int = CONTROL_DIM
+    history: int = 5
+    steps: int = 8
+    hidden: int = 64
+    cond_features: int = 64
+    dropout: float = 0.95
+
+    def __post_init__(self) -> None:
+        sizes = ("pose_dim", "control_dim", "history", "steps", "hidden", "cond_features")
+        check_history_config(self, "MoGlowConfig", sizes)
+        check_scalar(self.pose_dim, "pose_dim (a coupling splits it)", "MoGlowConfig", minimum=2)
+
+    @property
+    def cond_dim(self) -> int:
+        """Conditioning features per frame: ``tau`` poses and ``tau + 1`` controls."""
+        return self.history * self.pose_dim + (self.history + 1) * self.control_dim
 
 
 class MoGlow(nn.Module):
@@ -58,18 +103,12 @@ class MoGlow(nn.Module):
         self.flow = FlowSequence(layers)
         self.prior = StandardNormal()
 
-    def _check(self, pose: Tensor, control: Tensor, where: str) -> None:
-        check_pose_control(
-            pose, control, self.cfg.pose_dim, self.cfg.control_dim, self.cfg.history + 1, where
-        )
-        if control.shape[1] != pose.shape[1]:
-            raise ValueError(
-                f"{where}: pose and control must have the same frames, got {pose.shape[1]} and "
-                f"{control.shape[1]}"
-            )
-
     def initialize(self, pose: Tensor, control: Tensor, seed: int = 0) -> float:
-        """Fit the linear predictor (:mod:`.linear`) to training windows; returns its RMS residual."""
+        """Fit the linear predictor (:mod:`.linear`) to training windows; returns its RMS residual.
+
+        The residual stays available as ``self.linear.fit_rms`` (also on a model loaded from the cache
+        after this call, as :mod:`.experiment`'s runs do).
+        """
         return self.linear.fit(pose, control, self.cfg.history, self.cfg.dropout, seed)
 
     def latents(
@@ -84,7 +123,8 @@ class MoGlow(nn.Module):
             generator: draws the history dropout flags (probability ``cfg.dropout`` per frame and lag);
                 ``None`` uses torch's global generator, which the training loop seeds.
         """
-        self._check(pose, control, "MoGlow")
+        cfg = self.cfg
+        check_pose_control(pose, control, cfg.pose_dim, cfg.control_dim, cfg.history + 1, "MoGlow", True)
         batch, frames, _ = pose.shape
         keep = None
         if self.cfg.dropout > 0:
@@ -104,7 +144,7 @@ class MoGlow(nn.Module):
 
     @torch.no_grad()
     def generation_plan(self) -> GenerationPlan:
-        """The weights arranged for generating one frame at a time (:mod:`.sampler`), steps in inverse order.
+        """The weights arranged for generating one frame at a time (:mod:`.sampling`), steps in inverse order.
 
         Each step's ActNorm and 1x1 convolution are folded into one matrix; the couplings' weights are split
         by what they read, and the conditioning features' parts of all couplings are stacked side by side.
@@ -137,7 +177,7 @@ class MoGlow(nn.Module):
         temperature: float = 1.0,
         generator: torch.Generator | None = None,
     ) -> Tensor:
-        """Generate poses ``(B, N, P)`` frame by frame (:mod:`.sampler`).
+        """Generate poses ``(B, N, P)`` frame by frame with the fused loop (:func:`.sampling.sample_frames`).
 
         Args:
             control: ``(B, tau + N, C)``: the seed frames' controls, then those of the frames to generate.

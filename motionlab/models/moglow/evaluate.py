@@ -1,4 +1,5 @@
-"""What chapter 06 measures on generated motion: control adherence and long-horizon stability.
+"""What chapter 06 measures on generated motion (control adherence, long-horizon stability) and the test
+inputs it measures them on (:func:`control_test`, :func:`long_clips`).
 
 **Control mismatch** (gait speed against commanded speed). The foot that carries the body (the lowest of
 the ankles and toes) moves backwards relative to the pelvis at the walking speed the legs produce. From
@@ -25,8 +26,18 @@ failure of autoregressive motion models) gives a ratio near 0; a healthy one sta
 
 from __future__ import annotations
 
+import numbers
+from collections.abc import Sequence
+from typing import NamedTuple
+
+import numpy as np
 import torch
 from torch import Tensor
+
+from motionlab.data.synthetic import load_or_generate
+from motionlab.models.moglow.data import MoGlowDataConfig, MoGlowFeatures, clip_features
+from motionlab.models.moglow.sampling import seed_features, splice_controls
+from motionlab.validation import check_scalar, check_tensor
 
 #: Ankle and toe joints of the default skeleton (left ankle, right ankle, left foot, right foot).
 FOOT_JOINTS = (7, 8, 10, 11)
@@ -43,16 +54,10 @@ def support_foot_slide(positions: Tensor, fps: float = 30.0, feet: tuple[int, ..
     Frame ``t``'s support joint is the lowest of ``feet`` at ``t``; its speed is its displacement from
     ``t`` to ``t + 1`` times ``fps``.
     """
-    if (
-        not isinstance(positions, Tensor)
-        or positions.dim() < 3
-        or positions.shape[-1] != 3
-        or positions.shape[-3] < 2
-    ):
-        shape = tuple(positions.shape) if isinstance(positions, Tensor) else type(positions).__name__
-        raise ValueError(f"support_foot_slide: positions must be (..., T >= 2, J, 3), got {shape}")
-    if not bool(torch.isfinite(positions).all()):
-        raise ValueError("support_foot_slide: positions contain NaN or inf")
+    check_tensor(positions, "positions", "support_foot_slide", trailing=(None, 3), min_leading=1)
+    check_scalar(fps, "fps", "support_foot_slide", minimum=0.0, include_minimum=False)
+    if positions.shape[-3] < 2:
+        raise ValueError(f"support_foot_slide: positions need T >= 2 frames, got {tuple(positions.shape)}")
     foot = positions[..., list(feet), :]  # (..., T, F, 3)
     lowest = foot[..., :-1, :, 2].argmin(dim=-1, keepdim=True)  # (..., T-1, 1)
     step = (foot[..., 1:, :, :2] - foot[..., :-1, :, :2]).norm(dim=-1)  # (..., T-1, F)
@@ -71,9 +76,10 @@ def gait_speed(pose: Tensor, fps: float = 30.0, feet: tuple[int, ...] = FOOT_JOI
         pose: MoGlow poses ``(..., T, 64)`` in metres (heading frame: x forward, z up).
         feet: the candidate support joints (default ankles and toes).
     """
-    if not isinstance(pose, Tensor) or pose.dim() < 2 or pose.shape[-1] != 64 or pose.shape[-2] < 2:
-        shape = tuple(pose.shape) if isinstance(pose, Tensor) else type(pose).__name__
-        raise ValueError(f"gait_speed: pose must be (..., T >= 2, 64), got {shape}")
+    check_tensor(pose, "pose", "gait_speed", trailing=(64,), min_leading=1, finite=False)
+    check_scalar(fps, "fps", "gait_speed", minimum=0.0, include_minimum=False)
+    if pose.shape[-2] < 2:
+        raise ValueError(f"gait_speed: pose needs T >= 2 frames, got {tuple(pose.shape)}")
     foot = pose[..., _foot_pose_indices(feet)].unflatten(-1, (len(feet), 3))  # (..., T, F, 3)
     lowest = foot[..., :-1, :, 2].argmin(dim=-1, keepdim=True)
     backward = -(foot[..., 1:, :, 0] - foot[..., :-1, :, 0]) * fps
@@ -89,7 +95,9 @@ def control_mismatch(pose: Tensor, control: Tensor, fps: float = 30.0, window: i
             velocity is the command for the step ``t -> t + 1``.
         window: frames per window (the last incomplete window is dropped).
     """
-    if control.shape[:-1] != pose.shape[:-1] or control.shape[-1] != 3:
+    check_tensor(control, "control", "control_mismatch", trailing=(3,), min_leading=1, finite=False)
+    check_scalar(window, "window", "control_mismatch", kind=numbers.Integral, minimum=1)
+    if control.shape[:-1] != pose.shape[:-1]:
         raise ValueError(
             f"control_mismatch: control must be (..., T, 3) with the pose's (..., T), got "
             f"{tuple(control.shape)} and {tuple(pose.shape)}"
@@ -108,9 +116,10 @@ def joint_speed(pose: Tensor, fps: float = 30.0) -> Tensor:
 
     The 21 non-root joints' xyz in the heading frame (channels 1..63); the root height is left out.
     """
-    if not isinstance(pose, Tensor) or pose.dim() < 2 or pose.shape[-1] < 4 or (pose.shape[-1] - 1) % 3:
-        shape = tuple(pose.shape) if isinstance(pose, Tensor) else type(pose).__name__
-        raise ValueError(f"joint_speed: pose must be (..., T, 1 + 3 * joints), got {shape}")
+    check_tensor(pose, "pose", "joint_speed", min_leading=2, finite=False)
+    check_scalar(fps, "fps", "joint_speed", minimum=0.0, include_minimum=False)
+    if pose.shape[-1] < 4 or (pose.shape[-1] - 1) % 3:
+        raise ValueError(f"joint_speed: pose must be (..., T, 1 + 3 * joints), got {tuple(pose.shape)}")
     joints = pose[..., 1:].unflatten(-1, (-1, 3))
     return (joints[..., 1:, :, :] - joints[..., :-1, :, :]).norm(dim=-1).mean(dim=-1) * fps
 
@@ -120,7 +129,9 @@ def speed_ratio(pose: Tensor, window: int, fps: float = 30.0) -> float:
 
     ``pose`` ``(B, T, 64)`` in metres with ``T >= 2 * window``; speeds are averaged over the batch first.
     """
-    if pose.dim() != 3 or window < 2 or pose.shape[1] < 2 * window:
+    check_tensor(pose, "pose", "speed_ratio", ndim=3, finite=False)
+    check_scalar(window, "window", "speed_ratio", kind=numbers.Integral, minimum=2)
+    if pose.shape[1] < 2 * window:
         raise ValueError(
             f"speed_ratio: pose must be (B, T, 64) with T >= 2 * window, got {tuple(pose.shape)} and "
             f"window={window}"
@@ -130,3 +141,74 @@ def speed_ratio(pose: Tensor, window: int, fps: float = 30.0) -> float:
     if float(first) <= 0:
         raise ValueError("speed_ratio: the first window does not move, the ratio is undefined")
     return float(speed[:, -(window - 1) :].mean() / first)
+
+
+class ControlTest(NamedTuple):
+    """Spliced command sequences ``control`` ``(N, T, 3)`` (m/frame, rad/frame), the seeds that start them,
+    and the frame ranges of the pieces (walk, stand, jog, stand) within ``control``."""
+
+    control: Tensor
+    seed: MoGlowFeatures
+    pieces: tuple[tuple[int, int], ...]
+
+
+def control_test(
+    clips: MoGlowFeatures,
+    action: np.ndarray,
+    action_names: Sequence[str],
+    n: int,
+    history: int,
+    piece_seconds: float = 3.0,
+    blend: int = 15,
+    fps: int = 30,
+) -> ControlTest:
+    """``n`` commands spliced from held-out recorded controls: walk, stand (a wave clip), jog, stand.
+
+    Args:
+        clips: raw features of held-out clips ``(M, T, ·)`` (e.g. ``clip_features(test, cfg.data,
+            augment=False)`` with ``cfg`` the :class:`~.experiment.ExperimentConfig`).
+        action: the action id of each clip ``(M,)``; ``action_names`` maps ids to names.
+        n: how many commands (clip ``k * count // n`` of each action for command ``k``).
+        history: frames of the seed (taken from the walk clip, right before its piece of control).
+        piece_seconds: seconds of each piece; ``blend`` frames of cross-fade at each junction.
+    """
+    check_scalar(n, "n", "control_test", kind=numbers.Integral, minimum=1)
+    check_scalar(history, "history", "control_test", kind=numbers.Integral, minimum=1)
+    check_scalar(piece_seconds, "piece_seconds", "control_test", minimum=0.0, include_minimum=False)
+    names = [str(a) for a in action_names]
+    by_action = {
+        name: np.flatnonzero(np.asarray(action) == names.index(name)) for name in ("walk", "jog", "wave")
+    }
+    if any(len(ids) == 0 for ids in by_action.values()):
+        raise ValueError(
+            f"control_test: needs walk, jog and wave clips, got counts "
+            f"{ {k: len(v) for k, v in by_action.items()} }"
+        )
+    length = round(piece_seconds * fps)
+    first = 1 + history
+    if clips.control.shape[1] < first + length:
+        raise ValueError(
+            f"control_test: clips of {clips.control.shape[1]} frames are too short for {piece_seconds} s "
+            f"pieces after {first} frames"
+        )
+    commands, seeds = [], []
+    for k in range(n):
+        walk, jog, wave = (int(by_action[a][k * len(by_action[a]) // n]) for a in ("walk", "jog", "wave"))
+        pieces = [clips.control[i, first : first + length] for i in (walk, wave, jog, wave)]
+        commands.append(splice_controls(pieces, blend))
+        seeds.append(walk)
+    step = length - blend
+    bounds = tuple((i * step, i * step + step) for i in range(4))
+    return ControlTest(torch.stack(commands), seed_features(clips, seeds, history), bounds)
+
+
+def long_clips(n_per_mode: int, seconds: float, seed: int) -> MoGlowFeatures:
+    """Raw features of held-out walk and jog clips of ``seconds`` (the stability test's, generated once from
+    ``seed`` and cached under ``build/data``)."""
+    check_scalar(n_per_mode, "n_per_mode", "long_clips", kind=numbers.Integral, minimum=1)
+    check_scalar(seconds, "seconds", "long_clips", minimum=0.0, include_minimum=False)
+    check_scalar(seed, "seed", "long_clips", kind=numbers.Integral, minimum=0)
+    data = load_or_generate(seed, n_per_mode, seconds=seconds, split="test")
+    return clip_features(
+        data, MoGlowDataConfig(actions=("walk", "jog"), mirror=False, reverse_time=False), augment=False
+    )

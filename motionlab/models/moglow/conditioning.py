@@ -1,0 +1,125 @@
+"""The autoregressive conditioning shared by MoGlow and its baseline, and its history dropout.
+
+The pose of frame ``t`` is generated given the conditioning vector
+
+    c_t = [x_{t-tau}, ..., x_{t-1},  u_{t-tau}, ..., u_{t-1}, u_t]
+
+of the ``tau`` previous poses ``x`` and the ``tau + 1`` latest controls ``u`` (the current one included,
+so a change of control acts at once: zero latency). No future control is used: the model is causal.
+
+**History dropout.** Each previous pose in ``c_t`` is replaced by zeros (the mean pose, in standard units)
+with probability ``p``, independently per frame and lag. Without it the easiest way to predict ``x_t`` is
+to continue ``x_{t-1}``, and the model learns to ignore the control; with it the model has to read the
+control (and its own LSTM memory) to know what comes next. The erasure is part of the model: it is
+applied when generating and when measuring likelihoods too, not only in training. A model trained with
+``p = 0.95`` has almost never seen all ``tau`` previous poses at once, and feeding it the full history
+is far outside what it learned (on our data its held-out NLL is tens of nats per frame worse that way).
+"""
+
+from __future__ import annotations
+
+import numbers
+from typing import Any
+
+import torch
+from torch import Tensor
+
+from motionlab.validation import check_scalar, check_tensor
+
+
+def check_pose_control(
+    pose: Tensor,
+    control: Tensor,
+    pose_dim: int,
+    control_dim: int,
+    min_frames: int,
+    where: str,
+    same_frames: bool = False,
+) -> None:
+    """Check poses ``(B, T, P)`` and controls ``(B, T', C)``: floating, finite, sized right, one batch.
+
+    ``T >= min_frames`` is required of ``pose``, and ``T' = T`` with ``same_frames`` (a likelihood reads
+    both of every frame; sampling has its own rule). ``TypeError`` for a non-tensor or a non-floating
+    dtype, ``ValueError`` for a wrong shape or a NaN or infinite entry.
+    """
+    check_tensor(pose, "pose", where, trailing=(pose_dim,), ndim=3)
+    check_tensor(control, "control", where, trailing=(control_dim,), ndim=3)
+    if pose.shape[0] != control.shape[0]:
+        raise ValueError(
+            f"{where}: pose and control must have the same batch size, got {pose.shape[0]} and "
+            f"{control.shape[0]}"
+        )
+    if pose.shape[1] < min_frames:
+        raise ValueError(f"{where}: pose needs at least {min_frames} frames, got {pose.shape[1]}")
+    if same_frames and control.shape[1] != pose.shape[1]:
+        raise ValueError(
+            f"{where}: pose and control must have the same frames, got {pose.shape[1]} and {control.shape[1]}"
+        )
+
+
+def check_history_config(cfg: Any, where: str, sizes: tuple[str, ...]) -> None:
+    """Check the positive integer sizes ``sizes`` of an autoregressive model's config and its dropout."""
+    for name in sizes:
+        check_scalar(getattr(cfg, name), name, where, kind=numbers.Integral, minimum=1)
+    check_scalar(cfg.dropout, "dropout", where, minimum=0.0, maximum=1.0, include_maximum=False)
+
+
+def history_keep_mask(
+    batch: int, frames: int, history: int, dropout: float, generator: torch.Generator | None = None
+) -> Tensor:
+    """Bernoulli keep flags ``(batch, frames, history)`` (1 keep, 0 drop), each dropped with prob.
+    ``dropout``."""
+    for name, value in (("batch", batch), ("frames", frames), ("history", history)):
+        check_scalar(value, name, "history_keep_mask", kind=numbers.Integral, minimum=0)
+    check_scalar(dropout, "dropout", "history_keep_mask", minimum=0.0, maximum=1.0)
+    return (torch.rand(batch, frames, history, generator=generator) >= dropout).float()
+
+
+def autoregressive_conditioning(
+    pose: Tensor, control: Tensor, history: int, keep: Tensor | None = None
+) -> Tensor:
+    """Conditioning ``(B, T - tau, cond_dim)`` for predicting frames ``tau .. T-1`` of a sequence.
+
+    Args:
+        pose: poses ``(B, T, P)`` (standard units).
+        control: controls ``(B, T, C)`` of the same frames.
+        history: ``tau``.
+        keep: optional keep flags ``(B, T - tau, tau)`` from :func:`history_keep_mask`.
+
+    Row ``i`` holds, for frame ``t = tau + i``, poses ``t - tau .. t - 1`` (oldest first, flattened), then
+    controls ``t - tau .. t``: the layout of :func:`frame_conditioning`.
+    """
+    where = "autoregressive_conditioning"
+    check_tensor(pose, "pose", where, ndim=3, finite=False)
+    check_tensor(control, "control", where, ndim=3, finite=False)
+    check_scalar(history, "history", where, kind=numbers.Integral, minimum=1)
+    batch, frames, _ = pose.shape
+    if control.shape[:2] != pose.shape[:2]:
+        raise ValueError(
+            f"{where}: control must have the pose's (batch, frames) {tuple(pose.shape[:2])}, "
+            f"got {tuple(control.shape)}"
+        )
+    if frames <= history:
+        raise ValueError(f"{where}: needs more than tau={history} frames, got {frames}")
+    past = pose.unfold(1, history, 1)[:, : frames - history].transpose(2, 3)  # (B, T - tau, tau, P)
+    if keep is not None:
+        if keep.shape != (batch, frames - history, history):
+            raise ValueError(
+                f"{where}: keep must be {(batch, frames - history, history)}, got {tuple(keep.shape)}"
+            )
+        past = past * keep[..., None].to(past)
+    controls = control.unfold(1, history + 1, 1).transpose(2, 3)  # (B, T - tau, tau + 1, C)
+    return torch.cat([past.flatten(2), controls.flatten(2)], dim=2)
+
+
+def frame_conditioning(past: Tensor, controls: Tensor) -> Tensor:
+    """Conditioning ``(B, cond_dim)`` of one frame from ``past`` poses ``(B, tau, P)`` and ``controls``
+    ``(B, tau + 1, C)``."""
+    check_tensor(past, "past", "frame_conditioning", ndim=3, finite=False)
+    check_tensor(controls, "controls", "frame_conditioning", ndim=3, finite=False)
+    if controls.shape[0] != past.shape[0] or controls.shape[1] != past.shape[1] + 1:
+        raise ValueError(
+            f"frame_conditioning: controls must be (B, tau + 1, C) for past (B, tau, P) = "
+            f"{tuple(past.shape)}, got {tuple(controls.shape)}"
+        )
+    return torch.cat([past.flatten(1), controls.flatten(1)], dim=1)

@@ -1,0 +1,55 @@
+"""Chapter 06's experiment: the profiles' configs, the named runs, and train_all (tiny models)."""
+
+import dataclasses
+import pickle
+
+import pytest
+import torch
+
+from motionlab.models.moglow import MoGlowConfig, MoGlowFeatures, PreparedData, experiment, fit_scalers
+
+
+def test_experiment_config_profiles_and_runs():
+    quick, full = experiment.ExperimentConfig.quick(), experiment.ExperimentConfig.full()
+    assert quick.moglow_steps < full.moglow_steps and quick.moglow_train_steps < full.moglow_train_steps
+    assert experiment.ExperimentConfig.current() in (quick, full)
+    assert full.moglow(0.5) == MoGlowConfig(steps=4, hidden=64, cond_features=64, dropout=0.5)
+    named = experiment.runs(quick, data=None)
+    assert list(named) == ["MoGlow p=0.0", "MoGlow p=0.5", "MoGlow p=0.95", experiment.BASELINE]
+    assert named["MoGlow p=0.5"].model_cfg.dropout == 0.5
+    assert named[experiment.BASELINE].cache_name == "moglow_gaussian_ar"
+    with pytest.raises(ValueError, match="ExperimentConfig: window"):
+        experiment.ExperimentConfig(window=0)
+    with pytest.raises(TypeError, match="ExperimentConfig: n_commands"):
+        experiment.ExperimentConfig(n_commands=2.5)
+
+
+def test_train_all_trains_then_loads_every_run(tmp_path, monkeypatch):
+    monkeypatch.setenv("MOTIONLAB_BUILD", str(tmp_path))
+    cfg = dataclasses.replace(
+        experiment.ExperimentConfig.quick(),
+        dropout_rates=(0.0, 0.5),
+        moglow_train_steps=2,
+        batch_size=4,
+        baseline_train_steps=2,
+    )
+    generator = torch.Generator().manual_seed(0)
+    windows = MoGlowFeatures(
+        torch.randn(8, 12, 64, generator=generator), torch.randn(8, 12, 3, generator=generator)
+    )
+    data = PreparedData(windows, windows, fit_scalers(windows))
+    named = experiment.runs(cfg, data)
+    assert pickle.loads(pickle.dumps(named["MoGlow p=0.5"])).model_cfg == cfg.moglow(0.5)
+    assert not any(run.is_cached() for run in named.values())
+    first = experiment.train_all(cfg, data, processes=1, progress=False)
+    assert list(first) == ["MoGlow p=0.0", "MoGlow p=0.5", experiment.BASELINE]
+    assert all(run.is_cached() for run in named.values())
+    again = experiment.train_all(cfg, data, processes=1, progress=False)
+    for name, trained in first.items():
+        assert (
+            trained.model.linear.fit_rms > 0
+            and again[name].model.linear.fit_rms == trained.model.linear.fit_rms
+        )
+        assert again[name].result.loaded_from_cache
+        for key, value in trained.model.state_dict().items():
+            assert torch.equal(value, again[name].model.state_dict()[key])
