@@ -30,8 +30,6 @@ from motionlab.models.trajevae.experiment import (
     START_ORDER,
     CompletionRun,
     ExperimentConfig,
-    build_model,
-    loss_function,
     runs,
     train_all,
 )
@@ -145,12 +143,16 @@ def test_train_all_trains_each_run_once_and_sweeps_it_as_in_process(clips):
 
 def test_experiment_config_profiles_and_model_dispatch(monkeypatch):
     quick = ExperimentConfig.quick()
-    assert isinstance(build_model(quick.trajevae), TrajeVAE)
-    assert isinstance(build_model(quick.gru), GRUCompletion)
-    assert type(build_model(quick.cvae_rnn)).__name__ == "CVAERNN"
-    assert loss_function(quick.gru).__name__ == "gru_loss"
-    with pytest.raises(TypeError, match="TrajeVAEConfig or RecurrentConfig"):
-        build_model({"width": 3})
+    clips = torch.zeros(1, 60, 22, 3), torch.zeros(1, 60, 22, 4)
+    run = {
+        kind: CompletionRun(f"trajevae_{kind}", getattr(quick, kind), quick.train, *clips)
+        for kind in ("trajevae", "gru", "cvae_rnn")
+    }
+    assert isinstance(run["trajevae"].build_model(), TrajeVAE)
+    assert isinstance(run["gru"].build_model(), GRUCompletion)
+    assert type(run["cvae_rnn"].build_model()).__name__ == "CVAERNN"
+    assert run["gru"].loss_function().__name__ == "gru_loss"
+    assert run["cvae_rnn"].loss_function().__name__ == "cvae_rnn_loss"
     full = ExperimentConfig.full()
     assert full.trajevae.n_frames == 60 and full.train.steps == 400 and quick.train.steps == 30
     monkeypatch.setenv("MOTIONLAB_PROFILE", "quick")

@@ -38,6 +38,7 @@ class Completion(NamedTuple):
 def left_direction(pose: Tensor) -> Tensor:
     """The character's left in the floor plane ``(3,)`` (unit, z = 0): from the right hip to the left hip of
     ``pose`` ``(J * 3,)``."""
+    check_tensor(pose, "pose", "left_direction", ndim=1)
     joints = pose.reshape(-1, 3)
     across = joints[JOINT["left_hip"]] - joints[JOINT["right_hip"]]
     across = torch.cat([across[:2], across.new_zeros(1)])

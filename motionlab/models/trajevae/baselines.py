@@ -33,7 +33,7 @@ class RecurrentConfig(WindowShape):
     """A recurrent completion baseline.
 
     Attributes:
-        n_joints, n_frames: as in :class:`~motionlab.models.trajevae.config.TrajeVAEConfig`.
+        n_joints, n_frames: as in :class:`~motionlab.models.trajevae.model.TrajeVAEConfig`.
         hidden: GRU width (the bidirectional context GRU has ``hidden`` per direction).
         latent_dim: numbers in the sequence's latent vector; 0 makes the deterministic GRU model.
         beta: KL weight of the CVAE (unused when ``latent_dim == 0``).

@@ -133,6 +133,9 @@ class CompletionBatches:
         rotations = torch.as_tensor(self.rotations, dtype=torch.float32)
         check_tensor(positions, "positions", where, trailing=(None, 3), ndim=4)
         check_tensor(rotations, "rotations", where, trailing=(None, 4), ndim=4)
+        check_scalar(self.keep_probability, "keep_probability", where, minimum=0, maximum=1)
+        if not isinstance(self.augment, bool):
+            raise TypeError(f"{where}: augment must be a bool, got {self.augment!r}")
         if positions.shape[:-1] != rotations.shape[:-1]:
             raise ValueError(
                 f"{where}: positions (N, T, J, 3) and rotations (N, T, J, 4) must share N, T, J; got "

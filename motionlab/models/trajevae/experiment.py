@@ -177,33 +177,6 @@ def ladder(full: TrajeVAEConfig) -> dict[str, TrajeVAEConfig]:
     }
 
 
-def build_model(cfg: ModelConfig) -> nn.Module:
-    """TrajeVAE for a :class:`TrajeVAEConfig`; the GRU (``latent_dim == 0``) or CVAE-RNN for a
-    :class:`RecurrentConfig`."""
-    if isinstance(cfg, TrajeVAEConfig):
-        return TrajeVAE(cfg)
-    if isinstance(cfg, RecurrentConfig):
-        return CVAERNN(cfg) if cfg.latent_dim > 0 else GRUCompletion(cfg)
-    raise TypeError(f"build_model: cfg must be a TrajeVAEConfig or RecurrentConfig, got {type(cfg).__name__}")
-
-
-def loss_function(cfg: ModelConfig) -> LossFn:
-    """The training loss of the model that ``cfg`` builds (see :mod:`motionlab.models.trajevae.losses`)."""
-    if isinstance(cfg, TrajeVAEConfig):
-        return trajevae_loss
-    if isinstance(cfg, RecurrentConfig):
-        return cvae_rnn_loss if cfg.latent_dim > 0 else gru_loss
-    raise TypeError(
-        f"loss_function: cfg must be a TrajeVAEConfig or RecurrentConfig, got {type(cfg).__name__}"
-    )
-
-
-def completion_data_config(positions: Tensor) -> dict:
-    """What defines a completion model's training data (part of its cache key): the clips and the frame
-    step."""
-    return {"clips": data_fingerprint(positions), "frame_step": FRAME_STEP}
-
-
 @dataclass(frozen=True, eq=False)
 class CompletionRun:
     """One training run of a completion model (a :class:`~motionlab.train.many.Run`; picklable).
@@ -233,6 +206,19 @@ class CompletionRun:
                 f"{where}: train_config must be a TrainConfig, got {type(self.train_config).__name__}"
             )
 
+    def build_model(self) -> nn.Module:
+        """TrajeVAE for a :class:`TrajeVAEConfig`; the GRU (``latent_dim == 0``) or the CVAE-RNN for a
+        :class:`RecurrentConfig` (seeded by the config)."""
+        if isinstance(self.model, TrajeVAEConfig):
+            return TrajeVAE(self.model)
+        return CVAERNN(self.model) if self.model.latent_dim > 0 else GRUCompletion(self.model)
+
+    def loss_function(self) -> LossFn:
+        """The model's training loss (see :mod:`motionlab.models.trajevae.losses`)."""
+        if isinstance(self.model, TrajeVAEConfig):
+            return trajevae_loss
+        return cvae_rnn_loss if self.model.latent_dim > 0 else gru_loss
+
     def batches(self) -> CompletionBatches:
         """The training batch source (masks and, if the config says so, the yaw augmentation)."""
         return CompletionBatches(
@@ -240,26 +226,28 @@ class CompletionRun:
         )
 
     def is_cached(self) -> bool:
-        data_config = completion_data_config(
-            CompletionBatches(self.positions, self.rotations, False).positions
-        )
-        return is_cached(self.name, self.model, self.train_config, data_config)
+        return is_cached(self.name, self.model, self.train_config, self._data_config(self.batches()))
 
     def train(self, progress: bool | None = None) -> tuple[nn.Module, TrainResult]:
         """Train the model (or load it from the checkpoint cache); returns it in eval mode."""
-        model = build_model(self.model)
+        model = self.build_model()
         batches = self.batches()
         result = train_or_load(
             self.name,
             self.model,
             model,
-            loss_function(self.model),
+            self.loss_function(),
             batches,
             self.train_config,
-            data_config=completion_data_config(batches.positions),
+            data_config=self._data_config(batches),
             progress=progress,
         )
         return model, result
+
+    @staticmethod
+    def _data_config(batches: CompletionBatches) -> dict:
+        """What defines the training data (part of the cache key): the clips' fingerprint, the frame step."""
+        return {"clips": data_fingerprint(batches.positions), "frame_step": FRAME_STEP}
 
 
 def load_data(cfg: ExperimentConfig) -> CompletionData:
