@@ -18,7 +18,7 @@
 from __future__ import annotations
 
 import numbers
-from collections.abc import Mapping, Sequence
+from collections.abc import Sequence
 from dataclasses import dataclass, replace
 from functools import partial
 
@@ -282,33 +282,20 @@ def runs(cfg: ExperimentConfig, data: CompletionData) -> dict[str, CompletionRun
     }
 
 
-def sweep(
-    name: str,
-    model: nn.Module,
-    windows: Tensor,
-    multimodal: Sequence[np.ndarray],
-    ks: Mapping[str, Sequence[int]],
-) -> Sweep:
-    """The DLow metrics of run ``name``'s model for each number of given trajectories in ``ks[name]``
-    (:func:`~motionlab.models.trajevae.evaluate.sweep_given_joints` with ``N_SAMPLES`` samples, seed 0)."""
-    return sweep_given_joints(model, windows, ks[name], N_SAMPLES, 0, multimodal)
-
-
-def sweep_ks(names: Sequence[str]) -> dict[str, tuple[int, ...]]:
-    """The given-trajectory counts each run is swept over: Figure 6's for :data:`FIGURE6_RUNS`, Table 1's for
-    the others."""
-    return {name: FIGURE6_KS if name in FIGURE6_RUNS else PAPER_KS for name in names}
+def sweep(name: str, model: nn.Module, windows: Tensor, multimodal: Sequence[np.ndarray]) -> Sweep:
+    """The DLow metrics of run ``name``'s model on ``windows`` ``(N, T, J * 3)`` for each number of given
+    trajectories: Figure 6's k for :data:`FIGURE6_RUNS`, Table 1's for the others
+    (:func:`~motionlab.models.trajevae.evaluate.sweep_given_joints`, ``N_SAMPLES`` samples, seed 0)."""
+    ks = FIGURE6_KS if name in FIGURE6_RUNS else PAPER_KS
+    return sweep_given_joints(model, windows, ks, N_SAMPLES, 0, multimodal)
 
 
 def train_all(cfg: ExperimentConfig, data: CompletionData, processes: int = 2) -> dict[str, Trained[Sweep]]:
-    """Train (or load) every run of :func:`runs` and sweep each model, ``processes`` calls at a time.
+    """Train (or load) every run of :func:`runs` and :func:`sweep` each model, ``processes`` calls at a time.
 
     Returns:
         ``{name: Trained}`` in :data:`START_ORDER`; ``measured`` is the run's sweep ``{k: {metric: (mean,
-        ci95)}}`` over :func:`sweep_ks` on ``data.test_windows``.
+        ci95)}}`` on ``data.test_windows``.
     """
-    chapter_runs = runs(cfg, data)
-    then = partial(
-        sweep, windows=data.test_windows, multimodal=data.multimodal, ks=sweep_ks(list(chapter_runs))
-    )
-    return train_many(chapter_runs, then=then, processes=processes)
+    then = partial(sweep, windows=data.test_windows, multimodal=data.multimodal)
+    return train_many(runs(cfg, data), then=then, processes=processes)
