@@ -62,8 +62,10 @@ def test_dct_errors():
         dct(torch.tensor([[1.0], [float("nan")]]))
     with pytest.raises(TypeError, match="floating"):
         dct(torch.ones(4, 2, dtype=torch.int64))
-    with pytest.raises(ValueError, match="positive integer"):
+    with pytest.raises(ValueError, match="n_frames must be at least 1"):
         idct(torch.ones(3, 2), 0)
+    with pytest.raises(TypeError, match="dct_matrix: n_frames must be an integer"):
+        dct_matrix(4.0)
 
 
 def test_sample_joint_masks_keep_rate_and_seed():
@@ -88,8 +90,10 @@ def test_orders_and_joint_masks():
     assert torch.equal(joint_mask(["right_foot", 0]), joint_mask([11, "pelvis"]))
     with pytest.raises(ValueError, match="unknown joint"):
         joint_mask(["tail"])
-    with pytest.raises(ValueError, match="k must be"):
+    with pytest.raises(ValueError, match="first_joints: k must be in"):
         first_joints(23)
+    with pytest.raises(TypeError, match="k must be an integer"):
+        first_joints(True)
 
 
 def test_trajectories_keep_given_joints_for_every_frame_and_zero_the_rest():
@@ -106,5 +110,5 @@ def test_trajectories_keep_given_joints_for_every_frame_and_zero_the_rest():
     assert channel_mask(mask).shape == (2, 66)
     with pytest.raises(ValueError, match="channels"):
         given_trajectories(torch.randn(2, 7, 60), mask)
-    with pytest.raises(ValueError, match="bool"):
+    with pytest.raises(TypeError, match="hidden_poses: mask must be a bool tensor"):
         hidden_poses(poses, mask.float())

@@ -5,7 +5,6 @@ import pytest
 import torch
 
 from motionlab.models.trajevae.baselines import GRUCompletion, RecurrentConfig
-from motionlab.models.trajevae.config import TrajeVAEConfig
 from motionlab.models.trajevae.evaluate import (
     borrowed_trajectories,
     complete,
@@ -18,7 +17,7 @@ from motionlab.models.trajevae.evaluate import (
     upsample_frames,
 )
 from motionlab.models.trajevae.masks import first_joints, joint_mask
-from motionlab.models.trajevae.model import TrajeVAE
+from motionlab.models.trajevae.model import TrajeVAE, TrajeVAEConfig
 
 
 def test_dlow_metrics_by_hand():

@@ -6,9 +6,8 @@ import dataclasses
 import pytest
 import torch
 
-from motionlab.models.trajevae.ablations import RUNGS, SWITCHES, ladder
 from motionlab.models.trajevae.baselines import CVAERNN, GRUCompletion, RecurrentConfig
-from motionlab.models.trajevae.config import TrajeVAEConfig
+from motionlab.models.trajevae.experiment import RUNGS, SWITCHES, ladder
 from motionlab.models.trajevae.losses import (
     cvae_rnn_loss,
     gru_loss,
@@ -17,7 +16,7 @@ from motionlab.models.trajevae.losses import (
     trajevae_loss,
 )
 from motionlab.models.trajevae.masks import given_trajectories
-from motionlab.models.trajevae.model import TrajeVAE
+from motionlab.models.trajevae.model import TrajeVAE, TrajeVAEConfig
 
 TINY = TrajeVAEConfig(n_frames=9, width=8, latent_dim=3, dct_components=4, heads=2)
 TINY_RNN = RecurrentConfig(n_frames=9, hidden=8)
@@ -136,8 +135,12 @@ def test_bad_inputs_raise_clear_errors():
     bad[0, 2, 5] = float("nan")
     with pytest.raises(ValueError, match="NaN"):
         model(bad, mask)
-    with pytest.raises(ValueError, match="mask must be a bool"):
+    with pytest.raises(TypeError, match="TrajeVAE.forward: mask must be a bool"):
         model(windows, mask.float())
+    with pytest.raises(ValueError, match="TrajeVAE.forward: mask must have shape"):
+        model(windows, mask[:2])
+    with pytest.raises(TypeError, match="windows must have a floating-point dtype"):
+        model(windows.long(), mask)
     with pytest.raises(ValueError, match="n_samples"):
         model.sample(windows[:, 0], windows[:, 1:], 0)
     with pytest.raises(ValueError, match="temperature"):
@@ -157,6 +160,12 @@ def test_config_validation():
         TrajeVAEConfig(keep_probability=2.0)
     with pytest.raises(TypeError, match="TrajeVAEConfig"):
         TrajeVAE(TINY_RNN)
+    with pytest.raises(TypeError, match="TrajeVAEConfig: width must be an integer"):
+        TrajeVAEConfig(width=8.0)
+    with pytest.raises(TypeError, match="TrajeVAEConfig: use_dct must be a bool"):
+        TrajeVAEConfig(use_dct=1)
+    with pytest.raises(ValueError, match="RecurrentConfig: latent_dim must be at least 0"):
+        RecurrentConfig(latent_dim=-1)
 
 
 def test_ablation_ladder_turns_switches_on_one_by_one():

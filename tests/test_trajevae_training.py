@@ -1,6 +1,7 @@
 """TrajeVAE's data pipeline, training through the cache, the widget callback and the speed benchmark's
 pieces."""
 
+import dataclasses
 import math
 
 import numpy as np
@@ -9,17 +10,31 @@ import torch
 
 from motionlab.data.synthetic import generate
 from motionlab.models.trajevae.baselines import GRUCompletion
-from motionlab.models.trajevae.data import CompletionBatches, completion_task, completion_windows, decimate
-from motionlab.models.trajevae.evaluate import N_SAMPLES, multimodal_futures, sweep_given_joints
-from motionlab.models.trajevae.experiment import train_and_sweep
+from motionlab.models.trajevae.data import (
+    CompletionBatches,
+    CompletionData,
+    completion_task,
+    completion_windows,
+    decimate,
+)
+from motionlab.models.trajevae.evaluate import (
+    FIGURE6_KS,
+    N_SAMPLES,
+    PAPER_KS,
+    multimodal_futures,
+    sweep_given_joints,
+)
+from motionlab.models.trajevae.experiment import (
+    CACHE_NAMES,
+    RUNGS,
+    START_ORDER,
+    CompletionRun,
+    ExperimentConfig,
+    runs,
+    train_all,
+)
 from motionlab.models.trajevae.masks import first_joints
 from motionlab.models.trajevae.model import TrajeVAE
-from motionlab.models.trajevae.training import (
-    build_model,
-    chapter_setup,
-    loss_function,
-    train_completion_model,
-)
 from motionlab.skeleton import JOINT
 from motionlab.train import TrainConfig
 from motionlab.widgets.trajevae import bend_trajectory, complete_window, left_direction
@@ -69,15 +84,14 @@ def test_batches_are_seeded_and_yaw_augmentation_keeps_shape(clips):
 
 def test_training_is_cached_and_reproducible(clips):
     positions, rotations = clips
-    cfg = chapter_setup("quick").trajevae
+    cfg = ExperimentConfig.quick().trajevae
     train_cfg = TrainConfig(steps=3, batch_size=3, lr=1e-3, checkpoint_every=None)
-    model, result = train_completion_model(
-        "trajevae_test", cfg, positions, rotations, train_cfg, progress=False
-    )
+    run = CompletionRun("trajevae_test", cfg, train_cfg, positions, rotations)
+    assert not run.is_cached()
+    model, result = run.train(progress=False)
     assert not result.loaded_from_cache and set(result.history.terms) >= {"recon", "kl"}
-    again, cached = train_completion_model(
-        "trajevae_test", cfg, positions, rotations, train_cfg, progress=False
-    )
+    assert run.is_cached()
+    again, cached = run.train(progress=False)
     assert cached.loaded_from_cache
     for a, b in zip(model.state_dict().values(), again.state_dict().values()):
         assert torch.equal(a, b)
@@ -87,40 +101,70 @@ def test_training_is_cached_and_reproducible(clips):
         model.sample(start, trajectories, 3, generator=g().manual_seed(1)),
         again.sample(start, trajectories, 3, generator=g().manual_seed(1)),
     )
+    with pytest.raises(TypeError, match="CompletionRun: model must be"):
+        CompletionRun("trajevae_test", {"width": 3}, train_cfg, positions, rotations)
 
 
-def test_train_and_sweep_trains_each_run_once_and_sweeps_it_as_in_process(clips):
+def _tiny_experiment(clips):
     positions, rotations = clips
-    setup = chapter_setup("quick")
-    train_cfg = TrainConfig(steps=3, batch_size=3, lr=1e-3, checkpoint_every=None)
-    runs = {"trajevae_sweep_test": setup.trajevae, "trajevae_gru_sweep_test": setup.gru}
-    windows = completion_windows(positions[:4])
-    ks = {"trajevae_sweep_test": (0, 2), "trajevae_gru_sweep_test": (1,)}
-    multimodal = multimodal_futures(windows)
-    models, results, seconds, sweeps = train_and_sweep(
-        runs, positions, rotations, train_cfg, windows, ks, multimodal
+    cfg = dataclasses.replace(
+        ExperimentConfig.quick(),
+        train=TrainConfig(steps=2, batch_size=3, lr=1e-3, checkpoint_every=None),
+        n_eval_windows=3,
     )
-    assert list(sweeps) == list(runs) and set(seconds) == set(runs) and all(s > 0 for s in seconds.values())
-    for name in runs:
-        assert results[name].loaded_from_cache and set(sweeps[name]) == set(ks[name])
-        assert sweeps[name] == sweep_given_joints(models[name], windows, ks[name], N_SAMPLES, 0, multimodal)
-    _, _, seconds_again, sweeps_again = train_and_sweep(
-        runs, positions, rotations, train_cfg, windows, ks, multimodal
-    )
-    assert seconds_again == {} and sweeps_again == sweeps
+    windows = completion_windows(positions[:3])
+    data = CompletionData(positions, rotations, windows, np.zeros(3, dtype=int), multimodal_futures(windows))
+    return cfg, data
 
 
-def test_build_model_and_loss_by_config():
-    setup = chapter_setup("quick")
-    assert isinstance(build_model(setup.trajevae), TrajeVAE)
-    assert isinstance(build_model(setup.gru), GRUCompletion)
-    assert type(build_model(setup.cvae_rnn)).__name__ == "CVAERNN"
-    assert loss_function(setup.gru).__name__ == "gru_loss"
-    with pytest.raises(TypeError, match="TrajeVAEConfig or RecurrentConfig"):
-        build_model({"width": 3})
-    with pytest.raises(ValueError, match="profile"):
-        chapter_setup("fast")
-    assert chapter_setup("full").trajevae.n_frames == 60
+def test_runs_are_the_ladder_and_the_baselines_longest_first(clips):
+    cfg, data = _tiny_experiment(clips)
+    chapter_runs = runs(cfg, data)
+    assert tuple(chapter_runs) == START_ORDER and set(START_ORDER) == set(RUNGS) | {"GRU", "CVAE-RNN"}
+    assert {name: run.name for name, run in chapter_runs.items()} == CACHE_NAMES
+    assert chapter_runs["+ masked future poses"].model == cfg.trajevae
+    assert chapter_runs["GRU"].model == cfg.gru and chapter_runs["CVAE-RNN"].model == cfg.cvae_rnn
+    assert not chapter_runs["Base"].model.learnable_prior and not chapter_runs["Base"].model.use_dct
+
+
+def test_train_all_trains_each_run_once_and_sweeps_it_as_in_process(clips):
+    cfg, data = _tiny_experiment(clips)
+    trained = train_all(cfg, data)
+    assert tuple(trained) == START_ORDER and all(run.is_cached() for run in runs(cfg, data).values())
+    for name, item in trained.items():
+        assert item.result.loaded_from_cache and item.seconds is not None and item.seconds > 0
+        ks = FIGURE6_KS if name in ("+ masked future poses", "GRU") else PAPER_KS
+        assert set(item.measured) == set(ks)
+    for name in ("+ masked future poses", "Base"):  # the sweep in a worker equals the sweep here
+        item = trained[name]
+        in_process = sweep_given_joints(item.model, data.test_windows, sorted(item.measured), N_SAMPLES, 0)
+        assert item.measured == in_process
+
+
+def test_experiment_config_profiles_and_model_dispatch(monkeypatch):
+    quick = ExperimentConfig.quick()
+    clips = torch.zeros(1, 60, 22, 3), torch.zeros(1, 60, 22, 4)
+    run = {
+        kind: CompletionRun(f"trajevae_{kind}", getattr(quick, kind), quick.train, *clips)
+        for kind in ("trajevae", "gru", "cvae_rnn")
+    }
+    assert isinstance(run["trajevae"].build_model(), TrajeVAE)
+    assert isinstance(run["gru"].build_model(), GRUCompletion)
+    assert type(run["cvae_rnn"].build_model()).__name__ == "CVAERNN"
+    assert run["gru"].loss_function().__name__ == "gru_loss"
+    assert run["cvae_rnn"].loss_function().__name__ == "cvae_rnn_loss"
+    full = ExperimentConfig.full()
+    assert full.trajevae.n_frames == 60 and full.train.steps == 400 and quick.train.steps == 30
+    monkeypatch.setenv("MOTIONLAB_PROFILE", "quick")
+    assert ExperimentConfig.current() == quick
+    monkeypatch.setenv("MOTIONLAB_PROFILE", "full")
+    assert ExperimentConfig.current() == full
+    with pytest.raises(TypeError, match="ExperimentConfig: gru must be a RecurrentConfig"):
+        dataclasses.replace(quick, gru=quick.trajevae)
+    with pytest.raises(ValueError, match="ExperimentConfig: n_eval_windows must be at least 2"):
+        dataclasses.replace(quick, n_eval_windows=1)
+    with pytest.raises(ValueError, match="same windows"):
+        dataclasses.replace(quick, gru=dataclasses.replace(quick.gru, n_frames=30))
 
 
 def test_bend_trajectory_moves_one_joint_to_the_left():
@@ -147,7 +191,7 @@ def test_left_direction_of_a_character_facing_x_is_y(clips):
 def test_complete_window_callback(clips):
     positions, _ = clips
     window = completion_windows(positions)[0]
-    model = TrajeVAE(chapter_setup("quick").trajevae).eval()
+    model = TrajeVAE(ExperimentConfig.quick().trajevae).eval()
     result = complete_window(
         model,
         window,

@@ -13,14 +13,14 @@ import torch
 from motionlab import config
 from motionlab.bench._timing import generator_speed, median_seconds
 from motionlab.models.trajevae.data import FPS
+from motionlab.models.trajevae.experiment import ExperimentConfig
 from motionlab.models.trajevae.masks import first_joints, given_trajectories
 from motionlab.models.trajevae.model import TrajeVAE
-from motionlab.models.trajevae.training import chapter_setup
 
 
 def run() -> dict[str, float]:
     config.set_threads(1)
-    cfg = chapter_setup(profile="full").trajevae
+    cfg = ExperimentConfig.full().trajevae
     model = TrajeVAE(cfg).eval()
     generator = torch.Generator().manual_seed(0)
     windows = torch.randn(256, cfg.n_frames, cfg.n_channels, generator=generator)

@@ -17,9 +17,9 @@ from torch import Tensor
 
 from motionlab.models.trajevae.data import completion_task
 from motionlab.models.trajevae.evaluate import Completer
-from motionlab.models.trajevae.inputs import check_finite_tensor
 from motionlab.models.trajevae.masks import PAPER_ORDER, channel_mask, joint_mask
 from motionlab.skeleton import JOINT, PARENTS
+from motionlab.validation import check_tensor
 from motionlab.viz import animate
 
 #: Joints offered as tick boxes: the paper's four end effectors, the head and the pelvis.
@@ -38,6 +38,7 @@ class Completion(NamedTuple):
 def left_direction(pose: Tensor) -> Tensor:
     """The character's left in the floor plane ``(3,)`` (unit, z = 0): from the right hip to the left hip of
     ``pose`` ``(J * 3,)``."""
+    check_tensor(pose, "pose", "left_direction", ndim=1)
     joints = pose.reshape(-1, 3)
     across = joints[JOINT["left_hip"]] - joints[JOINT["right_hip"]]
     across = torch.cat([across[:2], across.new_zeros(1)])
@@ -59,7 +60,7 @@ def bend_trajectory(trajectories: Tensor, joint: str, amount: float, left: Tenso
     Returns:
         A new ``(F, J * 3)`` tensor; only the joint's three channels change.
     """
-    check_finite_tensor(trajectories, "trajectories", "bend_trajectory", (None, None))
+    check_tensor(trajectories, "trajectories", "bend_trajectory", ndim=2)
     if joint not in JOINT:
         raise ValueError(f"bend_trajectory: unknown joint {joint!r}")
     n_frames = trajectories.shape[0]
@@ -86,7 +87,7 @@ def complete_window(
     ``bend_joint`` (one of ``given``) has its trajectory bent sideways by ``bend`` metres (see
     :func:`bend_trajectory`) before the model sees it. ``seed`` fixes the samples.
     """
-    check_finite_tensor(window, "window", "complete_window", (None, None))
+    check_tensor(window, "window", "complete_window", ndim=2)
     mask = joint_mask(given, window.shape[-1] // 3)
     initial_pose, trajectories = completion_task(window[None], mask)
     if bend_joint is not None and bend != 0.0:

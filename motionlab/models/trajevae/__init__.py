@@ -2,17 +2,14 @@
 trajectories.
 
 Modules, in the order the chapter uses them: :mod:`.masks` (structured joint masks, ``Y = X ⊙ M``),
-:mod:`.dct` (the orthonormal DCT-II over time), :mod:`.config` (the model config with the ablation switches),
-:mod:`.layers` and :mod:`.model` (TrajeVAE), :mod:`.baselines` (deterministic GRU, CVAE-RNN), :mod:`.losses`,
-:mod:`.data` (windows and training batches), :mod:`.training` (build, train or load; the chapter's settings),
-:mod:`.ablations` (the Table 4 ladder), :mod:`.evaluate` (DLow metrics against the number of trajectories,
-borrowed trajectories, evaluator accuracy helpers) and :mod:`.experiment` (every model trained and swept on
-both cores).
+:mod:`.data` (windows, completion tasks and training batches), :mod:`.dct` (the orthonormal DCT-II over
+time), :mod:`.model` (TrajeVAE and its config with the ablation switches), :mod:`.baselines` (deterministic
+GRU, CVAE-RNN), :mod:`.losses`, :mod:`.evaluate` (DLow metrics against the number of trajectories, borrowed
+trajectories, upsampling for the evaluator) and :mod:`.experiment` (the chapter's config, the Table 4 ablation
+ladder and every run trained and swept on both cores).
 """
 
-from motionlab.models.trajevae.ablations import RUNGS, ladder
 from motionlab.models.trajevae.baselines import CVAERNN, GRUCompletion, RecurrentConfig
-from motionlab.models.trajevae.config import TrajeVAEConfig
-from motionlab.models.trajevae.model import TrajeVAE
+from motionlab.models.trajevae.model import TrajeVAE, TrajeVAEConfig
 
-__all__ = ["CVAERNN", "GRUCompletion", "RUNGS", "RecurrentConfig", "TrajeVAE", "TrajeVAEConfig", "ladder"]
+__all__ = ["CVAERNN", "GRUCompletion", "RecurrentConfig", "TrajeVAE", "TrajeVAEConfig"]

@@ -15,23 +15,17 @@ turn the task into offsets.
 
 from __future__ import annotations
 
+import numbers
 from dataclasses import dataclass
 
 import torch
 from torch import Tensor, nn
 
 from motionlab.models.gaussian import reparameterize
-from motionlab.models.trajevae.config import (
-    WindowShape,
-    check_flags,
-    check_non_negative,
-    check_positive_int,
-    check_probability,
-    check_seed,
-)
-from motionlab.models.trajevae.inputs import check_masks, check_sampling, check_task, check_windows
+from motionlab.models.trajevae.data import check_batch, check_task
 from motionlab.models.trajevae.masks import KEEP_PROBABILITY, given_trajectories
-from motionlab.models.trajevae.model import Gaussian
+from motionlab.models.trajevae.model import Gaussian, WindowShape, check_flags
+from motionlab.validation import check_scalar
 
 
 @dataclass(frozen=True)
@@ -39,7 +33,7 @@ class RecurrentConfig(WindowShape):
     """A recurrent completion baseline.
 
     Attributes:
-        n_joints, n_frames: as in :class:`~motionlab.models.trajevae.config.TrajeVAEConfig`.
+        n_joints, n_frames: as in :class:`~motionlab.models.trajevae.model.TrajeVAEConfig`.
         hidden: GRU width (the bidirectional context GRU has ``hidden`` per direction).
         latent_dim: numbers in the sequence's latent vector; 0 makes the deterministic GRU model.
         beta: KL weight of the CVAE (unused when ``latent_dim == 0``).
@@ -57,17 +51,15 @@ class RecurrentConfig(WindowShape):
     seed: int = 0
 
     def __post_init__(self) -> None:
-        owner = "RecurrentConfig"
-        for name in ("n_joints", "n_frames", "hidden"):
-            check_positive_int(owner, name, getattr(self, name))
-        if self.n_frames < 2:
-            raise ValueError(f"{owner}.n_frames must be at least 2, got {self.n_frames}")
-        if isinstance(self.latent_dim, bool) or not isinstance(self.latent_dim, int) or self.latent_dim < 0:
-            raise ValueError(f"{owner}.latent_dim must be an integer >= 0, got {self.latent_dim!r}")
-        check_non_negative(owner, "beta", self.beta)
-        check_probability(owner, "keep_probability", self.keep_probability)
-        check_flags(owner, self, ("augment",))
-        check_seed(owner, self.seed)
+        where = "RecurrentConfig"
+        for name in ("n_joints", "hidden"):
+            check_scalar(getattr(self, name), name, where, kind=numbers.Integral, minimum=1)
+        check_scalar(self.n_frames, "n_frames", where, kind=numbers.Integral, minimum=2)
+        check_scalar(self.latent_dim, "latent_dim", where, kind=numbers.Integral, minimum=0)
+        check_scalar(self.beta, "beta", where, minimum=0)
+        check_scalar(self.keep_probability, "keep_probability", where, minimum=0, maximum=1)
+        check_flags(self, ("augment",), where)
+        check_scalar(self.seed, "seed", where, kind=numbers.Integral, minimum=0)
 
 
 class TaskContext(nn.Module):
@@ -127,10 +119,19 @@ class _RecurrentCompletion(nn.Module):
     def build_extra(self) -> None:
         """Modules a subclass adds (built under the same seed)."""
 
-    def _check_batch(self, windows: Tensor, mask: Tensor, func: str) -> tuple[Tensor, Tensor, Tensor]:
-        check_windows(windows, self.cfg.n_frames, self.cfg.n_channels, func)
-        check_masks(mask, windows.shape[0], self.cfg.n_joints, func)
+    def _check_batch(self, windows: Tensor, mask: Tensor, where: str) -> tuple[Tensor, Tensor, Tensor]:
+        """Check a training batch; return the initial poses, the true future and the given trajectories."""
+        check_batch(windows, mask, self.cfg.n_frames, self.cfg.n_joints, where)
         return windows[:, 0], windows[:, 1:], given_trajectories(windows[:, 1:], mask)
+
+    def _check_task(
+        self, initial_pose: Tensor, trajectories: Tensor, n_samples: int, temperature: float, where: str
+    ) -> int:
+        """Check the arguments of ``sample``; return the batch size."""
+        cfg = self.cfg
+        return check_task(
+            initial_pose, trajectories, n_samples, temperature, cfg.n_frames, cfg.n_joints, where
+        )
 
 
 class GRUCompletion(_RecurrentCompletion):
@@ -160,9 +161,7 @@ class GRUCompletion(_RecurrentCompletion):
     ) -> Tensor:
         """``(B, K, F, J * 3)``: the one deterministic completion repeated ``K`` times (temperature, generator
         unused)."""
-        func = "GRUCompletion.sample"
-        check_task(initial_pose, trajectories, self.cfg.n_future, self.cfg.n_channels, func)
-        check_sampling(n_samples, temperature, func)
+        self._check_task(initial_pose, trajectories, n_samples, temperature, "GRUCompletion.sample")
         completion = self.complete(initial_pose, trajectories)
         return completion[:, None].expand(-1, n_samples, -1, -1)
 
@@ -205,9 +204,7 @@ class CVAERNN(_RecurrentCompletion):
     ) -> Tensor:
         """Completions ``(B, K, F, J * 3)`` with ``z ~ N(0, temperature² I)`` (``K = 1``: ``z = 0``, the prior
         mean)."""
-        func = "CVAERNN.sample"
-        batch = check_task(initial_pose, trajectories, self.cfg.n_future, self.cfg.n_channels, func)
-        check_sampling(n_samples, temperature, func)
+        batch = self._check_task(initial_pose, trajectories, n_samples, temperature, "CVAERNN.sample")
         context = self.context(trajectories, initial_pose).repeat_interleave(n_samples, dim=0)
         shape = (batch * n_samples, self.cfg.latent_dim)
         z = torch.zeros(shape) if n_samples == 1 else temperature * torch.randn(shape, generator=generator)

@@ -13,7 +13,8 @@ they are classified.
 
 from __future__ import annotations
 
-from collections.abc import Iterator
+import numbers
+from collections.abc import Iterator, Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -21,8 +22,14 @@ import torch
 from torch import Tensor
 
 from motionlab.data.augment import random_yaw
-from motionlab.data.representations import check_tensor, to_trajevae
-from motionlab.models.trajevae.masks import KEEP_PROBABILITY, given_trajectories, sample_joint_masks
+from motionlab.data.representations import to_trajevae
+from motionlab.models.trajevae.masks import (
+    KEEP_PROBABILITY,
+    check_mask,
+    given_trajectories,
+    sample_joint_masks,
+)
+from motionlab.validation import check_scalar, check_tensor
 
 #: Every FRAME_STEP-th frame of the 30 fps clips is kept.
 FRAME_STEP = 2
@@ -34,25 +41,14 @@ FPS = 15
 def decimate(clips: np.ndarray | Tensor) -> Tensor:
     """Every :data:`FRAME_STEP`-th frame of clips ``(N, T, ...)`` as a float32 tensor ``(N, ceil(T / 2),
     ...)``."""
-    clips = torch.as_tensor(clips, dtype=torch.float32)
-    if clips.dim() < 2:
-        raise ValueError(f"decimate: clips need a frame axis (N, T, ...), got shape {tuple(clips.shape)}")
+    clips = check_tensor(torch.as_tensor(clips, dtype=torch.float32), "clips", "decimate", min_leading=2)
     return clips[:, ::FRAME_STEP]
 
 
 def completion_windows(positions: np.ndarray | Tensor) -> Tensor:
     """Clips ``(N, T, J, 3)`` (global positions, metres) as windows ``(N, T, J * 3)`` float32."""
-    positions = check_tensor(
-        torch.as_tensor(positions, dtype=torch.float32),
-        "positions",
-        "completion_windows",
-        (None, 3),
-        min_leading=2,
-    )
-    if positions.dim() != 4:
-        raise ValueError(
-            f"completion_windows: positions must have shape (N, T, J, 3), got {tuple(positions.shape)}"
-        )
+    positions = torch.as_tensor(positions, dtype=torch.float32)
+    check_tensor(positions, "positions", "completion_windows", trailing=(None, 3), ndim=4)
     return to_trajevae(positions)
 
 
@@ -64,9 +60,50 @@ def completion_task(windows: Tensor, mask: Tensor) -> tuple[Tensor, Tensor]:
         mask: ``(B, J)`` or ``(J,)`` bool, True for joints whose trajectory is given (``(J,)`` applies to
         all).
     """
+    where = "completion_task"
+    check_tensor(windows, "windows", where, ndim=3)
+    check_mask(mask, "mask", where)
     if mask.dim() == 1:
         mask = mask.expand(windows.shape[0], -1)
     return windows[:, 0], given_trajectories(windows[:, 1:], mask)
+
+
+def check_batch(windows: Tensor, mask: Tensor, n_frames: int, n_joints: int, where: str) -> None:
+    """Check a training batch: windows ``(B, n_frames, n_joints * 3)`` (finite floats) and masks ``(B,
+    n_joints)`` bool."""
+    check_tensor(windows, "windows", where, trailing=(n_frames, 3 * n_joints), ndim=3)
+    check_mask(mask, "mask", where, shape=(windows.shape[0], n_joints))
+
+
+def check_task(
+    initial_pose: Tensor,
+    trajectories: Tensor,
+    n_samples: int,
+    temperature: float,
+    n_frames: int,
+    n_joints: int,
+    where: str,
+) -> int:
+    """Check a sampling request of a completion model (the arguments of ``sample``); return its batch size.
+
+    Args:
+        initial_pose: ``(B, J * 3)`` the pose at frame 0.
+        trajectories: ``(B, n_frames - 1, J * 3)`` the given joints' positions in frames ``1 ..``, zeros for
+            the joints to complete (``Y = X ⊙ M``).
+        n_samples: completions per task, an integer >= 1; temperature: a finite number >= 0.
+    """
+    channels = 3 * n_joints
+    check_tensor(initial_pose, "initial_pose", where, trailing=(channels,), ndim=2)
+    check_tensor(trajectories, "trajectories", where, trailing=(n_frames - 1, channels), ndim=3)
+    batch = initial_pose.shape[0]
+    if trajectories.shape[0] != batch:
+        raise ValueError(
+            f"{where}: trajectories must have shape ({batch}, {n_frames - 1}, {channels}) like initial_pose, "
+            f"got {tuple(trajectories.shape)}"
+        )
+    check_scalar(n_samples, "n_samples", where, kind=numbers.Integral, minimum=1)
+    check_scalar(temperature, "temperature", where, minimum=0)
+    return batch
 
 
 @dataclass(frozen=True, eq=False)
@@ -91,16 +128,17 @@ class CompletionBatches:
     keep_probability: float = KEEP_PROBABILITY
 
     def __post_init__(self) -> None:
-        func = "CompletionBatches"
-        positions = check_tensor(
-            torch.as_tensor(self.positions, dtype=torch.float32), "positions", func, (None, 3)
-        )
-        rotations = check_tensor(
-            torch.as_tensor(self.rotations, dtype=torch.float32), "rotations", func, (None, 4)
-        )
-        if positions.dim() != 4 or positions.shape[:-1] != rotations.shape[:-1]:
+        where = "CompletionBatches"
+        positions = torch.as_tensor(self.positions, dtype=torch.float32)
+        rotations = torch.as_tensor(self.rotations, dtype=torch.float32)
+        check_tensor(positions, "positions", where, trailing=(None, 3), ndim=4)
+        check_tensor(rotations, "rotations", where, trailing=(None, 4), ndim=4)
+        check_scalar(self.keep_probability, "keep_probability", where, minimum=0, maximum=1)
+        if not isinstance(self.augment, bool):
+            raise TypeError(f"{where}: augment must be a bool, got {self.augment!r}")
+        if positions.shape[:-1] != rotations.shape[:-1]:
             raise ValueError(
-                f"{func}: positions (N, T, J, 3) and rotations (N, T, J, 4) must share N, T, J; got "
+                f"{where}: positions (N, T, J, 3) and rotations (N, T, J, 4) must share N, T, J; got "
                 f"{tuple(positions.shape)} and {tuple(rotations.shape)}"
             )
         object.__setattr__(self, "positions", positions)
@@ -113,8 +151,9 @@ class CompletionBatches:
         self, epoch: int, generator: torch.Generator, batch_size: int
     ) -> Iterator[tuple[Tensor, Tensor]]:
         n = len(self)
-        if not 1 <= batch_size <= n:
-            raise ValueError(f"CompletionBatches: batch_size must lie in [1, {n}], got {batch_size}")
+        check_scalar(
+            batch_size, "batch_size", "CompletionBatches", kind=numbers.Integral, minimum=1, maximum=n
+        )
         order = torch.randperm(n, generator=generator)
         for begin in range(0, n - n % batch_size, batch_size):
             index = order[begin : begin + batch_size]
@@ -123,3 +162,23 @@ class CompletionBatches:
                 positions, _ = random_yaw(positions, self.rotations[index], generator)
             mask = sample_joint_masks(batch_size, generator, positions.shape[-2], self.keep_probability)
             yield to_trajevae(positions), mask
+
+
+@dataclass(frozen=True, eq=False)
+class CompletionData:
+    """The chapter's data at :data:`FPS`: training clips and the test windows every model is measured on.
+
+    Attributes:
+        train_positions: training clips ``(N, T, J, 3)``, global positions in metres (float32).
+        train_rotations: their local quaternions ``(N, T, J, 4)``.
+        test_windows: test windows ``(M, T, J * 3)`` (:func:`completion_windows`), spread over all modes.
+        test_action: the action label of each test window ``(M,)``.
+        multimodal: DLow's multimodal ground truth of each test window, futures ``(M_i, T - 1, J * 3)``
+            (:func:`motionlab.models.trajevae.evaluate.multimodal_futures`).
+    """
+
+    train_positions: Tensor
+    train_rotations: Tensor
+    test_windows: Tensor
+    test_action: np.ndarray
+    multimodal: Sequence[np.ndarray]

@@ -17,15 +17,12 @@ belongs to one frequency instead of one frame.
 from __future__ import annotations
 
 import math
+import numbers
 
 import torch
 from torch import Tensor
 
-
-def _count(value: int, name: str, func: str) -> int:
-    if isinstance(value, bool) or not isinstance(value, int) or value < 1:
-        raise ValueError(f"{func}: {name} must be a positive integer, got {value!r}")
-    return value
+from motionlab.validation import check_scalar, check_tensor
 
 
 def dct_matrix(n_frames: int, n_components: int | None = None, dtype: torch.dtype = torch.float32) -> Tensor:
@@ -33,26 +30,16 @@ def dct_matrix(n_frames: int, n_components: int | None = None, dtype: torch.dtyp
 
     ``dct_matrix(n) @ x`` for ``x`` of shape ``(n,)`` equals ``scipy.fft.dct(x, norm="ortho")``.
     """
-    func = "dct_matrix"
-    n_frames = _count(n_frames, "n_frames", func)
-    n_components = n_frames if n_components is None else _count(n_components, "n_components", func)
-    if n_components > n_frames:
-        raise ValueError(f"{func}: n_components ({n_components}) cannot exceed n_frames ({n_frames})")
+    where = "dct_matrix"
+    check_scalar(n_frames, "n_frames", where, kind=numbers.Integral, minimum=1)
+    if n_components is None:
+        n_components = n_frames
+    check_scalar(n_components, "n_components", where, kind=numbers.Integral, minimum=1, maximum=n_frames)
     k = torch.arange(n_components, dtype=torch.float64)[:, None]
     n = torch.arange(n_frames, dtype=torch.float64)[None, :]
     matrix = torch.cos(math.pi * (2 * n + 1) * k / (2 * n_frames)) * math.sqrt(2.0 / n_frames)
     matrix[0] = math.sqrt(1.0 / n_frames)
     return matrix.to(dtype)
-
-
-def _check_input(x: Tensor, name: str, func: str) -> Tensor:
-    if not isinstance(x, Tensor) or not x.is_floating_point():
-        raise TypeError(f"{func}: {name} must be a floating-point torch.Tensor, got {type(x).__name__}")
-    if x.dim() < 1:
-        raise ValueError(f"{func}: {name} must have a time axis (at least 1 dimension), got a scalar")
-    if not bool(torch.isfinite(x).all()):
-        raise ValueError(f"{func}: {name} contains NaN or inf")
-    return x
 
 
 def dct(x: Tensor, dim: int = -2, n_components: int | None = None) -> Tensor:
@@ -61,7 +48,7 @@ def dct(x: Tensor, dim: int = -2, n_components: int | None = None) -> Tensor:
     Returns the ``n_components`` lowest-frequency coefficients (all ``T`` by default) in place of the
     frames: ``(..., C, D)`` for ``dim=-2``.
     """
-    _check_input(x, "x", "dct")
+    check_tensor(x, "x", "dct", min_leading=1)
     matrix = dct_matrix(x.shape[dim], n_components, x.dtype).to(x.device)
     moved = x.movedim(dim, -1)
     return (moved @ matrix.T).movedim(-1, dim)
@@ -74,7 +61,7 @@ def idct(coefficients: Tensor, n_frames: int, dim: int = -2) -> Tensor:
     Missing high frequencies count as zero, so ``idct(dct(x, n_components=C), T)`` is ``x`` low-pass
     filtered to ``C`` components, and ``idct(dct(x), T)`` is ``x``.
     """
-    _check_input(coefficients, "coefficients", "idct")
+    check_tensor(coefficients, "coefficients", "idct", min_leading=1)
     matrix = dct_matrix(n_frames, coefficients.shape[dim], coefficients.dtype).to(coefficients.device)
     moved = coefficients.movedim(dim, -1)
     return (moved @ matrix).movedim(-1, dim)

@@ -24,6 +24,7 @@ from the requested trajectories, their APD, and which action the evaluation clas
 
 from __future__ import annotations
 
+import numbers
 from collections.abc import Sequence
 from typing import Protocol
 
@@ -33,8 +34,8 @@ from torch import Tensor
 
 from motionlab.metrics import apd, mean_ci, min_ade, min_fde, mmade, mmfde, multimodal_ground_truth
 from motionlab.models.trajevae.data import completion_task
-from motionlab.models.trajevae.inputs import check_finite_tensor
-from motionlab.models.trajevae.masks import FULL_ORDER, channel_mask, first_joints
+from motionlab.models.trajevae.masks import FULL_ORDER, channel_mask, check_mask, first_joints
+from motionlab.validation import check_scalar, check_tensor
 
 #: Samples per input window, as in DLow and the paper.
 N_SAMPLES = 50
@@ -71,10 +72,6 @@ class Completer(Protocol):
     ) -> Tensor: ...
 
 
-def _windows(windows: Tensor, func: str) -> Tensor:
-    return check_finite_tensor(windows, "windows", func, (None, None, None))
-
-
 def complete(
     model: Completer,
     initial_pose: Tensor,
@@ -88,6 +85,10 @@ def complete(
     Args:
         initial_pose: ``(N, J * 3)``; trajectories: ``(N, F, J * 3)`` with zeros for joints to complete.
     """
+    where = "complete"
+    check_tensor(initial_pose, "initial_pose", where, ndim=2)
+    check_tensor(trajectories, "trajectories", where, ndim=3)
+    check_scalar(n_samples, "n_samples", where, kind=numbers.Integral, minimum=1)
     parts = []
     for begin in range(0, initial_pose.shape[0], CHUNK):
         start, given = initial_pose[begin : begin + CHUNK], trajectories[begin : begin + CHUNK]
@@ -99,7 +100,8 @@ def complete(
 def multimodal_futures(windows: Tensor, threshold: float = MULTIMODAL_THRESHOLD) -> list[np.ndarray]:
     """DLow's multimodal ground truth of each window: the futures ``(M_i, F, J * 3)`` of windows starting
     alike."""
-    windows = _windows(windows, "multimodal_futures")
+    check_tensor(windows, "windows", "multimodal_futures", ndim=3)
+    check_scalar(threshold, "threshold", "multimodal_futures", minimum=0)
     return multimodal_ground_truth(windows[:, 0].numpy(), windows[:, 1:].numpy(), threshold)
 
 
@@ -110,11 +112,16 @@ def dlow_metrics(samples: Tensor, windows: Tensor, multimodal: Sequence[np.ndarr
         samples: completed windows ``(N, K, T, J * 3)`` (frame 0 is skipped); windows: the truth ``(N, T, J *
         3)``; multimodal: :func:`multimodal_futures` of the windows.
     """
-    samples, windows = _windows_pair(samples, windows)
-    if len(multimodal) != windows.shape[0]:
-        raise ValueError(f"dlow_metrics: {len(multimodal)} multimodal sets for {windows.shape[0]} windows")
-    future = samples[:, :, 1:].numpy()
-    truth = windows[:, 1:].numpy()
+    where = "dlow_metrics"
+    check_tensor(windows, "windows", where, ndim=3)
+    check_tensor(samples, "samples", where, trailing=tuple(windows.shape[1:]), ndim=4)
+    if samples.shape[0] != windows.shape[0] or len(multimodal) != windows.shape[0]:
+        raise ValueError(
+            f"{where}: samples {tuple(samples.shape)} and {len(multimodal)} multimodal sets must match the "
+            f"{windows.shape[0]} windows"
+        )
+    future = samples[:, :, 1:].detach().float().numpy()
+    truth = windows[:, 1:].float().numpy()
     rows = {name: [] for name in DLOW_METRICS}
     for i in range(truth.shape[0]):
         rows["apd"].append(apd(future[i]) if future.shape[1] > 1 else 0.0)
@@ -123,14 +130,6 @@ def dlow_metrics(samples: Tensor, windows: Tensor, multimodal: Sequence[np.ndarr
         rows["mmade"].append(mmade(future[i], multimodal[i]))
         rows["mmfde"].append(mmfde(future[i], multimodal[i]))
     return {name: np.asarray(values) for name, values in rows.items()}
-
-
-def _windows_pair(samples: Tensor, windows: Tensor) -> tuple[Tensor, Tensor]:
-    windows = _windows(windows, "dlow_metrics")
-    samples = check_finite_tensor(
-        samples, "samples", "dlow_metrics", (windows.shape[0], None) + tuple(windows.shape[1:])
-    )
-    return samples.detach().float(), windows.float()
 
 
 def summarise(values: dict[str, np.ndarray]) -> dict[str, tuple[float, float]]:
@@ -152,7 +151,7 @@ def sweep_given_joints(
     The samples of ``k`` come from a generator seeded with ``(seed, k)``, so a row does not depend on the
     others.
     """
-    windows = _windows(windows, "sweep_given_joints")
+    check_tensor(windows, "windows", "sweep_given_joints", ndim=3)
     multimodal = multimodal_futures(windows) if multimodal is None else multimodal
     table = {}
     for k in ks:
@@ -187,12 +186,13 @@ def borrowed_trajectories(windows: Tensor, mask: Tensor) -> tuple[Tensor, Tensor
         came from: the other window whose given joints start closest) and ``start_gap`` ``(N,)``, the
         distance (metres, over the given joints) that was removed by moving them.
     """
-    func = "borrowed_trajectories"
-    windows = _windows(windows, func)
+    where = "borrowed_trajectories"
+    check_tensor(windows, "windows", where, ndim=3)
     if windows.shape[0] < 2:
-        raise ValueError(f"{func}: needs at least 2 windows to borrow from, got {windows.shape[0]}")
-    if mask.dtype != torch.bool or mask.dim() != 1 or not bool(mask.any()):
-        raise ValueError(f"{func}: mask must be a (J,) bool tensor with at least one joint given")
+        raise ValueError(f"{where}: needs at least 2 windows to borrow from, got {windows.shape[0]}")
+    check_mask(mask, "mask", where, shape=(windows.shape[-1] // 3,))
+    if not bool(mask.any()):
+        raise ValueError(f"{where}: mask must give at least one joint")
     channels = channel_mask(mask)
     starts = windows[:, 0, channels]
     distance = torch.cdist(starts.double(), starts.double())
@@ -209,6 +209,10 @@ def follow_error(samples: Tensor, trajectories: Tensor, mask: Tensor) -> np.ndar
     Args:
         samples: ``(N, K, T, J * 3)`` (frame 0 skipped); trajectories: ``(N, F, J * 3)``; mask: ``(J,)`` bool.
     """
+    where = "follow_error"
+    check_tensor(samples, "samples", where, ndim=4)
+    check_tensor(trajectories, "trajectories", where, ndim=3)
+    check_mask(mask, "mask", where, shape=(samples.shape[-1] // 3,))
     joints = torch.nonzero(mask).flatten()
     generated = samples[:, :, 1:].unflatten(-1, (-1, 3))[..., joints, :]
     requested = trajectories.unflatten(-1, (-1, 3))[:, None, :, joints, :]
@@ -221,9 +225,9 @@ def upsample_frames(windows: Tensor, factor: int) -> Tensor:
     Frame ``factor * t + s`` lies ``s / factor`` of the way from frame ``t`` to ``t + 1``; after the last
     frame the motion continues with its last velocity (so a window keeps its duration).
     """
-    if isinstance(factor, bool) or not isinstance(factor, int) or factor < 1:
-        raise ValueError(f"upsample_frames: factor must be a positive integer, got {factor!r}")
-    if windows.dim() < 2 or windows.shape[-2] < 2:
+    check_scalar(factor, "factor", "upsample_frames", kind=numbers.Integral, minimum=1)
+    check_tensor(windows, "windows", "upsample_frames", min_leading=2)
+    if windows.shape[-2] < 2:
         raise ValueError(
             f"upsample_frames: windows need a frame axis of at least 2 frames, got {tuple(windows.shape)}"
         )

@@ -1,87 +1,301 @@
-"""The chapter's models trained and swept on both cores, each model's sweep as soon as it has trained.
+"""Chapter 07's experiment: its sizes and schedule, its seven training runs, all of them trained and swept.
 
-Seven training runs on two cores leave one core idle while the last run trains; :func:`train_and_sweep`
-chains every run with its k sweep (:func:`~motionlab.train.parallel.run_paired`), so the sweeps of the
-models that are done fill that core. The sweep of a model loads it from the checkpoint cache and is seeded
-as an in-process :func:`~motionlab.models.trajevae.evaluate.sweep_given_joints` call, so the tables do not
-depend on where or when it ran.
+* :class:`ExperimentConfig` holds every knob of the chapter for one profile (:meth:`~ExperimentConfig.quick`,
+  :meth:`~ExperimentConfig.full`, :meth:`~ExperimentConfig.current`): the full TrajeVAE, the two baselines,
+  the one training schedule they all share (so they are compared at equal cost) and the test windows.
+* :func:`ladder` builds the paper's Table 4 ablation ladder from the full TrajeVAE: **Base** (attention over
+  frames, one encoder ``q(z | Y)`` pulled towards ``N(0, I)``, no augmentation), **+ DCT**, **+ learnable
+  prior** (posterior ``q_pose(z | X)`` and prior ``p_traj(z | Y)``), **+ augmentation** (random yaw),
+  **+ masked future poses** (the posterior sees ``X ⊙ (1 - M)``), which is the full TrajeVAE.
+* :class:`CompletionRun` is one training run (a :class:`~motionlab.train.many.Run`); :func:`runs` names the
+  chapter's seven: the five rungs and the GRU and CVAE-RNN baselines.
+* :func:`train_all` trains them on both cores and sweeps every model over the number of given trajectories
+  in a worker as soon as it is trained (:func:`sweep`), so the sweeps fill the core that the last training
+  leaves idle. A sweep loads its model from the checkpoint cache and is seeded by its arguments alone, so the
+  tables do not depend on where or when it ran.
 """
 
 from __future__ import annotations
 
+import numbers
 from collections.abc import Sequence
+from dataclasses import dataclass, replace
+from functools import partial
 
 import numpy as np
+import torch
 from torch import Tensor, nn
 
-from motionlab.models.trajevae.data import CompletionBatches
-from motionlab.models.trajevae.evaluate import N_SAMPLES, Sweep, sweep_given_joints
-from motionlab.models.trajevae.training import ModelConfig, completion_data_config, train_completion_model
-from motionlab.train import TrainConfig, TrainResult, is_cached
-from motionlab.train.parallel import run_paired
+from motionlab import config
+from motionlab.evaluation.benchmark import load_benchmark
+from motionlab.evaluation.evaluator import data_fingerprint
+from motionlab.models.trajevae.baselines import CVAERNN, GRUCompletion, RecurrentConfig
+from motionlab.models.trajevae.data import (
+    FRAME_STEP,
+    CompletionBatches,
+    CompletionData,
+    completion_windows,
+    decimate,
+)
+from motionlab.models.trajevae.evaluate import (
+    FIGURE6_KS,
+    N_SAMPLES,
+    PAPER_KS,
+    Sweep,
+    multimodal_futures,
+    sweep_given_joints,
+)
+from motionlab.models.trajevae.losses import cvae_rnn_loss, gru_loss, trajevae_loss
+from motionlab.models.trajevae.model import TrajeVAE, TrajeVAEConfig
+from motionlab.train import PiecewiseLinear, TrainConfig, TrainResult, is_cached, train_or_load
+from motionlab.train.loop import LossFn
+from motionlab.train.many import Trained, train_many
+from motionlab.validation import check_scalar
+
+#: A completion model's config: TrajeVAE (any rung of the ladder) or a recurrent baseline.
+ModelConfig = TrajeVAEConfig | RecurrentConfig
+
+#: The ablation switches in the order the ladder turns them on.
+SWITCHES: tuple[str, ...] = ("use_dct", "learnable_prior", "augment", "mask_future_poses")
+
+#: Rung names, Base first; rung ``i`` has the first ``i`` switches on.
+RUNGS: tuple[str, ...] = ("Base", "+ DCT", "+ learnable prior", "+ augmentation", "+ masked future poses")
+
+#: Each run's checkpoint cache name.
+CACHE_NAMES: dict[str, str] = {
+    "Base": "trajevae_base",
+    "+ DCT": "trajevae_dct",
+    "+ learnable prior": "trajevae_learnable_prior",
+    "+ augmentation": "trajevae_augmentation",
+    "+ masked future poses": "trajevae_masked_future_poses",
+    "GRU": "trajevae_gru",
+    "CVAE-RNN": "trajevae_cvae_rnn",
+}
+
+#: The order to start the runs: the longest (training and sweep, measured in the full profile) first.
+START_ORDER: tuple[str, ...] = (
+    "+ masked future poses",
+    "GRU",
+    "CVAE-RNN",
+    "+ augmentation",
+    "+ learnable prior",
+    "Base",
+    "+ DCT",
+)
+
+#: The runs swept over Figure 6's k (up to all 22 joints); the others over Table 1's k = 0..4.
+FIGURE6_RUNS: tuple[str, ...] = ("+ masked future poses", "GRU")
 
 
-def _train_in_worker(
-    name: str, cfg: ModelConfig, positions: Tensor, rotations: Tensor, train_config: TrainConfig
-) -> float:
-    """Body of a worker call: train one model into the checkpoint cache, return its training seconds."""
-    _, result = train_completion_model(name, cfg, positions, rotations, train_config, progress=False)
-    return result.metrics["train_seconds"]
+def _train_config(steps: int, batch_size: int, checkpoint_every: int | None) -> TrainConfig:
+    """The chapter's one schedule: AdamW at 2e-3, a warm-up over the first eighth, then a linear decay."""
+    return TrainConfig(
+        steps=steps,
+        batch_size=batch_size,
+        lr=2e-3,
+        grad_clip=None,
+        lr_schedule=PiecewiseLinear(((0, 0.05), (steps // 8, 1.0), (steps, 0.05))),
+        checkpoint_every=checkpoint_every,
+    )
 
 
-def _sweep_in_worker(
-    name: str,
-    cfg: ModelConfig,
-    positions: Tensor,
-    rotations: Tensor,
-    train_config: TrainConfig,
-    windows: Tensor,
-    ks: Sequence[int],
-    multimodal: Sequence[np.ndarray],
-) -> Sweep:
-    """Body of a worker call: load the trained model from the cache (its chain trained it) and sweep it over
-    ``ks``."""
-    model, _ = train_completion_model(name, cfg, positions, rotations, train_config, progress=False)
+@dataclass(frozen=True)
+class ExperimentConfig:
+    """Every size and schedule of chapter 07 for one profile.
+
+    Attributes:
+        trajevae: the full TrajeVAE, the last rung of the ablation ladder (:func:`ladder` builds the others).
+        gru: the deterministic GRU baseline; cvae_rnn: the CVAE-RNN baseline.
+        train: the schedule every model trains with.
+        n_eval_windows: test windows the metrics average over (each with ``N_SAMPLES`` samples).
+    """
+
+    trajevae: TrajeVAEConfig
+    gru: RecurrentConfig
+    cvae_rnn: RecurrentConfig
+    train: TrainConfig
+    n_eval_windows: int
+
+    def __post_init__(self) -> None:
+        where = "ExperimentConfig"
+        for name, kind in (
+            ("trajevae", TrajeVAEConfig),
+            ("gru", RecurrentConfig),
+            ("cvae_rnn", RecurrentConfig),
+            ("train", TrainConfig),
+        ):
+            value = getattr(self, name)
+            if not isinstance(value, kind):
+                raise TypeError(f"{where}: {name} must be a {kind.__name__}, got {type(value).__name__}")
+        if not self.trajevae.n_frames == self.gru.n_frames == self.cvae_rnn.n_frames:
+            raise ValueError(
+                f"{where}: every model must complete the same windows, got n_frames "
+                f"{self.trajevae.n_frames}, {self.gru.n_frames} and {self.cvae_rnn.n_frames}"
+            )
+        if self.gru.latent_dim != 0 or self.cvae_rnn.latent_dim < 1:
+            raise ValueError(f"{where}: gru needs latent_dim 0 and cvae_rnn latent_dim >= 1")
+        check_scalar(self.n_eval_windows, "n_eval_windows", where, kind=numbers.Integral, minimum=2)
+
+    @classmethod
+    def quick(cls) -> ExperimentConfig:
+        """Tiny widths and a few dozen steps, so every code path runs in seconds."""
+        return cls(
+            trajevae=TrajeVAEConfig(n_frames=60, width=8, latent_dim=4, dct_components=4, heads=2),
+            gru=RecurrentConfig(n_frames=60, hidden=8),
+            cvae_rnn=RecurrentConfig(n_frames=60, hidden=8, latent_dim=4),
+            train=_train_config(steps=30, batch_size=16, checkpoint_every=None),
+            n_eval_windows=12,
+        )
+
+    @classmethod
+    def full(cls) -> ExperimentConfig:
+        """The models whose numbers the chapter reports, sized for its budget on two CPU cores."""
+        return cls(
+            trajevae=TrajeVAEConfig(n_frames=60, width=32, latent_dim=8, dct_components=8, heads=2),
+            gru=RecurrentConfig(n_frames=60, hidden=64),
+            cvae_rnn=RecurrentConfig(n_frames=60, hidden=48, latent_dim=16),
+            train=_train_config(steps=400, batch_size=32, checkpoint_every=100),
+            n_eval_windows=48,
+        )
+
+    @classmethod
+    def current(cls) -> ExperimentConfig:
+        """The config of the active profile (:func:`motionlab.config.profile`)."""
+        return cls.quick() if config.profile() == "quick" else cls.full()
+
+
+def ladder(full: TrajeVAEConfig) -> dict[str, TrajeVAEConfig]:
+    """The five rungs ``{name: config}`` of Table 4 built from ``full`` (architecture and loss weight shared).
+
+    The last rung equals ``full`` with every switch on.
+    """
+    if not isinstance(full, TrajeVAEConfig):
+        raise TypeError(f"ladder: full must be a TrajeVAEConfig, got {type(full).__name__}")
+    return {
+        name: replace(full, **{switch: index < rung for index, switch in enumerate(SWITCHES)})
+        for rung, name in enumerate(RUNGS)
+    }
+
+
+@dataclass(frozen=True, eq=False)
+class CompletionRun:
+    """One training run of a completion model (a :class:`~motionlab.train.many.Run`; picklable).
+
+    Attributes:
+        name: the checkpoint cache name, e.g. ``"trajevae_masked_future_poses"``.
+        model: the model's config (part of the cache key, with ``train`` and the clips' fingerprint).
+        train_config: steps, batch size, learning rate, ... of the one training loop.
+        positions, rotations: the training clips ``(N, T, J, 3)`` and ``(N, T, J, 4)`` at the chapter's frame
+            rate (:func:`~motionlab.models.trajevae.data.decimate`).
+    """
+
+    name: str
+    model: ModelConfig
+    train_config: TrainConfig
+    positions: Tensor
+    rotations: Tensor
+
+    def __post_init__(self) -> None:
+        where = "CompletionRun"
+        if not isinstance(self.model, (TrajeVAEConfig, RecurrentConfig)):
+            raise TypeError(
+                f"{where}: model must be a TrajeVAEConfig or RecurrentConfig, got {type(self.model).__name__}"
+            )
+        if not isinstance(self.train_config, TrainConfig):
+            raise TypeError(
+                f"{where}: train_config must be a TrainConfig, got {type(self.train_config).__name__}"
+            )
+
+    def build_model(self) -> nn.Module:
+        """TrajeVAE for a :class:`TrajeVAEConfig`; the GRU (``latent_dim == 0``) or the CVAE-RNN for a
+        :class:`RecurrentConfig` (seeded by the config)."""
+        if isinstance(self.model, TrajeVAEConfig):
+            return TrajeVAE(self.model)
+        return CVAERNN(self.model) if self.model.latent_dim > 0 else GRUCompletion(self.model)
+
+    def loss_function(self) -> LossFn:
+        """The model's training loss (see :mod:`motionlab.models.trajevae.losses`)."""
+        if isinstance(self.model, TrajeVAEConfig):
+            return trajevae_loss
+        return cvae_rnn_loss if self.model.latent_dim > 0 else gru_loss
+
+    def batches(self) -> CompletionBatches:
+        """The training batch source (masks and, if the config says so, the yaw augmentation)."""
+        return CompletionBatches(
+            self.positions, self.rotations, self.model.augment, self.model.keep_probability
+        )
+
+    def is_cached(self) -> bool:
+        return is_cached(self.name, self.model, self.train_config, self._data_config(self.batches()))
+
+    def train(self, progress: bool | None = None) -> tuple[nn.Module, TrainResult]:
+        """Train the model (or load it from the checkpoint cache); returns it in eval mode."""
+        model = self.build_model()
+        batches = self.batches()
+        result = train_or_load(
+            self.name,
+            self.model,
+            model,
+            self.loss_function(),
+            batches,
+            self.train_config,
+            data_config=self._data_config(batches),
+            progress=progress,
+        )
+        return model, result
+
+    @staticmethod
+    def _data_config(batches: CompletionBatches) -> dict:
+        """What defines the training data (part of the cache key): the clips' fingerprint, the frame step."""
+        return {"clips": data_fingerprint(batches.positions), "frame_step": FRAME_STEP}
+
+
+def load_data(cfg: ExperimentConfig) -> CompletionData:
+    """The benchmark at the chapter's frame rate: its training clips and ``cfg.n_eval_windows`` test windows
+    spread evenly over the test split (so over all style modes), with their multimodal ground truth."""
+    if not isinstance(cfg, ExperimentConfig):
+        raise TypeError(f"load_data: cfg must be an ExperimentConfig, got {type(cfg).__name__}")
+    bench = load_benchmark()
+    all_test = completion_windows(decimate(bench.test.positions))
+    pick = torch.linspace(0, all_test.shape[0] - 1, cfg.n_eval_windows).round().long()
+    test_windows = all_test[pick]
+    return CompletionData(
+        train_positions=decimate(bench.train.positions),
+        train_rotations=decimate(bench.train.rotations),
+        test_windows=test_windows,
+        test_action=bench.test.action[pick.numpy()],
+        multimodal=multimodal_futures(test_windows),
+    )
+
+
+def runs(cfg: ExperimentConfig, data: CompletionData) -> dict[str, CompletionRun]:
+    """The chapter's seven runs ``{name: run}`` in :data:`START_ORDER`: the rungs of :func:`ladder` (named by
+    :data:`RUNGS`), ``"GRU"`` and ``"CVAE-RNN"``."""
+    if not isinstance(cfg, ExperimentConfig):
+        raise TypeError(f"runs: cfg must be an ExperimentConfig, got {type(cfg).__name__}")
+    models: dict[str, ModelConfig] = {**ladder(cfg.trajevae), "GRU": cfg.gru, "CVAE-RNN": cfg.cvae_rnn}
+    return {
+        name: CompletionRun(
+            CACHE_NAMES[name], models[name], cfg.train, data.train_positions, data.train_rotations
+        )
+        for name in START_ORDER
+    }
+
+
+def sweep(name: str, model: nn.Module, windows: Tensor, multimodal: Sequence[np.ndarray]) -> Sweep:
+    """The DLow metrics of run ``name``'s model on ``windows`` ``(N, T, J * 3)`` for each number of given
+    trajectories: Figure 6's k for :data:`FIGURE6_RUNS`, Table 1's for the others
+    (:func:`~motionlab.models.trajevae.evaluate.sweep_given_joints`, ``N_SAMPLES`` samples, seed 0)."""
+    ks = FIGURE6_KS if name in FIGURE6_RUNS else PAPER_KS
     return sweep_given_joints(model, windows, ks, N_SAMPLES, 0, multimodal)
 
 
-def train_and_sweep(
-    runs: dict[str, ModelConfig],
-    positions: Tensor,
-    rotations: Tensor,
-    train_config: TrainConfig,
-    windows: Tensor,
-    ks: dict[str, Sequence[int]],
-    multimodal: Sequence[np.ndarray],
-    processes: int = 2,
-) -> tuple[dict[str, nn.Module], dict[str, TrainResult], dict[str, float], dict[str, Sweep]]:
-    """Train (or load) every ``{cache name: config}`` of ``runs`` and sweep it, ``processes`` calls at a time.
-
-    Args:
-        positions, rotations, train_config: as for
-        :func:`~motionlab.models.trajevae.training.train_completion_model`. windows: the test windows ``(N, T,
-        J * 3)``; ks: the given-trajectory counts of each run's sweep; multimodal:
-        :func:`~motionlab.models.trajevae.evaluate.multimodal_futures` of the windows.
+def train_all(cfg: ExperimentConfig, data: CompletionData, processes: int = 2) -> dict[str, Trained[Sweep]]:
+    """Train (or load) every run of :func:`runs` and :func:`sweep` each model, ``processes`` calls at a time.
 
     Returns:
-        The models and their training results (loaded here from the cache), the training seconds of the runs
-        trained now, and each run's sweep ``{k: {metric: (mean, ci95)}}``; all keyed like ``runs``.
+        ``{name: Trained}`` in :data:`START_ORDER`; ``measured`` is the run's sweep ``{k: {metric: (mean,
+        ci95)}}`` on ``data.test_windows``.
     """
-    data_config = completion_data_config(CompletionBatches(positions, rotations, augment=False).positions)
-    trainings = {
-        name: (_train_in_worker, (name, cfg, positions, rotations, train_config))
-        for name, cfg in runs.items()
-        if not is_cached(name, cfg, train_config, data_config)
-    }
-    sweeps = {
-        name: (
-            _sweep_in_worker,
-            (name, cfg, positions, rotations, train_config, windows, ks[name], multimodal),
-        )
-        for name, cfg in runs.items()
-    }
-    seconds, sweeps = run_paired(trainings, sweeps, processes)
-    models, results = {}, {}
-    for name, cfg in runs.items():
-        models[name], results[name] = train_completion_model(name, cfg, positions, rotations, train_config)
-    return models, results, seconds, sweeps
+    then = partial(sweep, windows=data.test_windows, multimodal=data.multimodal)
+    return train_many(runs(cfg, data), then=then, processes=processes)

@@ -14,12 +14,14 @@ the wrists), then :data:`FULL_ORDER` continues to all joints.
 
 from __future__ import annotations
 
+import numbers
 from collections.abc import Sequence
 
 import torch
 from torch import Tensor
 
 from motionlab.skeleton import JOINT, JOINT_NAMES
+from motionlab.validation import check_scalar, check_tensor
 
 #: Probability that a joint's trajectory is given in a training sequence.
 KEEP_PROBABILITY = 0.15
@@ -61,13 +63,10 @@ def sample_joint_masks(
 
     One ``torch.rand`` draw of ``(n_sequences, n_joints)`` from ``generator``.
     """
-    func = "sample_joint_masks"
-    if isinstance(n_sequences, bool) or not isinstance(n_sequences, int) or n_sequences < 1:
-        raise ValueError(f"{func}: n_sequences must be a positive integer, got {n_sequences!r}")
-    if isinstance(n_joints, bool) or not isinstance(n_joints, int) or n_joints < 1:
-        raise ValueError(f"{func}: n_joints must be a positive integer, got {n_joints!r}")
-    if not 0.0 <= keep_probability <= 1.0:
-        raise ValueError(f"{func}: keep_probability must lie in [0, 1], got {keep_probability!r}")
+    where = "sample_joint_masks"
+    check_scalar(n_sequences, "n_sequences", where, kind=numbers.Integral, minimum=1)
+    check_scalar(n_joints, "n_joints", where, kind=numbers.Integral, minimum=1)
+    check_scalar(keep_probability, "keep_probability", where, minimum=0, maximum=1)
     return torch.rand((n_sequences, n_joints), generator=generator) < keep_probability
 
 
@@ -89,37 +88,42 @@ def joint_mask(joints: Sequence[str | int], n_joints: int = len(JOINT_NAMES)) ->
 
 def first_joints(k: int, order: Sequence[str] = FULL_ORDER) -> Tensor:
     """The mask ``(22,)`` of the first ``k`` joints of ``order`` (``k = 0`` gives no trajectory at all)."""
-    if isinstance(k, bool) or not isinstance(k, int) or not 0 <= k <= len(order):
-        raise ValueError(f"first_joints: k must be an integer in [0, {len(order)}], got {k!r}")
+    check_scalar(k, "k", "first_joints", kind=numbers.Integral, minimum=0, maximum=len(order))
     return joint_mask(order[:k])
 
 
-def _check_poses_and_mask(poses: Tensor, mask: Tensor, func: str) -> tuple[int, int]:
-    if not isinstance(poses, Tensor) or not poses.is_floating_point() or poses.dim() < 2:
-        raise ValueError(
-            f"{func}: poses must be a floating tensor (..., T, J * 3), got "
-            f"{type(poses).__name__} {tuple(getattr(poses, 'shape', ()))}"
-        )
+def check_mask(mask: Tensor, name: str, where: str, shape: tuple[int, ...] | None = None) -> Tensor:
+    """Check a joint mask ``(..., J)`` of dtype bool (of exactly ``shape`` if given) and return it.
+
+    Raises ``TypeError`` for a non-tensor or a dtype other than bool, ``ValueError`` for a wrong shape.
+    """
     if not isinstance(mask, Tensor) or mask.dtype != torch.bool:
-        raise ValueError(
-            f"{func}: mask must be a bool tensor (..., J), got {getattr(mask, 'dtype', type(mask).__name__)}"
-        )
+        got = mask.dtype if isinstance(mask, Tensor) else type(mask).__name__
+        raise TypeError(f"{where}: {name} must be a bool tensor (..., J), got {got}")
+    if mask.dim() < 1 or (shape is not None and tuple(mask.shape) != shape):
+        raise ValueError(f"{where}: {name} must have shape {shape or '(..., J)'}, got {tuple(mask.shape)}")
+    return mask
+
+
+def _check_poses_and_mask(poses: Tensor, mask: Tensor, where: str) -> None:
+    check_tensor(poses, "poses", where, min_leading=2, finite=False)
+    check_mask(mask, "mask", where)
     n_joints = mask.shape[-1]
     if poses.shape[-1] != 3 * n_joints:
         raise ValueError(
-            f"{func}: poses have {poses.shape[-1]} channels but the mask has {n_joints} joints "
+            f"{where}: poses have {poses.shape[-1]} channels but the mask has {n_joints} joints "
             f"(expected {3 * n_joints} = J * 3 channels)"
         )
     if mask.shape[:-1] != poses.shape[:-2]:
         raise ValueError(
-            f"{func}: mask {tuple(mask.shape)} must have the leading shape of poses "
+            f"{where}: mask {tuple(mask.shape)} must have the leading shape of poses "
             f"{tuple(poses.shape[:-2])} plus the joint axis"
         )
-    return n_joints, poses.shape[-2]
 
 
 def channel_mask(mask: Tensor) -> Tensor:
     """A joint mask ``(..., J)`` bool repeated for the x, y, z channels: ``(..., J * 3)`` bool."""
+    check_mask(mask, "mask", "channel_mask")
     return mask.repeat_interleave(3, dim=-1)
 
 

@@ -21,30 +21,203 @@ initial pose: :math:`\hat x_t = x_0 + \sum_{s=1}^{t} \Delta_s`.
 **Sampling** decodes prior samples :math:`z = \mu + \tau \sigma \epsilon` at temperature τ; a single sample
 decodes the prior means (the deterministic prediction).
 
-The ablation switches of :class:`~motionlab.models.trajevae.config.TrajeVAEConfig` turn off the DCT, the
-learned prior (then one encoder :math:`q(z \mid Y)` is pulled towards :math:`\mathcal N(0, I)` and sampled at
-test time), the yaw augmentation (a data switch, see :mod:`.data`) and the posterior's mask.
+The ablation switches of :class:`TrajeVAEConfig` turn off the DCT, the learned prior (then one encoder
+:math:`q(z \mid Y)` is pulled towards :math:`\mathcal N(0, I)` and sampled at test time), the yaw
+augmentation (a data switch, see :mod:`.data`) and the posterior's mask.
+
+The module reads top to bottom: the config, the layers (frame MLPs, position codes, attention blocks), the
+decoder and the model.
 """
 
 from __future__ import annotations
 
+import math
+import numbers
+from dataclasses import dataclass
 from typing import NamedTuple
 
 import torch
 from torch import Tensor, nn
 
 from motionlab.models.gaussian import reparameterize
-from motionlab.models.trajevae.config import TrajeVAEConfig
+from motionlab.models.trajevae.data import check_batch, check_task
 from motionlab.models.trajevae.dct import dct, idct
-from motionlab.models.trajevae.inputs import check_masks, check_sampling, check_task, check_windows
-from motionlab.models.trajevae.layers import (
-    GaussianBranch,
-    attention_block,
-    frame_mlp,
-    output_mlp,
-    sinusoidal_encoding,
-)
-from motionlab.models.trajevae.masks import given_trajectories, hidden_poses
+from motionlab.models.trajevae.masks import KEEP_PROBABILITY, given_trajectories, hidden_poses
+from motionlab.validation import check_scalar
+
+
+def check_flags(config: object, names: tuple[str, ...], where: str) -> None:
+    """Raise ``TypeError`` unless each attribute of ``config`` in ``names`` is a bool (a switch, not a
+    number)."""
+    for name in names:
+        value = getattr(config, name)
+        if not isinstance(value, bool):
+            raise TypeError(f"{where}: {name} must be a bool, got {value!r} ({type(value).__name__})")
+
+
+class WindowShape:
+    """The window geometry every completion model's config shares (needs ``n_joints`` and ``n_frames``)."""
+
+    n_joints: int
+    n_frames: int
+
+    @property
+    def n_channels(self) -> int:
+        """Numbers per pose, ``J * 3``."""
+        return 3 * self.n_joints
+
+    @property
+    def n_future(self) -> int:
+        """Frames to complete, ``n_frames - 1``."""
+        return self.n_frames - 1
+
+
+@dataclass(frozen=True)
+class TrajeVAEConfig(WindowShape):
+    """TrajeVAE's architecture, loss weight and the four ablation switches.
+
+    Windows have ``n_frames`` frames: frame 0 is the initial pose, frames ``1 .. n_frames - 1`` are completed.
+
+    Attributes:
+        n_joints: skeleton joints ``J`` (poses are ``J * 3`` global coordinates, metres).
+        n_frames: frames per window, initial pose included (120 = 4 s at 30 fps).
+        width: ``d``, the size of a frame embedding and of the initial-pose embedding; the transformer
+            tokens are their concatenation, ``2 d``.
+        latent_dim: latent numbers per DCT component (per frame without the DCT).
+        dct_components: the ``C`` lowest frequencies kept (at most ``n_frames - 1``); ignored without the DCT.
+        heads: attention heads; layers: transformer layers in each attention block.
+        beta: weight of ``KL(q_pose || p_traj)`` (the paper: 0.01).
+        keep_probability: chance that a joint's trajectory is given in a training sequence (0.15).
+        use_dct: attend over DCT components (``False``: over frames).
+        learnable_prior: a posterior ``q_pose(z | X)`` and a learned prior ``p_traj(z | Y)`` (``False``: one
+            encoder ``q(z | Y)`` regularised towards ``N(0, I)``, the Base model).
+        augment: turn every training sequence by a random yaw.
+        mask_future_poses: the posterior sees ``X ⊙ (1 - M)`` instead of ``X`` (needs ``learnable_prior``).
+        seed: seeds the weight initialisation.
+    """
+
+    n_joints: int = 22
+    n_frames: int = 120
+    width: int = 64
+    latent_dim: int = 32
+    dct_components: int = 40
+    heads: int = 4
+    layers: int = 1
+    beta: float = 0.01
+    keep_probability: float = KEEP_PROBABILITY
+    use_dct: bool = True
+    learnable_prior: bool = True
+    augment: bool = True
+    mask_future_poses: bool = True
+    seed: int = 0
+
+    def __post_init__(self) -> None:
+        where = "TrajeVAEConfig"
+        for name in ("n_joints", "width", "latent_dim", "heads", "layers"):
+            check_scalar(getattr(self, name), name, where, kind=numbers.Integral, minimum=1)
+        check_scalar(self.n_frames, "n_frames", where, kind=numbers.Integral, minimum=2)
+        check_scalar(
+            self.dct_components,
+            "dct_components",
+            where,
+            kind=numbers.Integral,
+            minimum=1,
+            maximum=self.n_future,
+        )
+        if (2 * self.width) % self.heads:
+            raise ValueError(
+                f"{where}: the token size 2 * width = {2 * self.width} must be divisible by "
+                f"heads={self.heads}"
+            )
+        check_scalar(self.beta, "beta", where, minimum=0)
+        check_scalar(self.keep_probability, "keep_probability", where, minimum=0, maximum=1)
+        check_flags(self, ("use_dct", "learnable_prior", "augment", "mask_future_poses"), where)
+        if self.mask_future_poses and not self.learnable_prior:
+            raise ValueError(
+                f"{where}: mask_future_poses masks the posterior's input, so it needs learnable_prior=True"
+            )
+        check_scalar(self.seed, "seed", where, kind=numbers.Integral, minimum=0)
+
+    @property
+    def n_latent_steps(self) -> int:
+        """Latent vectors per sequence: the DCT components, or one per completed frame without the DCT."""
+        return self.dct_components if self.use_dct else self.n_future
+
+
+# --- layers ----------------------------------------------------------------------------------------
+
+
+def frame_mlp(n_in: int, n_out: int) -> nn.Sequential:
+    """The paper's encoder MLP, applied to every frame: (Linear → LayerNorm → LeakyReLU(0.1)) twice.
+
+    ``(..., n_in) -> (..., n_out)``.
+    """
+    return nn.Sequential(
+        nn.Linear(n_in, n_out),
+        nn.LayerNorm(n_out),
+        nn.LeakyReLU(0.1),
+        nn.Linear(n_out, n_out),
+        nn.LayerNorm(n_out),
+        nn.LeakyReLU(0.1),
+    )
+
+
+def output_mlp(n_in: int, n_hidden: int, n_out: int) -> nn.Sequential:
+    """Linear → LayerNorm → LeakyReLU(0.1) → Linear: ``(..., n_in) -> (..., n_out)`` with an unbounded
+    output."""
+    return nn.Sequential(
+        nn.Linear(n_in, n_hidden), nn.LayerNorm(n_hidden), nn.LeakyReLU(0.1), nn.Linear(n_hidden, n_out)
+    )
+
+
+def sinusoidal_encoding(n_positions: int, dim: int) -> Tensor:
+    r"""Fixed position codes ``(n_positions, dim)`` of "Attention is all you need".
+
+    Channel pairs ``(2i, 2i + 1)`` hold :math:`\sin(p\,\omega_i)` and :math:`\cos(p\,\omega_i)` with
+    :math:`\omega_i = 10000^{-2i/\mathrm{dim}}`; ``dim`` must be even.
+    """
+    if dim % 2:
+        raise ValueError(f"sinusoidal_encoding: dim must be even, got {dim}")
+    position = torch.arange(n_positions, dtype=torch.float64)[:, None]
+    frequency = torch.exp(-math.log(10000.0) * torch.arange(0, dim, 2, dtype=torch.float64) / dim)
+    codes = torch.zeros(n_positions, dim, dtype=torch.float64)
+    codes[:, 0::2] = torch.sin(position * frequency)
+    codes[:, 1::2] = torch.cos(position * frequency)
+    return codes.float()
+
+
+def attention_block(dim: int, heads: int, layers: int) -> nn.TransformerEncoder:
+    """``layers`` pre-norm transformer encoder layers (self-attention + MLP of width ``2 dim``, no dropout),
+    closed by a LayerNorm.
+
+    ``(B, N, dim) -> (B, N, dim)``, attending over all ``N`` tokens (frames or DCT components). The final norm
+    matters after the DCT: the first coefficient is ``sqrt(F)`` times the mean frame, and without it that
+    scale would reach the Gaussian heads unnormalised.
+    """
+    layer = nn.TransformerEncoderLayer(
+        dim, heads, dim_feedforward=2 * dim, dropout=0.0, batch_first=True, norm_first=True
+    )
+    return nn.TransformerEncoder(layer, layers, norm=nn.LayerNorm(dim), enable_nested_tensor=False)
+
+
+class GaussianBranch(nn.Module):
+    """An unshared branch: self-attention, then per-token mean and log-variance of the latent.
+
+    ``(B, N, dim) -> (mu, logvar)``, each ``(B, N, latent_dim)``.
+    """
+
+    def __init__(self, dim: int, latent_dim: int, heads: int, layers: int) -> None:
+        super().__init__()
+        self.attention = attention_block(dim, heads, layers)
+        self.mean = nn.Linear(dim, latent_dim)
+        self.log_variance = nn.Linear(dim, latent_dim)
+
+    def forward(self, tokens: Tensor) -> tuple[Tensor, Tensor]:
+        hidden = self.attention(tokens)
+        return self.mean(hidden), self.log_variance(hidden)
+
+
+# --- the model -------------------------------------------------------------------------------------
 
 
 class Gaussian(NamedTuple):
@@ -144,9 +317,7 @@ class TrajeVAE(nn.Module):
     ) -> CompletionOutput:
         """Reconstruct windows ``(B, T, J * 3)`` given joint masks ``(B, J)`` bool (True: trajectory
         given)."""
-        func = "TrajeVAE.forward"
-        check_windows(windows, self.cfg.n_frames, self.cfg.n_channels, func)
-        check_masks(mask, windows.shape[0], self.cfg.n_joints, func)
+        check_batch(windows, mask, self.cfg.n_frames, self.cfg.n_joints, "TrajeVAE.forward")
         initial_pose, future = windows[:, 0], windows[:, 1:]
         initial_embedding = self.initial_pose_encoder(initial_pose)
         prior = self.prior(given_trajectories(future, mask), initial_embedding)
@@ -177,9 +348,15 @@ class TrajeVAE(nn.Module):
             prediction). temperature: scales the prior's standard deviation (0 decodes the means for every
             sample). generator: the noise's ``torch.Generator`` (same seed, bitwise-identical samples).
         """
-        func = "TrajeVAE.sample"
-        batch = check_task(initial_pose, trajectories, self.cfg.n_future, self.cfg.n_channels, func)
-        check_sampling(n_samples, temperature, func)
+        batch = check_task(
+            initial_pose,
+            trajectories,
+            n_samples,
+            temperature,
+            self.cfg.n_frames,
+            self.cfg.n_joints,
+            "TrajeVAE.sample",
+        )
         initial_embedding = self.initial_pose_encoder(initial_pose)
         prior = self.prior(trajectories, initial_embedding)
         mu = prior.mu.repeat_interleave(n_samples, dim=0)
