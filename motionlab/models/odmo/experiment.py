@@ -98,8 +98,17 @@ class ExperimentConfig:
         where = "ExperimentConfig"
         if not isinstance(self.model, ODMOConfig):
             raise TypeError(f"{where}: model must be an ODMOConfig, got {type(self.model).__name__}")
-        counts = ("frame_stride", "steps", "batch_size", "n_sets", "n_per_class", "n_per_mode", "n_codes")
-        for name in (*counts, "n_end_points"):
+        counts = (
+            "frame_stride",
+            "steps",
+            "batch_size",
+            "n_sets",
+            "n_per_class",
+            "n_per_mode",
+            "n_codes",
+            "n_end_points",
+        )
+        for name in counts:
             check_scalar(getattr(self, name), name, where, kind=numbers.Integral, minimum=1)
         check_scalar(self.seed, "seed", where, kind=numbers.Integral, minimum=0)
         check_scalar(self.lr, "lr", where, minimum=0, include_minimum=False)
