@@ -6,10 +6,10 @@ import dataclasses
 import pytest
 import torch
 
-from motionlab.models.odmo.config import VARIANTS, ODMOConfig, variant_config
-from motionlab.models.odmo.contrastive import BalancedBatches
-from motionlab.models.odmo.model import ODMO, joint_objective, sequence_error
-from motionlab.models.odmo.trajectory import accumulate, class_code_condition
+from motionlab.models.odmo.data import BalancedBatches
+from motionlab.models.odmo.experiment import VARIANTS, variant_config
+from motionlab.models.odmo.losses import joint_objective, sequence_error
+from motionlab.models.odmo.model import ODMO, ODMOConfig, accumulate, class_code_condition
 from motionlab.train import Constant, TrainConfig, train
 
 TINY = ODMOConfig(
@@ -55,7 +55,7 @@ def test_variants_change_only_their_switches():
         cfg = variant_config(name, base)
         differing = {f.name for f in dataclasses.fields(cfg) if getattr(cfg, f.name) != getattr(base, f.name)}
         assert differing == set(changes), name
-    with pytest.raises(KeyError, match="unknown"):
+    with pytest.raises(ValueError, match="variant_config: name must be one of"):
         variant_config("nope", base)
 
 

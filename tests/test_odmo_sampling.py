@@ -5,6 +5,8 @@ is the plumbing (shapes, which codes and end points reach the generators, how nu
 against hand computations and scikit-learn.
 """
 
+import dataclasses
+
 import ipywidgets as widgets
 import matplotlib.pyplot as plt
 import numpy as np
@@ -15,14 +17,12 @@ from sklearn.metrics import adjusted_rand_score
 
 from motionlab.data.synthetic import generate
 from motionlab.metrics import end_point_error
-from motionlab.models.odmo import customize, evaluate
-from motionlab.models.odmo.config import ODMOConfig
+from motionlab.models.odmo import evaluate, sampling
 from motionlab.models.odmo.data import ODMOData
-from motionlab.models.odmo.experiment import MeasurePlan, measure_variant, train_and_measure
-from motionlab.models.odmo.model import ODMO
+from motionlab.models.odmo.experiment import VARIANTS, ExperimentConfig, measure_variant, runs, train_all
+from motionlab.models.odmo.model import ODMO, ODMOConfig
 from motionlab.models.odmo.modes import discover_modes
-from motionlab.models.odmo.sampler import ODMOSampler, encode_clips
-from motionlab.models.odmo.training import ODMOTraining
+from motionlab.models.odmo.sampling import ODMOSampler, encode_clips
 from motionlab.widgets import odmo as odmo_widgets
 
 CFG = ODMOConfig(
@@ -37,6 +37,18 @@ CFG = ODMOConfig(
 )
 PARENTS = [-1, 0, 1]
 STRIDE = 2
+#: The chapter's experiment on the tiny model: 2 steps, small sample sets.
+EXPERIMENT = ExperimentConfig(
+    model=CFG,
+    frame_stride=STRIDE,
+    steps=2,
+    batch_size=4,
+    n_sets=2,
+    n_per_class=4,
+    n_per_mode=2,
+    n_codes=2,
+    n_end_points=2,
+)
 
 
 @pytest.fixture(scope="module")
@@ -101,20 +113,20 @@ def test_encode_and_sample_shapes_and_determinism(data, sampler):
 
 def test_customisation_sends_the_requested_codes_and_end_points(sampler):
     weights = np.array([0.0, 0.5, 1.0])
-    mixed = customize.mode_interpolation(sampler, 0, 0, 1, weights)
+    mixed = sampling.mode_interpolation(sampler, 0, 0, 1, weights)
     centres = sampler.modes.classes[0].means
     assert np.allclose(mixed.codes[[0, 2]], centres[[0, 1]]) and np.allclose(
         mixed.codes[1], centres[:2].mean(0)
     )
     target = np.array([1.0, -0.5, 0.0])
-    styles = customize.styles_to_end_point(sampler, 1, target, np.random.default_rng(0), per_mode=2)
+    styles = sampling.styles_to_end_point(sampler, 1, target, np.random.default_rng(0), per_mode=2)
     assert sorted(set(styles.mode.tolist())) == list(range(sampler.modes.classes[1].n_modes))
     assert np.allclose(styles.end_points, target)
-    again = customize.to_end_point(sampler, 1, styles.codes, styles.end_points)
+    again = sampling.to_end_point(sampler, 1, styles.codes, styles.end_points)
     assert torch.equal(again.features, styles.features)
-    assert np.allclose(customize.end_point_sweep([0, 0, 0], [2, 4, 0], 3), [[0, 0, 0], [1, 2, 0], [2, 4, 0]])
+    assert np.allclose(sampling.end_point_sweep([0, 0, 0], [2, 4, 0], 3), [[0, 0, 0], [1, 2, 0], [2, 4, 0]])
     with pytest.raises(ValueError, match="modes"):
-        customize.mode_interpolation(sampler, 0, 0, 99, weights)
+        sampling.mode_interpolation(sampler, 0, 0, 99, weights)
 
 
 def test_mode_recovery_matches_scikit_learn(data, sampler):
@@ -134,10 +146,10 @@ def test_end_point_control_measures_the_generated_root(sampler):
     rng = np.random.default_rng(0)
     members = np.flatnonzero(sampler.modes.action == 0)
     source, other = rng.choice(members, size=3), rng.choice(members, size=3)
-    targets = customize.end_point_sweep(
+    targets = sampling.end_point_sweep(
         sampler.modes.end_points[source[0]], sampler.modes.end_points[other[0]], 4
     )
-    clips = customize.to_end_point(sampler, 0, np.repeat(sampler.modes.codes[source[:1]], 4, axis=0), targets)
+    clips = sampling.to_end_point(sampler, 0, np.repeat(sampler.modes.codes[source[:1]], 4, axis=0), targets)
     assert table["dist_e"].values[0] == pytest.approx(
         end_point_error(clips.features[..., -3:].numpy(), targets)
     )
@@ -161,74 +173,70 @@ def test_metric_and_homogeneity_tables(sampler):
     assert all(0.0 <= v <= 1.0 for v in homogeneity.values)
 
 
-def test_measure_variant_follows_the_plan(data, sampler):
+def test_measure_variant_follows_the_config(data, sampler):
     real = torch.randn(8, CFG.n_frames * STRIDE, 3, 3)
     reference = evaluate.Reference(
         StandInEvaluator(), StandInEvaluator().features(real), real, np.array([0, 1] * 4)
     )
-    plan = MeasurePlan(
-        n_per_class=4,
-        n_sets=2,
-        n_per_mode=2,
-        n_codes=2,
-        n_end_points=2,
-        prior_sampled=("vae",),
-        conventional=("odmo",),
-        homogeneity=("odmo",),
-        end_point=("vae",),
-    )
     modes = ODMOSampler.from_data(sampler.model, data, kind="modes")
-    odmo = measure_variant("odmo", sampler.model, data, reference, plan)
+    odmo = measure_variant("ODMO", sampler.model, data, reference, EXPERIMENT)
     assert (
         set(odmo.samplers) == {"table", "modes", "conventional"}
         and odmo.samplers["table"] is odmo.samplers["modes"]
     )
-    assert list(odmo.rows) == ["odmo", "odmo_conv"] and odmo.end_point is None
-    assert odmo.rows["odmo"] == evaluate.metric_row(reference, modes, 4, 2)
+    assert list(odmo.rows) == ["ODMO", "ODMO_conv"]
+    assert odmo.rows["ODMO"] == evaluate.metric_row(reference, modes, 4, 2)
     conventional = ODMOSampler.from_data(sampler.model, data, kind="conventional")
-    assert odmo.rows["odmo_conv"] == evaluate.metric_row(reference, conventional, 4, 2)
+    assert odmo.rows["ODMO_conv"] == evaluate.metric_row(reference, conventional, 4, 2)
     assert odmo.homogeneity == evaluate.mode_homogeneity_interval(reference, modes, 2, 2)
-    vae = measure_variant("vae", sampler.model, data, reference, plan)
-    assert list(vae.rows) == ["vae"] and vae.homogeneity is None
-    assert vae.rows["vae"] == evaluate.metric_row(
+    assert odmo.end_point == evaluate.end_point_control(reference, modes, 2, 2)
+    vae = measure_variant("standard VAE", sampler.model, data, reference, EXPERIMENT)
+    assert list(vae.rows) == ["standard VAE"] and vae.end_point is None
+    assert vae.rows["standard VAE"] == evaluate.metric_row(
         reference, ODMOSampler.from_data(sampler.model, data, kind="prior"), 4, 2
     )
-    assert vae.end_point == evaluate.end_point_control(reference, modes, 2, 2)
+    assert vae.homogeneity == odmo.homogeneity  # the same model's discovered modes
+    ablation = measure_variant("-L_es", sampler.model, data, reference, EXPERIMENT)
+    assert list(ablation.rows) == ["-L_es"] and ablation.homogeneity is None and ablation.end_point is None
+    with pytest.raises(ValueError, match="measure_variant: variant must be one of"):
+        measure_variant("odmo", sampler.model, data, reference, EXPERIMENT)
 
 
-def test_train_and_measure_trains_in_workers_and_measures_like_in_process(data, tmp_path, monkeypatch):
+def test_experiment_config_profiles_and_runs(data, monkeypatch):
+    quick, full = ExperimentConfig.quick(), ExperimentConfig.full()
+    assert (quick.steps, quick.batch_size, full.steps, full.batch_size) == (4, 30, 300, 60)
+    assert full.model == ODMOConfig() and quick.model.motion_hidden == 16
+    monkeypatch.setenv("MOTIONLAB_PROFILE", "quick")
+    assert ExperimentConfig.current() == quick
+    monkeypatch.setenv("MOTIONLAB_PROFILE", "full")
+    assert ExperimentConfig.current() == full
+    assert full.train_config().schedules["teacher_forcing"](150) == pytest.approx(0.65)
+    chapter = runs(EXPERIMENT, data)
+    assert list(chapter) == [name for name in VARIANTS if name != "-L_es"] + ["-L_es"]
+    assert [run.name for run in chapter.values()][:3] == ["odmo", "odmo_odmo_paper_s_prior_term", "odmo_r_e"]
+    assert chapter["-L_traj"].cfg.use_trajectory_loss is False
+    with pytest.raises(ValueError, match="frame_stride"):
+        runs(ExperimentConfig(model=CFG), data)
+    with pytest.raises(ValueError, match="ExperimentConfig: homogeneity must be one of"):
+        ExperimentConfig(homogeneity=("odmo",))
+    with pytest.raises(TypeError, match="ExperimentConfig: steps must be an integer"):
+        ExperimentConfig(steps=2.5)
+
+
+def test_train_all_trains_in_workers_and_measures_like_in_process(data, tmp_path, monkeypatch):
     monkeypatch.setenv("MOTIONLAB_BUILD", str(tmp_path))  # the workers get it with every call
     real = torch.randn(8, CFG.n_frames * STRIDE, 3, 3)
     reference = evaluate.Reference(
         StandInEvaluator(), StandInEvaluator().features(real), real, np.array([0, 1] * 4)
     )
-    plan = MeasurePlan(
-        n_per_class=2,
-        n_sets=2,
-        n_per_mode=2,
-        n_codes=2,
-        n_end_points=2,
-        prior_sampled=("vae",),
-        conventional=(),
-        homogeneity=("odmo",),
-        end_point=(),
-    )
-    configs = {"odmo": CFG, "vae": CFG}
-    training = ODMOTraining(steps=2, batch_size=4)
-    models, results, seconds, measured = train_and_measure(
-        configs, data, training, reference, plan, processes=2
-    )
-    assert (
-        list(measured) == ["odmo", "vae"]
-        and set(seconds) == {"odmo", "vae"}
-        and all(results[n].loaded_from_cache for n in configs)
-    )
-    for name, model in models.items():
-        assert measured[name] == measure_variant(name, model, data, reference, plan)._replace(
-            samplers=measured[name].samplers
-        )  # the same numbers as measuring here
-    _, _, seconds_again, again = train_and_measure(configs, data, training, reference, plan, processes=2)
-    assert seconds_again == {} and [m.rows for m in again.values()] == [m.rows for m in measured.values()]
+    trained = train_all(EXPERIMENT, data, reference, processes=2)
+    assert list(trained) == list(VARIANTS)
+    assert all(t.seconds is not None and t.result.loaded_from_cache for t in trained.values())
+    for name in ("ODMO", "standard VAE", "-L_es"):  # one of each kind of measurement
+        t = trained[name]
+        here = measure_variant(name, t.model, data, reference, EXPERIMENT)
+        assert t.measured == dataclasses.replace(here, samplers=t.measured.samplers)  # the same numbers
+    assert all(run.is_cached() for run in runs(EXPERIMENT, data).values())  # a second call trains nothing
 
 
 def test_widget_callbacks_and_builders(sampler):

@@ -1,6 +1,6 @@
 """ODMO's generation speed: code -> trajectory -> motion -> 30 fps joint positions, at batch 1 and batched.
 
-The networks have the chapter's sizes (:class:`~motionlab.models.odmo.config.ODMOConfig` defaults, 40 model
+The networks have the chapter's sizes (:class:`~motionlab.models.odmo.model.ODMOConfig` defaults, 40 model
 frames at 10 fps, upsampled to a 4-second clip of 120 frames). Weights are untrained: the speed does not
 depend on them.
 """
@@ -11,9 +11,8 @@ import torch
 
 from motionlab import config
 from motionlab.bench._timing import generator_speed
-from motionlab.models.odmo.config import ODMOConfig
 from motionlab.models.odmo.data import to_positions
-from motionlab.models.odmo.model import ODMO
+from motionlab.models.odmo.model import ODMO, ODMOConfig
 
 FPS = 30
 FRAME_STRIDE = 3

@@ -1,7 +1,7 @@
 """Chapter 08's widgets: sample a discovered mode, slide between two modes, send several styles to one end
 point.
 
-Each callback is a plain function of a trained :class:`~motionlab.models.odmo.sampler.ODMOSampler` and the
+Each callback is a plain function of a trained :class:`~motionlab.models.odmo.sampling.ODMOSampler` and the
 widget values that returns a matplotlib ``Figure``; the ``*_widget`` builders only wire ipywidgets to them.
 """
 
@@ -16,8 +16,7 @@ import numpy as np
 from IPython.display import display
 from matplotlib.figure import Figure
 
-from motionlab.models.odmo.customize import mode_interpolation, styles_to_end_point
-from motionlab.models.odmo.sampler import ODMOSampler
+from motionlab.models.odmo.sampling import ODMOSampler, mode_interpolation, styles_to_end_point
 from motionlab.viz import GENERATED_COLOR, filmstrip, plot_root_paths
 
 

@@ -1,29 +1,28 @@
 """ODMO (Lu et al., "Action-conditioned On-demand Motion Generation", ACM MM 2022) on the course benchmark.
 
-Modules, in the order of the chapter: :mod:`.data` (local movement profile + root trajectory),
-:mod:`.config` (sizes, objective, ablation switches), :mod:`.encoder` (LMP encoder), :mod:`.contrastive`
-(eq. 1, the σ² prior term, class-balanced pairs), :mod:`.trajectory` and :mod:`.generator` (the two
-generators), :mod:`.model` (the joint objective, eq. 5), :mod:`.training`, :mod:`.modes` (mode discovery
-and sampling), :mod:`.sampler` (codes to joint positions), :mod:`.customize` (on-demand generation),
+Modules, in the order of the chapter: :mod:`.data` (local movement profile + root trajectory, class-balanced
+batches), :mod:`.model` (the config, the LMP encoder and the two generators), :mod:`.losses` (the joint
+objective, eq. 5, with the contrastive term of eq. 1 and the σ² prior term), :mod:`.modes` (mode discovery
+and sampling in the code space), :mod:`.sampling` (codes to joint positions, on-demand customisation),
 :mod:`.evaluate` (Tables 1–4 and the adjusted Rand index against the true modes) and :mod:`.experiment`
-(every variant trained and measured on both cores).
+(the chapter's sizes and variants, every variant trained and measured on both cores).
 """
 
-from motionlab.models.odmo.config import VARIANTS, ODMOConfig, variant_config
 from motionlab.models.odmo.data import ODMOData, prepare, to_positions
-from motionlab.models.odmo.model import ODMO, joint_objective
+from motionlab.models.odmo.experiment import VARIANTS, ExperimentConfig, train_all, variant_config
+from motionlab.models.odmo.losses import joint_objective
+from motionlab.models.odmo.model import ODMO, ODMOConfig
 from motionlab.models.odmo.modes import ModeSet, choose_component_count, discover_modes
-from motionlab.models.odmo.sampler import ODMOSampler, Samples, encode_clips
-from motionlab.models.odmo.training import ODMOTraining, train_odmo
+from motionlab.models.odmo.sampling import ODMOSampler, Samples, encode_clips
 
 __all__ = [
     "ODMO",
     "VARIANTS",
+    "ExperimentConfig",
     "ModeSet",
     "ODMOConfig",
     "ODMOData",
     "ODMOSampler",
-    "ODMOTraining",
     "Samples",
     "choose_component_count",
     "discover_modes",
@@ -31,6 +30,6 @@ __all__ = [
     "joint_objective",
     "prepare",
     "to_positions",
-    "train_odmo",
+    "train_all",
     "variant_config",
 ]

@@ -15,18 +15,25 @@ Preparation (:func:`prepare`) does three things to each clip of a :class:`~motio
 The ODMO features do not say how high the pelvis starts. :func:`to_positions` puts the lowest joint of
 the first frame at the average height it has in the training data (``floor_clearance``), which puts
 real clips back at their true height to 3 mm on average.
+
+Training batches are class-balanced (:class:`BalancedBatches`): every batch holds the same number of clips
+of every action, which the contrastive term's pairs need
+(:func:`~motionlab.models.odmo.losses.balanced_pairs`).
 """
 
 from __future__ import annotations
 
+import numbers
+from collections.abc import Iterator
 from dataclasses import dataclass
 
 import torch
 from torch import Tensor
 
 from motionlab.data.augment import rotate_yaw
-from motionlab.data.representations import RootStart, check_tensor, from_odmo, heading_yaw, to_odmo
+from motionlab.data.representations import RootStart, from_odmo, heading_yaw, to_odmo
 from motionlab.data.store import MotionSet
+from motionlab.validation import check_scalar, check_tensor
 
 
 @dataclass(frozen=True, eq=False)
@@ -64,7 +71,8 @@ class ODMOData:
 
 def face_forward(positions: Tensor, rotations: Tensor) -> Tensor:
     """Clips ``(N, T, J, 3)`` turned about z so that each root starts with heading yaw 0 (facing +x)."""
-    check_tensor(positions, "positions", "face_forward", (None, 3), min_leading=2)
+    check_tensor(positions, "positions", "face_forward", trailing=(None, 3), ndim=4)
+    check_tensor(rotations, "rotations", "face_forward", trailing=(None, 4), ndim=4)
     yaw = heading_yaw(rotations[:, 0, 0, :])
     return rotate_yaw(positions, rotations, -yaw)[0]
 
@@ -77,8 +85,9 @@ def lowest_first_joint(features: Tensor) -> Tensor:
 def prepare(data: MotionSet, frame_stride: int = 3, floor_clearance: float | None = None) -> ODMOData:
     """ODMO features of a motion set (see the module notes); ``floor_clearance`` defaults to this set's
     own."""
-    if isinstance(frame_stride, bool) or not isinstance(frame_stride, int) or frame_stride < 1:
-        raise ValueError(f"prepare: frame_stride must be a positive integer, got {frame_stride!r}")
+    check_scalar(frame_stride, "frame_stride", "prepare", kind=numbers.Integral, minimum=1)
+    if floor_clearance is not None:
+        check_scalar(floor_clearance, "floor_clearance", "prepare")
     if data.n_frames < 2 * frame_stride:
         raise ValueError(
             f"prepare: clips of {data.n_frames} frames are too short for frame_stride {frame_stride}"
@@ -104,6 +113,8 @@ def upsample_frames(x: Tensor, factor: int) -> Tensor:
     Model frame ``t`` becomes data frame ``t · factor``; the frames between are interpolated, and the
     ``factor - 1`` frames after the last one continue its last velocity.
     """
+    check_tensor(x, "x", "upsample_frames", min_leading=2, finite=False)
+    check_scalar(factor, "factor", "upsample_frames", kind=numbers.Integral, minimum=1)
     if factor == 1:
         return x
     steps = torch.arange(factor, dtype=x.dtype) / factor
@@ -119,8 +130,10 @@ def to_positions(features: Tensor, frame_stride: int, floor_clearance: float) ->
     The first frame's root is placed above the origin, at the height that puts the first frame's lowest
     joint ``floor_clearance`` metres above the floor.
     """
-    check_tensor(features, "features", "to_positions", (None,), min_leading=2)
-    if features.dim() != 3 or features.shape[-1] % 3 or features.shape[-1] < 6:
+    check_tensor(features, "features", "to_positions", ndim=3)
+    check_scalar(frame_stride, "frame_stride", "to_positions", kind=numbers.Integral, minimum=1)
+    check_scalar(floor_clearance, "floor_clearance", "to_positions")
+    if features.shape[-1] % 3 or features.shape[-1] < 6:
         raise ValueError(
             f"to_positions: features must be (N, T, 3 (J - 1) + 3) with J >= 2 joints, got "
             f"{tuple(features.shape)}"
@@ -130,3 +143,53 @@ def to_positions(features: Tensor, frame_stride: int, floor_clearance: float) ->
     start[:, 2] = height
     positions = from_odmo(features, RootStart(start, torch.zeros(features.shape[0], dtype=features.dtype)))
     return upsample_frames(positions, frame_stride)
+
+
+class BalancedBatches:
+    """A batch source of class-balanced batches ``(features (B, T, F), labels (B,))`` for the training loop.
+
+    Every batch has ``batch_size / n_classes`` clips of each class. An epoch shuffles each class's clips and
+    deals them out; it ends when the smallest class runs out (so every clip is used once at most).
+    """
+
+    def __init__(self, features: Tensor, labels: Tensor, n_classes: int) -> None:
+        where = "BalancedBatches"
+        check_tensor(features, "features", where, min_leading=1)
+        check_tensor(labels, "labels", where, ndim=1, floating=False)
+        if labels.is_floating_point():
+            raise TypeError(f"{where}: labels must be an integer tensor, got dtype {labels.dtype}")
+        check_scalar(n_classes, "n_classes", where, kind=numbers.Integral, minimum=2)
+        if labels.shape[0] != features.shape[0]:
+            raise ValueError(f"{where}: labels must be ({features.shape[0]},), got {tuple(labels.shape)}")
+        counts = torch.bincount(labels, minlength=n_classes)
+        if counts.numel() != n_classes or bool((counts < 2).any()):
+            raise ValueError(
+                f"{where}: every one of the {n_classes} classes needs at least 2 clips, "
+                f"got counts {counts.tolist()}"
+            )
+        self.features = features
+        self.labels = labels
+        self.n_classes = n_classes
+        self.members = [torch.nonzero(labels == c).flatten() for c in range(n_classes)]
+
+    def per_class(self, batch_size: int) -> int:
+        """Clips of each class in a batch of ``batch_size`` (which must be a multiple of the class count)."""
+        check_scalar(batch_size, "batch_size", "BalancedBatches", kind=numbers.Integral, minimum=1)
+        if batch_size % self.n_classes or batch_size < 2 * self.n_classes:
+            raise ValueError(
+                f"BalancedBatches: batch_size must be a multiple of {self.n_classes} classes with at "
+                f"least 2 clips each, got {batch_size}"
+            )
+        return batch_size // self.n_classes
+
+    def __call__(
+        self, epoch: int, generator: torch.Generator, batch_size: int
+    ) -> Iterator[tuple[Tensor, Tensor]]:
+        k = self.per_class(batch_size)
+        shuffled = [m[torch.randperm(m.numel(), generator=generator)] for m in self.members]
+        n_batches = min(m.numel() for m in shuffled) // k
+        if n_batches == 0:
+            raise ValueError(f"BalancedBatches: the smallest class has fewer than {k} clips for one batch")
+        for b in range(n_batches):
+            index = torch.cat([m[b * k : (b + 1) * k] for m in shuffled])
+            yield self.features[index], self.labels[index]

@@ -15,6 +15,7 @@
 
 from __future__ import annotations
 
+import numbers
 from dataclasses import dataclass
 
 import numpy as np
@@ -33,10 +34,10 @@ from motionlab.metrics import (
     n_apd,
     repeat_metric,
 )
-from motionlab.models.odmo.customize import end_point_sweep, to_end_point
 from motionlab.models.odmo.data import prepare, to_positions
 from motionlab.models.odmo.modes import ModeSet
-from motionlab.models.odmo.sampler import ODMOSampler, Samples
+from motionlab.models.odmo.sampling import ODMOSampler, Samples, end_point_sweep, to_end_point
+from motionlab.validation import check_scalar
 
 #: Columns of Tables 1–2, in order.
 METRICS = ("accuracy", "fid", "diversity", "multimodality", "n_apd")
@@ -97,6 +98,7 @@ def metric_row(
 ) -> dict[str, Interval]:
     """One row of Tables 1–2: ``{metric: Interval}`` over ``n_sets`` sample sets of ``n_per_class`` clips per
     class."""
+    _check_counts("metric_row", n_per_class=n_per_class, n_sets=n_sets)
 
     def draw(generator: torch.Generator) -> tuple[Samples, np.random.Generator]:
         rng = np.random.default_rng(generator.initial_seed())
@@ -117,6 +119,7 @@ def real_row(
 
     The clips are fixed; the repeats redraw the Diversity and Multimodality pairs.
     """
+    _check_counts("real_row", n_sets=n_sets)
     positions, action = canonical_positions(test, floor_clearance), np.asarray(test.action)
     features, probs = reference.evaluator.features_and_probs(positions, "action")
     real_n_apd = n_apd(
@@ -140,6 +143,7 @@ def mode_homogeneity_interval(
 ) -> Interval:
     """Table 3: homogeneity of the true styles (recognised by the evaluator) among clips of each discovered
     mode."""
+    _check_counts("mode_homogeneity_interval", n_per_mode=n_per_mode, n_sets=n_sets)
 
     def draw(generator: torch.Generator) -> tuple[np.ndarray, np.ndarray]:
         clips = sampler.sample_modes(n_per_mode, np.random.default_rng(generator.initial_seed()))
@@ -160,6 +164,7 @@ def end_point_control(
     on the generated motion's root; ``dist_e_trajectory`` on the trajectory generator's output, which the
     motion was asked to follow.
     """
+    _check_counts("end_point_control", n_codes=n_codes, n_end_points=n_end_points)
     rng = np.random.default_rng(seed)
     modes = sampler.modes
     accuracy, distance, trajectory_distance = [], [], []
@@ -187,6 +192,11 @@ def end_point_control(
         "dist_e": _interval(distance),
         "dist_e_trajectory": _interval(trajectory_distance),
     }
+
+
+def _check_counts(where: str, **counts: int) -> None:
+    for name, count in counts.items():
+        check_scalar(count, name, where, kind=numbers.Integral, minimum=1)
 
 
 def _interval(values: list[float]) -> Interval:

@@ -1,61 +1,233 @@
-"""The chapter's experiment on both cores: train every variant and measure it as soon as it has trained.
+"""Chapter 08's experiment: its sizes, its seven models, and training and measuring them on both cores.
 
-Seven variants on two cores leave one core idle while the last one trains. :func:`train_and_measure`
-chains every variant's training with its measurements (:func:`~motionlab.train.parallel.run_paired`):
-its samplers (:class:`~motionlab.models.odmo.sampler.ODMOSampler`), its rows of Tables 1-2 and, if the
-:class:`MeasurePlan` asks, its Table 3 (mode homogeneity) and Table 4 (end-point control) rows. The
-measurements of the variants that are done fill the idle core. A measurement loads its model from the
-checkpoint cache and every table is seeded by the plan alone, so the numbers equal in-process calls of
-:mod:`motionlab.models.odmo.evaluate`, wherever and whenever they ran.
+:class:`ExperimentConfig` holds every knob of the chapter (the base model's sizes, the training schedule,
+the sizes of the sample sets and which variant takes part in which table); :data:`VARIANTS` lists the seven
+models as changes to the base model's config; :func:`runs` gives one :class:`ODMORun` per variant, and
+:func:`train_all` trains them on both cores, measuring each in a worker as soon as it is trained
+(:func:`measure_variant`: its samplers, its rows of Tables 1-2 and, for the variants that take part,
+Table 3 (mode homogeneity) and Table 4 (end-point control)). A measurement loads its model from the
+checkpoint cache and every table is seeded by the config alone, so the numbers equal in-process calls of
+:mod:`~motionlab.models.odmo.evaluate`, wherever and whenever they ran.
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-from typing import NamedTuple
+import numbers
+import re
+from dataclasses import dataclass, field, replace
+from functools import partial
 
+import torch
+
+from motionlab import config
+from motionlab.evaluation.evaluator import data_fingerprint
 from motionlab.metrics import Interval
-from motionlab.models.odmo.config import ODMOConfig
-from motionlab.models.odmo.data import ODMOData
+from motionlab.models.odmo.data import BalancedBatches, ODMOData
 from motionlab.models.odmo.evaluate import Reference, end_point_control, metric_row, mode_homogeneity_interval
-from motionlab.models.odmo.model import ODMO
-from motionlab.models.odmo.sampler import ODMOSampler, encode_clips
-from motionlab.models.odmo.training import ODMOTraining, odmo_data_config, run_name, train_odmo
-from motionlab.train import TrainResult, is_cached
-from motionlab.train.parallel import run_paired
+from motionlab.models.odmo.losses import joint_objective
+from motionlab.models.odmo.model import ODMO, ODMOConfig
+from motionlab.models.odmo.sampling import ODMOSampler, encode_clips
+from motionlab.train import LinearRamp, TrainConfig, TrainResult, is_cached, train_or_load
+from motionlab.train.many import Trained, train_many
+from motionlab.validation import check_choice, check_scalar
+
+#: The chapter's models, as changes to the base config (the base is ODMO as the chapter uses it). The names
+#: are the models' cache names (through :func:`cache_name`) and the keys of the chapter's claims.
+VARIANTS: dict[str, dict[str, object]] = {
+    "ODMO": {},
+    "ODMO (paper's prior term)": {"prior_target": "code"},
+    "-L_es": {"use_contrastive": False},
+    "-r_e": {"use_end_point": False},
+    "-L_cons": {"use_consistency": False},
+    "-L_traj": {"use_consistency": False, "use_trajectory_loss": False},
+    "standard VAE": {"use_contrastive": False, "prior_target": "standard"},
+}
+
+
+def variant_config(name: str, base: ODMOConfig) -> ODMOConfig:
+    """``base`` with the changes of the variant ``name`` (a key of :data:`VARIANTS`)."""
+    check_choice(name, "name", "variant_config", VARIANTS)
+    return replace(base, **VARIANTS[name])
+
+
+def cache_name(variant: str) -> str:
+    """A file-name-safe cache name for a variant, e.g. ``"-L_cons"`` -> ``"odmo_l_cons"``."""
+    slug = re.sub(r"[^a-z0-9]+", "_", variant.lower()).strip("_")
+    return "odmo" if slug == "odmo" else f"odmo_{slug}"
 
 
 @dataclass(frozen=True)
-class MeasurePlan:
-    """What to measure of which variant, and with how many samples.
+class ExperimentConfig:
+    """Every size and schedule of chapter 08; the defaults are the full profile (:meth:`full`).
 
     Attributes:
-        n_per_class, n_sets: clips per class in a sample set of Tables 1-2, and the sets per row;
-        n_per_mode: clips per discovered mode in a sample set of Table 3 (also ``n_sets`` sets);
-        n_codes, n_end_points: Table 4's codes per class and end points per code.
-        prior_sampled: variants whose table sampler draws codes from the prior (the standard VAE); the
-            others sample their discovered modes.
+        model: the base model's config (sizes and objective); :data:`VARIANTS` change it.
+        frame_stride: frames of the 30 fps data per model frame (3: 10 fps, 40 frames per 4-second clip).
+        steps, batch_size, lr: optimiser steps, class-balanced batch size (a multiple of the class count)
+            and AdamW learning rate of every variant.
+        teacher_forcing_end: the decoder's teacher-forcing probability decays linearly from 1 to this over
+            the run, as in the reference implementation (``tf_min = 0.3``).
+        seed: seeds every variant's initialisation and batches.
+        n_sets: sample sets per row of every table (each number is a mean with its 95 % interval);
+        n_per_class: clips per class in a sample set of Tables 1-2; n_per_mode: clips per discovered mode in
+            a sample set of Table 3; n_codes, n_end_points: Table 4's codes per class and end points per code.
+        prior_sampled: variants whose table sampler draws codes from the prior (the standard VAE); the others
+            sample their discovered modes.
         conventional: variants that also get a row with the single-Gaussian sampler, named ``<variant>_conv``.
         homogeneity, end_point: the variants of Table 3 and of Table 4.
     """
 
-    n_per_class: int
-    n_sets: int
-    n_per_mode: int
-    n_codes: int
-    n_end_points: int
+    model: ODMOConfig = field(default_factory=ODMOConfig)
+    frame_stride: int = 3
+    steps: int = 300
+    batch_size: int = 60
+    lr: float = 3e-3
+    teacher_forcing_end: float = 0.3
+    seed: int = 0
+    n_sets: int = 10
+    n_per_class: int = 20
+    n_per_mode: int = 10
+    n_codes: int = 40
+    n_end_points: int = 10
     prior_sampled: tuple[str, ...] = ("standard VAE",)
     conventional: tuple[str, ...] = ("ODMO",)
     homogeneity: tuple[str, ...] = ("ODMO", "ODMO (paper's prior term)", "standard VAE")
     end_point: tuple[str, ...] = ("ODMO", "-r_e", "-L_cons", "-L_traj")
 
+    def __post_init__(self) -> None:
+        where = "ExperimentConfig"
+        if not isinstance(self.model, ODMOConfig):
+            raise TypeError(f"{where}: model must be an ODMOConfig, got {type(self.model).__name__}")
+        counts = (
+            "frame_stride",
+            "steps",
+            "batch_size",
+            "n_sets",
+            "n_per_class",
+            "n_per_mode",
+            "n_codes",
+            "n_end_points",
+        )
+        for name in counts:
+            check_scalar(getattr(self, name), name, where, kind=numbers.Integral, minimum=1)
+        check_scalar(self.seed, "seed", where, kind=numbers.Integral, minimum=0)
+        check_scalar(self.lr, "lr", where, minimum=0, include_minimum=False)
+        check_scalar(self.teacher_forcing_end, "teacher_forcing_end", where, minimum=0, maximum=1)
+        for name in ("prior_sampled", "conventional", "homogeneity", "end_point"):
+            for variant in getattr(self, name):
+                check_choice(variant, name, where, VARIANTS)
 
-class Measured(NamedTuple):
-    """One variant's measurements.
+    @classmethod
+    def full(cls) -> ExperimentConfig:
+        """The chapter's sizes: the paper-sized networks, 300 steps, 10 sample sets per row."""
+        return cls()
+
+    @classmethod
+    def quick(cls) -> ExperimentConfig:
+        """Tiny networks, 4 steps and 2 small sample sets per row: the notebook runs end to end in the
+        tests."""
+        return cls(
+            model=ODMOConfig(encoder_hidden=16, encoder_mlp=32, trajectory_hidden=16, motion_hidden=16),
+            steps=4,
+            batch_size=30,
+            n_sets=2,
+            n_per_class=4,
+            n_per_mode=2,
+            n_codes=3,
+            n_end_points=3,
+        )
+
+    @classmethod
+    def current(cls) -> ExperimentConfig:
+        """:meth:`quick` or :meth:`full`, for the active :func:`motionlab.config.profile`."""
+        return cls.quick() if config.is_quick() else cls.full()
+
+    def train_config(self) -> TrainConfig:
+        """Every variant's :class:`~motionlab.train.TrainConfig`, with the teacher-forcing schedule."""
+        ramp = LinearRamp(start=0, length=self.steps, begin=1.0, end=self.teacher_forcing_end)
+        return TrainConfig(
+            steps=self.steps,
+            batch_size=self.batch_size,
+            lr=self.lr,
+            grad_clip=1.0,
+            seed=self.seed,
+            schedules={"teacher_forcing": ramp},
+            checkpoint_every=None,
+            log_every=20,
+        )
+
+
+@dataclass(frozen=True, eq=False)
+class ODMORun:
+    """One variant's training run (a :class:`~motionlab.train.many.Run`), cached as ``name``.
+
+    :meth:`train` builds the model of ``cfg`` (seeded by ``training.seed``), fits its standardiser on
+    ``data`` and trains it on class-balanced batches, or loads it from the checkpoint cache.
+    """
+
+    name: str
+    cfg: ODMOConfig
+    training: TrainConfig
+    data: ODMOData
+
+    def __post_init__(self) -> None:
+        shape = tuple(self.data.features.shape[1:])
+        if shape != (self.cfg.n_frames, self.cfg.feature_dim):
+            raise ValueError(
+                f"ODMORun: the config expects clips of {self.cfg.n_frames} frames x {self.cfg.feature_dim} "
+                f"features, the data has {shape}"
+            )
+
+    def data_config(self) -> dict:
+        """What defines the training data (part of the cache key)."""
+        return {
+            "features": data_fingerprint(self.data.features),
+            "action": data_fingerprint(self.data.action.float()),
+            "frame_stride": self.data.frame_stride,
+        }
+
+    def is_cached(self) -> bool:
+        return is_cached(self.name, self.cfg, self.training, self.data_config())
+
+    def train(self, progress: bool | None = None) -> tuple[ODMO, TrainResult]:
+        torch.manual_seed(self.training.seed)
+        model = ODMO(self.cfg).fit_standardizer(self.data.features)
+        batches = BalancedBatches(self.data.features, self.data.action, self.cfg.n_classes)
+        result = train_or_load(
+            self.name,
+            self.cfg,
+            model,
+            joint_objective,
+            batches,
+            self.training,
+            data_config=self.data_config(),
+            progress=progress,
+        )
+        return model, result
+
+
+def runs(cfg: ExperimentConfig, data: ODMOData) -> dict[str, ODMORun]:
+    """Every variant's run, by variant name, in the order to start them: ``-L_es`` last, because its
+    measurement is the shortest (one table row), so the other core waits least at the end."""
+    if data.frame_stride != cfg.frame_stride:
+        raise ValueError(
+            f"runs: the data was prepared with frame_stride {data.frame_stride}, the config has "
+            f"{cfg.frame_stride}"
+        )
+    order = [name for name in VARIANTS if name != "-L_es"] + ["-L_es"]
+    training = cfg.train_config()
+    return {
+        name: ODMORun(cache_name(name), variant_config(name, cfg.model), training, data) for name in order
+    }
+
+
+@dataclass(frozen=True)
+class Measured:
+    """One variant's measurements (its :attr:`~motionlab.train.many.Trained.measured`).
 
     Attributes:
         samplers: ``{"table": ..., "modes": ...}`` (the same sampler for variants that sample their modes),
-            plus ``"conventional"`` if the plan asks for it.
+            plus ``"conventional"`` for the variants in :attr:`ExperimentConfig.conventional`.
         rows: Tables 1-2 rows ``{row name: {metric: Interval}}`` (the variant, and ``<variant>_conv``).
         homogeneity: Table 3's interval, or ``None``; end_point: Table 4's row, or ``None``.
     """
@@ -67,80 +239,47 @@ class Measured(NamedTuple):
 
 
 def measure_variant(
-    variant: str, model: ODMO, data: ODMOData, reference: Reference, plan: MeasurePlan
+    variant: str, model: ODMO, data: ODMOData, reference: Reference, cfg: ExperimentConfig
 ) -> Measured:
-    """Build the samplers of a trained ``model`` and measure what ``plan`` asks of ``variant``."""
+    """Build the samplers of a trained ``model`` and measure what ``cfg`` asks of ``variant``."""
+    check_choice(variant, "variant", "measure_variant", VARIANTS)
     codes = encode_clips(model, data)  # once, for every sampler of the variant
     modes = ODMOSampler.from_codes(model, codes, data, kind="modes")
     samplers = {
         "table": ODMOSampler.from_codes(model, codes, data, kind="prior")
-        if variant in plan.prior_sampled
+        if variant in cfg.prior_sampled
         else modes,
         "modes": modes,
     }
-    rows = {variant: metric_row(reference, samplers["table"], plan.n_per_class, plan.n_sets)}
-    if variant in plan.conventional:
+    rows = {variant: metric_row(reference, samplers["table"], cfg.n_per_class, cfg.n_sets)}
+    if variant in cfg.conventional:
         samplers["conventional"] = ODMOSampler.from_codes(model, codes, data, kind="conventional")
-        rows[f"{variant}_conv"] = metric_row(
-            reference, samplers["conventional"], plan.n_per_class, plan.n_sets
-        )
+        rows[f"{variant}_conv"] = metric_row(reference, samplers["conventional"], cfg.n_per_class, cfg.n_sets)
     homogeneity = (
-        mode_homogeneity_interval(reference, modes, plan.n_per_mode, plan.n_sets)
-        if variant in plan.homogeneity
+        mode_homogeneity_interval(reference, modes, cfg.n_per_mode, cfg.n_sets)
+        if variant in cfg.homogeneity
         else None
     )
     end_point = (
-        end_point_control(reference, modes, plan.n_codes, plan.n_end_points)
-        if variant in plan.end_point
+        end_point_control(reference, modes, cfg.n_codes, cfg.n_end_points)
+        if variant in cfg.end_point
         else None
     )
     return Measured(samplers, rows, homogeneity, end_point)
 
 
-def _train_in_worker(variant: str, cfg: ODMOConfig, data: ODMOData, training: ODMOTraining) -> float:
-    """Body of a worker call: train one variant into the checkpoint cache, return its training seconds."""
-    _, result = train_odmo(variant, cfg, data, training, progress=False)
-    return result.metrics["train_seconds"]
-
-
-def _measure_in_worker(
-    variant: str,
-    cfg: ODMOConfig,
+def train_all(
+    cfg: ExperimentConfig,
     data: ODMOData,
-    training: ODMOTraining,
     reference: Reference,
-    plan: MeasurePlan,
-) -> Measured:
-    """Body of a worker call: load a trained variant from the cache (its chain trained it) and measure it."""
-    model, _ = train_odmo(variant, cfg, data, training, progress=False)
-    return measure_variant(variant, model, data, reference, plan)
-
-
-def train_and_measure(
-    configs: dict[str, ODMOConfig],
-    data: ODMOData,
-    training: ODMOTraining,
-    reference: Reference,
-    plan: MeasurePlan,
     processes: int = 2,
-) -> tuple[dict[str, ODMO], dict[str, TrainResult], dict[str, float], dict[str, Measured]]:
-    """Train (or load) every ``{variant: config}`` and measure it, ``processes`` calls at a time.
+    progress: bool | None = None,
+) -> dict[str, Trained[Measured]]:
+    """Train (or load) every variant on ``processes`` cores and measure each as soon as it is trained.
 
-    Trainings start in the order of ``configs`` (put one whose measurement is short last). Returns the
-    models and training results (loaded here from the cache), the training seconds of the variants trained
-    now, and every variant's :class:`Measured`; all keyed like ``configs``.
+    Returns ``{variant: Trained}`` in the order of :data:`VARIANTS`, every model loaded here from the cache
+    and its :class:`Measured` in ``measured``.
     """
-    trainings = {
-        variant: (_train_in_worker, (variant, cfg, data, training))
-        for variant, cfg in configs.items()
-        if not is_cached(run_name(variant), cfg, training.train_config(), odmo_data_config(data))
-    }
-    measurements = {
-        variant: (_measure_in_worker, (variant, cfg, data, training, reference, plan))
-        for variant, cfg in configs.items()
-    }
-    seconds, measured = run_paired(trainings, measurements, processes)
-    models, results = {}, {}
-    for variant, cfg in configs.items():
-        models[variant], results[variant] = train_odmo(variant, cfg, data, training)
-    return models, results, seconds, measured
+    measure = partial(measure_variant, data=data, reference=reference, cfg=cfg)
+    trained = train_many(runs(cfg, data), then=measure, processes=processes, progress=progress)
+    return {name: trained[name] for name in VARIANTS}

@@ -1,36 +1,306 @@
-r"""ODMO: the LMP encoder, the trajectory generator and the motion generator, and the joint objective (eq. 5).
+r"""ODMO: the LMP encoder, the trajectory generator and the motion generator, and their config.
 
 A clip ``x`` (local movement profile and root trajectory, see :mod:`.data`, standardised per channel) of
 action ``c`` is encoded to ``q(z | x) = N(μ, s²)``; a code ``z = μ + s ε``, the class and the end point
-``r_e`` of ``x`` give the trajectory ``τ̂``, and ``τ̂``, ``z`` and ``c`` give the motion ``x̂``. With ``E(a,
-b)`` the squared error averaged over channels and summed over frames, the joint objective is
+``r_e`` of ``x`` give the trajectory ``τ̂``, and ``τ̂``, ``z`` and ``c`` give the motion ``x̂``. The joint
+objective that trains the three networks together is in :mod:`.losses`.
 
-.. math::
-    L = \underbrace{E(\hat x, x)}_{L_{motion}}
-        + \underbrace{E(\hat\tau, \tau)}_{L_{traj}}
-        + \underbrace{E(\hat x_{traj}, \hat\tau)}_{L_{cons}}
-        + \lambda_c \underbrace{L_c}_{\text{eq. 1}} + \lambda_p\, L_{prior}
+**The condition.** Every ODMO generator is conditioned on the outer product of the class one-hot and the
+code, flattened (:func:`class_code_condition`): a ``C · D`` vector that holds the code in the block of its
+class and zeros elsewhere, so each class reads the code space with its own weights.
 
-where ``τ`` is the real trajectory and ``x̂_traj`` the trajectory channels of the generated motion;
-``L_c + L_prior`` is the embedding loss ``L_es`` (:mod:`.contrastive`). The ablations switch terms off
-through the config (:data:`~motionlab.models.odmo.config.VARIANTS`); every term is still logged.
+**LMP encoder.** An LSTM reads the local movement profile (joints relative to the root, no trajectory) frame
+by frame; its outputs, averaged over the frames, go through two fully connected layers with BatchNorm and
+PReLU to ``(μ, log s²)``. The reference implementation reads the LSTM's last hidden state instead of the
+average. On our clips the last state forgets what happened mid-clip: with it, a linear probe could not tell
+a front kick's code from a side kick's (48 % on two balanced classes), and with the average it could
+(100 %), with the same training.
+
+**Trajectory generator.** It feeds the condition, the end point ``r_e`` (zeros in the ``-r_e`` ablation)
+and the frame's time ``t / (T - 1)`` to an LSTM at every frame, maps each output to a velocity and adds the
+velocities up from the origin (:func:`accumulate`). :class:`ODMO` feeds it a standardised end point and
+reads its velocities in units of each trajectory channel's standard deviation.
+
+**Motion generator.** A trajectory encoder (an LSTM over the trajectory generator's output, during
+training and sampling alike) hands its last hidden and cell states to an autoregressive LSTM decoder as
+its initial state, which is how the trajectory steers the motion. The decoder writes the full motion frame
+by frame, local movement profile and root trajectory together (``3 (J - 1) + 3`` channels): at frame ``t``
+its input is the previous frame, the condition and the time ``t / T``. In training the previous frame is the
+real one with probability ``teacher_forcing`` (drawn for each clip and frame), the decoder's own output
+otherwise; the chapter decays the probability from 1 to 0.3 over training (see :mod:`.experiment`), so the
+decoder learns to continue its own output, which is all it has when sampling (probability 0). Frame 0
+starts from a zero frame.
 """
 
 from __future__ import annotations
 
-from typing import NamedTuple
+import numbers
+from dataclasses import dataclass
+from typing import Literal, NamedTuple
 
 import torch
+import torch.nn.functional as F
 from torch import Tensor, nn
 
 from motionlab.data.datasets import Standardizer
-from motionlab.data.representations import check_tensor
 from motionlab.models.gaussian import reparameterize
-from motionlab.models.odmo.config import ODMOConfig
-from motionlab.models.odmo.contrastive import balanced_pairs, contrastive_loss, prior_term
-from motionlab.models.odmo.encoder import LMPEncoder
-from motionlab.models.odmo.generator import MotionGenerator
-from motionlab.models.odmo.trajectory import TrajectoryGenerator
+from motionlab.validation import check_choice, check_scalar, check_tensor
+
+#: Which Gaussian the prior term of the embedding loss compares with what (see :mod:`.losses`):
+#: ``"noise"`` KL(N(0, s²) || N(0, σ²)) on the noise alone (reference implementation),
+#: ``"code"`` KL(N(μ, s²) || N(0, σ²)) on the whole code (the paper's equation),
+#: ``"standard"`` KL(N(μ, s²) || N(0, I)) (a standard VAE).
+PriorTarget = Literal["noise", "code", "standard"]
+PRIOR_TARGETS: tuple[str, ...] = ("noise", "code", "standard")
+
+
+@dataclass(frozen=True)
+class ODMOConfig:
+    """Sizes and objective of one ODMO model. The defaults are the chapter's ODMO: the reference
+    implementation's prior term (on the noise) and same-class slack, at the sizes the full profile trains.
+
+    The paper's model, the reference implementation's variant, the ablations of Table 2 and the
+    standard-VAE baseline differ only in fields of this config (:data:`~.experiment.VARIANTS`), never in
+    code.
+
+    Attributes:
+        n_classes: action classes ``C`` (the one-hot condition).
+        n_frames: frames per clip ``T`` the model generates (at the model's frame rate: 40 frames at 10 fps
+            for the benchmark's 4-second clips).
+        n_joints: skeleton joints ``J``; features per frame are ``3 (J - 1)`` (local movement profile) + 3
+            (root trajectory).
+        code_dim: latent code size ``D`` (the paper: 20).
+        encoder_hidden: LSTM width of the LMP encoder; encoder_mlp: width of its two BatchNorm + PReLU layers.
+        trajectory_hidden: LSTM width of the trajectory generator.
+        motion_hidden: LSTM width of the motion generator (its trajectory encoder and its decoder).
+        margin: contrastive margin ``α`` between codes of different classes (the paper: 5).
+        same_class_slack: same-class codes closer than this do not attract each other (0 is the paper's
+            eq. 1; the reference implementation, and the chapter, use 0.5, which leaves room for styles).
+        prior_variance: ``σ²`` of the prior term (the paper: 0.05).
+        prior_target: see :data:`PriorTarget`.
+        use_contrastive: the contrastive term ``L_c`` (off: ``-L_es`` and the standard VAE).
+        use_end_point: feed the end point ``r_e`` to the trajectory generator (off: ``-r_e``).
+        use_consistency: the consistency loss between the two trajectories (off: ``-L_cons``).
+        use_trajectory_loss: the trajectory loss (off together with the consistency loss: ``-L_traj``).
+        contrastive_weight, prior_weight: weights of the two embedding terms in the joint objective.
+    """
+
+    n_classes: int = 6
+    n_frames: int = 40
+    n_joints: int = 22
+    code_dim: int = 20
+    encoder_hidden: int = 64
+    encoder_mlp: int = 128
+    trajectory_hidden: int = 64
+    motion_hidden: int = 64
+    margin: float = 5.0
+    same_class_slack: float = 0.5
+    prior_variance: float = 0.05
+    prior_target: PriorTarget = "noise"
+    use_contrastive: bool = True
+    use_end_point: bool = True
+    use_consistency: bool = True
+    use_trajectory_loss: bool = True
+    contrastive_weight: float = 1.0
+    prior_weight: float = 1.0
+
+    def __post_init__(self) -> None:
+        where = "ODMOConfig"
+        sizes = (
+            "n_classes",
+            "code_dim",
+            "encoder_hidden",
+            "encoder_mlp",
+            "trajectory_hidden",
+            "motion_hidden",
+        )
+        for name in sizes:
+            check_scalar(getattr(self, name), name, where, kind=numbers.Integral, minimum=1)
+        for name in ("n_frames", "n_joints"):
+            check_scalar(getattr(self, name), name, where, kind=numbers.Integral, minimum=2)
+        for name in ("margin", "prior_variance"):
+            check_scalar(getattr(self, name), name, where, minimum=0, include_minimum=False)
+        for name in ("same_class_slack", "contrastive_weight", "prior_weight"):
+            check_scalar(getattr(self, name), name, where, minimum=0)
+        check_choice(self.prior_target, "prior_target", where, PRIOR_TARGETS)
+        for name in ("use_contrastive", "use_end_point", "use_consistency", "use_trajectory_loss"):
+            if not isinstance(getattr(self, name), bool):
+                raise TypeError(f"{where}: {name} must be True or False, got {getattr(self, name)!r}")
+        if self.use_consistency and not self.use_trajectory_loss:
+            raise ValueError(
+                f"{where}: the consistency loss is part of the trajectory losses; "
+                "-L_traj switches both off (use_consistency=False, use_trajectory_loss=False)"
+            )
+
+    @property
+    def lmp_dim(self) -> int:
+        """Channels of the local movement profile, ``3 (J - 1)``."""
+        return 3 * (self.n_joints - 1)
+
+    @property
+    def feature_dim(self) -> int:
+        """Channels per frame: the local movement profile and the 3 root-trajectory channels."""
+        return self.lmp_dim + 3
+
+    @property
+    def condition_dim(self) -> int:
+        """Size of the class-code condition, the flattened outer product one-hot ⊗ code: ``C · D``."""
+        return self.n_classes * self.code_dim
+
+
+def class_code_condition(code: Tensor, action: Tensor, n_classes: int) -> Tensor:
+    """The flattened outer product ``one_hot(action) ⊗ code``: ``(B, D)``, ``(B,)`` -> ``(B, C · D)``."""
+    where = "class_code_condition"
+    check_tensor(code, "code", where, ndim=2)
+    check_tensor(action, "action", where, ndim=1, floating=False)
+    if action.is_floating_point():
+        raise TypeError(f"{where}: action must be an integer tensor, got dtype {action.dtype}")
+    if action.shape != code.shape[:1]:
+        raise ValueError(
+            f"{where}: action must be ({code.shape[0]},) like code's batch, got {tuple(action.shape)}"
+        )
+    if action.numel() and (int(action.min()) < 0 or int(action.max()) >= n_classes):
+        raise ValueError(
+            f"{where}: actions must lie in [0, {n_classes}), got [{int(action.min())}, {int(action.max())}]"
+        )
+    one_hot = F.one_hot(action, n_classes).to(code.dtype)
+    return (one_hot[:, :, None] * code[:, None, :]).flatten(1)
+
+
+def accumulate(velocity: Tensor) -> Tensor:
+    """Positions ``(B, T, C)`` from the velocities of frames 1..T-1 ``(B, T - 1, C)``: frame 0 at the
+    origin, frame ``t`` the sum of the first ``t`` velocities."""
+    check_tensor(velocity, "velocity", "accumulate", ndim=3, finite=False)
+    return torch.cat([torch.zeros_like(velocity[:, :1]), torch.cumsum(velocity, dim=1)], dim=1)
+
+
+class LMPEncoder(nn.Module):
+    """``(B, T, 3 (J - 1))`` local movement profiles -> ``μ (B, D)``, ``log s² (B, D)``."""
+
+    def __init__(self, cfg: ODMOConfig) -> None:
+        super().__init__()
+        self.cfg = cfg
+        self.lstm = nn.LSTM(cfg.lmp_dim, cfg.encoder_hidden, batch_first=True)
+        width = cfg.encoder_mlp
+        self.head = nn.Sequential(
+            nn.Linear(cfg.encoder_hidden, width),
+            nn.BatchNorm1d(width),
+            nn.PReLU(),
+            nn.Linear(width, width),
+            nn.BatchNorm1d(width),
+            nn.PReLU(),
+            nn.Linear(width, 2 * cfg.code_dim),
+        )
+
+    def forward(self, lmp: Tensor) -> tuple[Tensor, Tensor]:
+        check_tensor(lmp, "lmp", "LMPEncoder", trailing=(self.cfg.lmp_dim,), ndim=3)
+        if self.training and lmp.shape[0] < 2:
+            raise ValueError("LMPEncoder: BatchNorm needs at least 2 clips per batch in training mode")
+        outputs, _ = self.lstm(lmp)
+        mu, logvar = self.head(outputs.mean(dim=1)).chunk(2, dim=-1)
+        return mu, logvar
+
+
+class TrajectoryGenerator(nn.Module):
+    """``code (B, D)``, ``action (B,)``, ``end_point (B, 3)`` -> root trajectory ``(B, T, 3)`` from the
+    origin.
+
+    With ``use_end_point=False`` (the ``-r_e`` ablation) the end point is replaced by zeros.
+    """
+
+    def __init__(self, cfg: ODMOConfig) -> None:
+        super().__init__()
+        self.cfg = cfg
+        hidden = cfg.trajectory_hidden
+        self.embed = nn.Sequential(nn.Linear(cfg.condition_dim + 3 + 1, hidden), nn.PReLU())
+        self.lstm = nn.LSTM(hidden, hidden, batch_first=True)
+        self.velocity = nn.Sequential(nn.Linear(hidden, hidden), nn.PReLU(), nn.Linear(hidden, 3))
+
+    def forward(self, code: Tensor, action: Tensor, end_point: Tensor) -> Tensor:
+        check_tensor(end_point, "end_point", "TrajectoryGenerator", trailing=(3,), ndim=2)
+        if end_point.shape[0] != code.shape[0]:
+            raise ValueError(
+                f"TrajectoryGenerator: end_point must be ({code.shape[0]}, 3), got {tuple(end_point.shape)}"
+            )
+        if not self.cfg.use_end_point:
+            end_point = torch.zeros_like(end_point)
+        steps = self.cfg.n_frames - 1
+        per_clip = torch.cat([class_code_condition(code, action, self.cfg.n_classes), end_point], dim=-1)
+        time = torch.linspace(1.0 / steps, 1.0, steps, dtype=code.dtype)
+        inputs = torch.cat(
+            [per_clip[:, None, :].expand(-1, steps, -1), time[None, :, None].expand(code.shape[0], -1, 1)],
+            dim=-1,
+        )
+        out, _ = self.lstm(self.embed(inputs))
+        return accumulate(self.velocity(out))
+
+
+class MotionGenerator(nn.Module):
+    """``trajectory (B, T, 3)``, ``code (B, D)``, ``action (B,)`` -> motion features ``(B, T, 3 (J - 1) +
+    3)``."""
+
+    def __init__(self, cfg: ODMOConfig) -> None:
+        super().__init__()
+        self.cfg = cfg
+        hidden = cfg.motion_hidden
+        self.trajectory_embed = nn.Sequential(nn.Linear(3, hidden), nn.PReLU())
+        self.trajectory_encoder = nn.LSTM(hidden, hidden, batch_first=True)
+        # the decoder's input embedding PReLU(W [previous frame; condition; time] + b), split in two linear
+        # maps so that the part that does not change from frame to frame is computed once per clip
+        self.previous_embed = nn.Linear(cfg.feature_dim, hidden, bias=False)
+        self.condition_embed = nn.Linear(cfg.condition_dim + 1, hidden)
+        self.embed_activation = nn.PReLU()
+        self.decoder = nn.LSTMCell(hidden, hidden)
+        self.out = nn.Linear(hidden, cfg.feature_dim)
+
+    def forward(
+        self,
+        trajectory: Tensor,
+        code: Tensor,
+        action: Tensor,
+        target: Tensor | None = None,
+        teacher_forcing: float = 0.0,
+        generator: torch.Generator | None = None,
+    ) -> Tensor:
+        """Decode a motion; ``target`` ``(B, T, F)`` (standardised) is needed when ``teacher_forcing > 0``.
+
+        ``generator`` draws which frames are teacher-forced (the global generator when ``None``).
+        """
+        cfg, where = self.cfg, "MotionGenerator"
+        batch = code.shape[0]
+        check_tensor(trajectory, "trajectory", where, trailing=(cfg.n_frames, 3), ndim=3)
+        if trajectory.shape[0] != batch:
+            raise ValueError(f"{where}: trajectory has {trajectory.shape[0]} clips, code has {batch}")
+        check_scalar(teacher_forcing, "teacher_forcing", where, minimum=0, maximum=1)
+        if teacher_forcing > 0:
+            if target is None or target.shape != (batch, cfg.n_frames, cfg.feature_dim):
+                raise ValueError(
+                    f"{where}: teacher forcing needs target ({batch}, {cfg.n_frames}, {cfg.feature_dim}), "
+                    f"got {None if target is None else tuple(target.shape)}"
+                )
+            forced = torch.rand(batch, cfg.n_frames, 1, generator=generator) < teacher_forcing
+        _, (h, c) = self.trajectory_encoder(self.trajectory_embed(trajectory))
+        h, c = h[0], c[0]
+        condition = class_code_condition(code, action, cfg.n_classes)
+        time = torch.arange(cfg.n_frames, dtype=code.dtype) / cfg.n_frames
+        per_frame = self.condition_embed(
+            torch.cat(
+                [
+                    condition[:, None, :].expand(-1, cfg.n_frames, -1),
+                    time[None, :, None].expand(batch, -1, 1),
+                ],
+                dim=-1,
+            )
+        )
+        previous = code.new_zeros(batch, cfg.feature_dim)
+        frames = []
+        for t in range(cfg.n_frames):
+            embedded = self.embed_activation(self.previous_embed(previous) + per_frame[:, t])
+            h, c = self.decoder(embedded, (h, c))
+            frame = self.out(h)
+            frames.append(frame)
+            previous = torch.where(forced[:, t], target[:, t], frame) if teacher_forcing > 0 else frame
+        return torch.stack(frames, dim=1)
 
 
 class ODMOOutput(NamedTuple):
@@ -45,7 +315,7 @@ class ODMOOutput(NamedTuple):
 
 
 class ODMO(nn.Module):
-    """The three networks of ODMO, built from an :class:`~motionlab.models.odmo.config.ODMOConfig`.
+    """The three networks of ODMO, built from an :class:`ODMOConfig`.
 
     The networks work on standardised features: ``standardizer`` (fitted on the training clips with
     :meth:`fit_standardizer` before training, saved with the weights) maps metres to zero mean and unit
@@ -69,14 +339,8 @@ class ODMO(nn.Module):
         self.standardizer.fit(features)
         return self
 
-    def _check_features(self, features: Tensor, func: str) -> None:
-        cfg = self.cfg
-        check_tensor(features, "features", func, (cfg.n_frames, cfg.feature_dim), min_leading=1)
-        if features.dim() != 3:
-            raise ValueError(
-                f"{func}: features must be (B, {cfg.n_frames}, {cfg.feature_dim}), got "
-                f"{tuple(features.shape)}"
-            )
+    def _check_features(self, features: Tensor, where: str) -> None:
+        check_tensor(features, "features", where, trailing=(self.cfg.n_frames, self.cfg.feature_dim), ndim=3)
 
     def encode(self, features: Tensor) -> tuple[Tensor, Tensor]:
         """``μ`` and ``log s²`` ``(B, D)`` of clips ``(B, T, F)`` in metres (only the local movement profile
@@ -98,8 +362,8 @@ class ODMO(nn.Module):
         """Standardised trajectory ``(B, T, 3)`` and motion ``(B, T, F)`` from codes ``(B, D)``, actions
         ``(B,)`` and end points ``(B, 3)`` in metres; ``target`` is the standardised clip for teacher
         forcing."""
-        check_tensor(code, "code", "ODMO.generate", (self.cfg.code_dim,), min_leading=1)
-        check_tensor(end_point, "end_point", "ODMO.generate", (3,), min_leading=1)
+        check_tensor(code, "code", "ODMO.decode", trailing=(self.cfg.code_dim,), ndim=2)
+        check_tensor(end_point, "end_point", "ODMO.decode", trailing=(3,), ndim=2)
         mean, std = self.standardizer.mean[-3:].to(code), self.standardizer.std[-3:].to(code)
         steps = self.trajectory_generator(code, action, (end_point - mean) / std)
         trajectory = steps - mean / std
@@ -122,46 +386,3 @@ class ODMO(nn.Module):
         trajectory, motion = self.decode(code, action, end_point)
         std = self.standardizer.std[-3:].to(code)
         return self.standardizer.inverse(motion), trajectory * std + self.standardizer.mean[-3:].to(code)
-
-
-def sequence_error(prediction: Tensor, target: Tensor) -> Tensor:
-    """``E(a, b)`` of each clip ``(B,)``: squared error averaged over channels, summed over frames ``(B, T,
-    C)``."""
-    if prediction.shape != target.shape or prediction.dim() != 3:
-        raise ValueError(
-            f"sequence_error: prediction and target must both be (B, T, C), got "
-            f"{tuple(prediction.shape)} and {tuple(target.shape)}"
-        )
-    return (prediction - target).pow(2).mean(dim=-1).sum(dim=-1)
-
-
-def joint_objective(
-    model: ODMO, batch: tuple[Tensor, Tensor], step: int, coeffs: dict[str, float]
-) -> dict[str, Tensor]:
-    """Eq. 5 on one class-balanced batch ``(features (B, T, F), action (B,))`` for the training loop.
-
-    ``coeffs["teacher_forcing"]`` is the decoder's teacher-forcing probability at this step. Returns the
-    total as ``"loss"`` and every term (batch means), switched on or not.
-    """
-    features, action = batch
-    cfg = model.cfg
-    out = model(features, action, teacher_forcing=coeffs["teacher_forcing"])
-    target = model.standardizer.transform(features)
-    first, second, same = balanced_pairs(action)
-    terms = {
-        "motion": sequence_error(out.motion, target).mean(),
-        "trajectory": sequence_error(out.trajectory, target[..., -3:]).mean(),
-        "consistency": sequence_error(out.motion[..., -3:], out.trajectory).mean(),
-        "contrastive": contrastive_loss(
-            out.mu[first], out.mu[second], same, cfg.margin, cfg.same_class_slack
-        ).mean(),
-        "prior": prior_term(out.mu, out.logvar, cfg.prior_variance, cfg.prior_target).mean(),
-    }
-    total = terms["motion"] + cfg.prior_weight * terms["prior"]
-    if cfg.use_trajectory_loss:
-        total = total + terms["trajectory"]
-    if cfg.use_consistency:
-        total = total + terms["consistency"]
-    if cfg.use_contrastive:
-        total = total + cfg.contrastive_weight * terms["contrastive"]
-    return {"loss": total, **terms}

@@ -17,6 +17,7 @@ code is nearest (:meth:`ModeSet.nearest_end_points`).
 
 from __future__ import annotations
 
+import numbers
 from collections.abc import Sequence
 from dataclasses import dataclass
 
@@ -25,6 +26,8 @@ from scipy.stats import multivariate_normal
 from sklearn.metrics import silhouette_score
 from sklearn.mixture import GaussianMixture
 from threadpoolctl import threadpool_limits
+
+from motionlab.validation import check_scalar
 
 #: Component counts tried by :func:`discover_modes`, and the silhouette ratio of the selection rule.
 K_VALUES = tuple(range(3, 12))
@@ -74,14 +77,10 @@ class ModeSet:
     labels: np.ndarray
 
     def check_action(self, action: int) -> int:
-        if (
-            isinstance(action, bool)
-            or not isinstance(action, (int, np.integer))
-            or not 0 <= action < len(self.classes)
-        ):
-            raise ValueError(
-                f"ModeSet: action must be a class index in [0, {len(self.classes)}), got {action!r}"
-            )
+        """``action`` as an ``int`` if it is a class index; ``TypeError`` or ``ValueError`` otherwise."""
+        check_scalar(
+            action, "action", "ModeSet", kind=numbers.Integral, minimum=0, maximum=len(self.classes) - 1
+        )
         return int(action)
 
     def global_ids(self, action: np.ndarray, mode: np.ndarray) -> np.ndarray:
@@ -117,6 +116,7 @@ class ModeSet:
         """
         modes = self.classes[self.check_action(action)]
         if mode is not None:
+            check_scalar(mode, "mode", "ModeSet.sample", kind=numbers.Integral)
             if not 0 <= mode < modes.n_modes:
                 raise ValueError(
                     f"ModeSet.sample: action {action} has modes 0..{modes.n_modes - 1}, got {mode}"
@@ -142,8 +142,7 @@ def mode_counts(probabilities: np.ndarray, n: int) -> np.ndarray:
         raise ValueError(
             f"mode_counts: probabilities must be non-negative, finite, with a positive sum, got {p}"
         )
-    if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or n < 0:
-        raise ValueError(f"mode_counts: n must be a non-negative integer, got {n!r}")
+    check_scalar(n, "n", "mode_counts", kind=numbers.Integral, minimum=0)
     exact = p / p.sum() * n
     counts = np.floor(exact).astype(np.int64)
     leftovers = np.argsort(-(exact - counts), kind="stable")[: n - counts.sum()]
@@ -183,8 +182,7 @@ def fit_class_modes(
         raise ValueError(
             f"fit_class_modes: {codes.shape[0]} codes are too few for up to {max(k_values)} components"
         )
-    if not 0 <= min_share < 1:
-        raise ValueError(f"fit_class_modes: min_share must lie in [0, 1), got {min_share}")
+    check_scalar(min_share, "min_share", "fit_class_modes", minimum=0, maximum=1, include_maximum=False)
     fits, scores = {}, {}
     with threadpool_limits(1):  # BLAS threads only fight over the 2 cores on matrices this small
         for k in k_values:

@@ -7,7 +7,8 @@ import pytest
 import torch
 from torch.distributions import Normal, kl_divergence
 
-from motionlab.models.odmo.contrastive import BalancedBatches, balanced_pairs, contrastive_loss, prior_term
+from motionlab.models.odmo.data import BalancedBatches
+from motionlab.models.odmo.losses import balanced_pairs, contrastive_loss, prior_term
 
 
 def test_contrastive_loss_matches_hand_computation():
