@@ -4,12 +4,12 @@ Modules: :mod:`~.data` (features, augmentation, standardisation, windows), :mod:
 autoregressive conditioning and its history dropout), :mod:`~.coupling` (the LSTM affine coupling),
 :mod:`~.linear` (the least-squares first layer), :mod:`~.model` (MoGlow and its config), :mod:`~.losses`
 (NLL per frame), :mod:`~.sampling` (generation: the plain loop, the fused loop, physical units, control
-programmes), :mod:`~.baseline` (Gaussian autoregressive LSTM), :mod:`~.fixed_length` (the fixed-length
+programmes), :mod:`~.baselines` (Gaussian autoregressive LSTM), :mod:`~.fixed_length` (the fixed-length
 Glow of §3.4), :mod:`~.evaluate` (control mismatch, support-foot slide, joint-speed ratio, the control and
 stability tests), :mod:`~.experiment` (the chapter's config, runs and training).
 """
 
-from motionlab.models.moglow.baseline import GaussianAR, GaussianARConfig
+from motionlab.models.moglow.baselines import GaussianAR, GaussianARConfig
 from motionlab.models.moglow.conditioning import (
     autoregressive_conditioning,
     frame_conditioning,

@@ -16,7 +16,7 @@ from torch import nn
 
 from motionlab import config
 from motionlab.evaluation.benchmark import Benchmark
-from motionlab.models.moglow.baseline import GaussianAR, GaussianARConfig
+from motionlab.models.moglow.baselines import GaussianAR, GaussianARConfig
 from motionlab.models.moglow.data import MoGlowDataConfig, PreparedData, data_identity, prepare_data
 from motionlab.models.moglow.losses import nll_per_frame_loss
 from motionlab.models.moglow.model import MoGlow, MoGlowConfig
