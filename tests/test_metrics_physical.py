@@ -100,9 +100,9 @@ def test_speed_scales_with_the_frame_rate():
         ({"contacts": np.ones((10, 3))}, r"foot_skating: contacts must have shape \(10, 4\)"),
         ({"contacts": np.full((10, 4), 0.5)}, "foot_skating: contacts must be booleans or 0/1"),
         ({"feet": [7, 30]}, r"foot_skating: feet must be distinct joint indices in \[0, 22\)"),
-        ({"fps": 0.0}, "foot_skating: fps must be a finite positive number"),
-        ({"height_threshold": -0.1}, "foot_skating: height_threshold must be a finite positive number"),
-        ({"speed_threshold": np.nan}, "foot_skating: speed_threshold must be a finite positive number"),
+        ({"fps": 0.0}, "foot_skating: fps must be greater than 0, got 0.0"),
+        ({"height_threshold": -0.1}, "foot_skating: height_threshold must be greater than 0, got -0.1"),
+        ({"speed_threshold": np.nan}, "foot_skating: speed_threshold must be a finite number, got nan"),
     ],
 )
 def test_foot_skating_bad_inputs(kwargs, match):
