@@ -12,7 +12,8 @@ Messages name the function or class (``where``), the argument (``name``), what w
 and for tensors the index of the first bad entry, e.g. ``quat_mul: q1 contains NaN or infinite values
 (first at index (2, 0))``. All checks take their arguments in the order ``(value, name, where, ...)``.
 
-The array part (:func:`as_float_array`, :func:`as_labels`, :func:`check_same_shape`, :func:`as_rng`) is the
+The array part (:func:`as_float_array`, :func:`check_array`, :func:`as_labels`, :func:`check_same_shape`,
+:func:`as_rng`) is the
 NumPy counterpart of :func:`check_tensor` for code that computes in NumPy (the metrics, the plots): it
 accepts NumPy arrays, torch tensors (any device, with or without grad) or nested lists, and follows the
 same policy.
@@ -248,6 +249,51 @@ def as_float_array(
         )
     if not allow_empty and arr.size == 0:
         raise ValueError(f"{where}: {name} is empty (shape {arr.shape})")
+    return check_finite_array(arr, name, where)
+
+
+def check_array(
+    x: ArrayLike,
+    name: str,
+    where: str,
+    *,
+    trailing: tuple[int | None, ...] = (),
+    min_leading: int = 0,
+    floating: bool = True,
+    finite: bool = True,
+) -> np.ndarray:
+    """``x`` as a NumPy array of its own dtype (float32 stays float32), checked like :func:`check_tensor`.
+
+    Args:
+        x: the input.
+        name, where: the argument and the function, used in error messages.
+        trailing: the sizes its shape must end with (``None``: any size).
+        min_leading: the least number of dimensions before ``trailing``.
+        floating: require a floating-point dtype.
+        finite: reject NaN and infinities (naming the first one's index).
+
+    Raises:
+        TypeError: the dtype is not floating while ``floating``.
+        ValueError: ragged, too few dimensions, a wrong trailing shape, or a NaN or infinite entry.
+    """
+    arr = as_array(x, name, where)
+    if floating and not np.issubdtype(arr.dtype, np.floating):
+        raise TypeError(f"{where}: {name} must have a floating-point dtype, got {arr.dtype}")
+    if arr.ndim < len(trailing) + min_leading:
+        extra = f" with at least {min_leading} leading dimension(s)" if min_leading else ""
+        raise ValueError(f"{where}: {name} must have shape {_layout(trailing)}{extra}, got {arr.shape}")
+    if trailing:
+        actual = arr.shape[arr.ndim - len(trailing) :]
+        if any(want is not None and want != got for want, got in zip(trailing, actual)):
+            raise ValueError(f"{where}: {name} must have shape {_layout(trailing)}, got {arr.shape}")
+    if finite and arr.dtype.kind in "fc":
+        check_finite_array(arr, name, where)
+    return arr
+
+
+def check_finite_array(arr: np.ndarray, name: str, where: str) -> np.ndarray:
+    """Raise ``ValueError`` if ``arr`` holds a NaN or an infinity (naming the first one's index); return
+    ``arr``."""
     finite = np.isfinite(arr)
     if not finite.all():
         index = tuple(int(i) for i in np.argwhere(~finite)[0])
@@ -269,10 +315,7 @@ def as_labels(x: ArrayLike, name: str, where: str, *, length: int | None = None)
     if arr.size == 0:
         raise ValueError(f"{where}: {name} is empty (shape {arr.shape})")
     if arr.dtype.kind == "f":
-        finite = np.isfinite(arr)
-        if not finite.all():
-            index = int(np.argwhere(~finite)[0, 0])
-            raise ValueError(f"{where}: {name} contains NaN or infinite values (first at index ({index},))")
+        check_finite_array(arr, name, where)
         if not np.array_equal(arr, np.round(arr)):
             raise ValueError(f"{where}: {name} must hold integer labels, got non-integer floats")
         arr = arr.astype(np.int64)
