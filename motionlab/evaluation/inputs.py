@@ -37,6 +37,4 @@ def hip_heading(positions: Tensor) -> Tensor:
 def body_frame_features(positions: Tensor) -> Tensor:
     """Classifier input ``(..., T, 67)`` from global joint positions ``(..., T, 22, 3)`` (metres, z up)."""
     check_tensor(positions, "positions", "body_frame_features", trailing=(22, 3), min_leading=1)
-    if not bool(torch.isfinite(positions).all()):
-        raise ValueError("body_frame_features: positions contain NaN or inf")
     return to_moglow(positions, yaw_to_quat(hip_heading(positions)))
