@@ -159,3 +159,10 @@ def test_bone_length_error_hand_value():
 def test_bone_length_error_bad_inputs(parents, reference, match):
     with pytest.raises(ValueError, match=match):
         bone_length_error(np.zeros((2, 3, 3)), parents, reference)
+
+
+def test_non_integer_parents_are_a_type_error():
+    with pytest.raises(
+        TypeError, match="bone_lengths: parents must be 3 integers .one per joint., got dtype float64"
+    ):
+        bone_lengths(np.zeros((2, 3, 3)), [-1.0, 0.0, 1.0])

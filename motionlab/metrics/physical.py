@@ -129,7 +129,9 @@ def foot_skating(
 
 def _parents(parents: ArrayLike | Sequence[int], n_joints: int, func: str) -> np.ndarray:
     p = np.asarray(parents)
-    if p.ndim != 1 or p.shape[0] != n_joints or p.dtype.kind not in "iu":
+    if p.size and p.dtype.kind not in "iu":  # an empty list is a wrong length, not a wrong type
+        raise TypeError(f"{func}: parents must be {n_joints} integers (one per joint), got dtype {p.dtype}")
+    if p.ndim != 1 or p.shape[0] != n_joints:
         raise ValueError(f"{func}: parents must be {n_joints} integers (one per joint), got {p.tolist()}")
     joints = np.arange(n_joints)
     if (p < -1).any() or (p >= n_joints).any() or (p == joints).any() or not (p == -1).any():
