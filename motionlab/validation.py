@@ -197,13 +197,15 @@ def check_none(bad: torch.Tensor, what: str, where: str) -> None:
 
 
 def as_array(x: ArrayLike, name: str, where: str) -> np.ndarray:
-    """``x`` as a NumPy array, unconverted dtype (a tensor is detached and copied to the CPU).
+    """``x`` as a NumPy array, unconverted dtype (a tensor is detached and copied to the CPU; bfloat16, which
+    NumPy lacks, becomes float32 exactly).
 
     Raises:
         ValueError: ``x`` is a ragged nested list (not a rectangular array).
     """
     if isinstance(x, torch.Tensor):
-        return x.detach().cpu().numpy()
+        x = x.detach().cpu()
+        return (x.float() if x.dtype == torch.bfloat16 else x).numpy()
     try:
         return np.asarray(x)
     except ValueError as exc:  # ragged nested lists

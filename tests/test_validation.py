@@ -270,3 +270,9 @@ def test_as_rng():
             TypeError, match="f: rng must be a numpy.random.Generator or a non-negative integer"
         ):
             as_rng(bad, "f")
+
+
+def test_as_array_converts_bfloat16_exactly():
+    x = torch.tensor([1.5, -2.25], dtype=torch.bfloat16)
+    assert as_array(x, "x", "f").dtype == np.float32
+    assert as_float_array(x, "x", "f").tolist() == [1.5, -2.25]

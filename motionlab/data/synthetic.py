@@ -88,7 +88,8 @@ def generate(
         fps: frames per second, at least :data:`MIN_FPS`.
         split: ``"train"``, ``"val"`` or ``"test"``: which family of random streams to draw from.
     Raises:
-        ValueError: on a bad argument.
+        TypeError: an argument of the wrong type (a float seed, a bool count...).
+        ValueError: an argument out of range, or an unknown split.
     """
     _check_arguments(seed, n_per_mode, seconds, fps, split)
     n_frames = int(round(seconds * fps))
