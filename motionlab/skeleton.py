@@ -15,6 +15,7 @@ frame. The root's offset is zero: the root (pelvis) is placed by ``root_position
 
 from __future__ import annotations
 
+import numbers
 from collections.abc import Sequence
 from dataclasses import dataclass, fields
 
@@ -22,6 +23,7 @@ import numpy as np
 import torch
 
 from motionlab.geometry import quat_apply, quat_mul, quat_normalize
+from motionlab.validation import check_choice, check_finite, check_finite_array, check_scalar, check_tensor
 
 #: The 22 joints, named and ordered like the SMPL body.
 JOINT_NAMES: tuple[str, ...] = (
@@ -90,9 +92,7 @@ class BodyMeasurements:
 
     def __post_init__(self) -> None:
         for f in fields(self):
-            value = getattr(self, f.name)
-            if not np.isfinite(value) or value < 0:
-                raise ValueError(f"BodyMeasurements.{f.name} must be a finite length >= 0, got {value!r}")
+            check_scalar(getattr(self, f.name), f.name, "BodyMeasurements", minimum=0)
 
     @property
     def ankle_height(self) -> float:
@@ -226,8 +226,7 @@ class Skeleton:
         offsets = np.array(self.offsets, dtype=np.float64)
         if offsets.shape != (len(names), 3):
             raise ValueError(f"Skeleton: offsets must have shape ({len(names)}, 3), got {offsets.shape}")
-        if not np.isfinite(offsets).all():
-            raise ValueError("Skeleton: offsets contain NaN or infinite values")
+        check_finite_array(offsets, "offsets", "Skeleton")
         object.__setattr__(self, "names", names)
         object.__setattr__(self, "parents", parents)
         object.__setattr__(self, "offsets", offsets)
@@ -256,13 +255,15 @@ class Skeleton:
 def body_skeleton(body: int | str) -> Skeleton:
     """The 22-joint skeleton of body type ``body`` (an index into, or a name from, :data:`BODY_TYPES`)."""
     if isinstance(body, str):
-        if body not in BODY_TYPES:
-            raise ValueError(f"body_skeleton: unknown body type {body!r}; expected one of {BODY_TYPES}")
-        body = BODY_TYPES.index(body)
-    if isinstance(body, bool) or not isinstance(body, (int, np.integer)) or not 0 <= body < len(BODY_TYPES):
-        raise ValueError(
-            f"body_skeleton: body must be an index in [0, {len(BODY_TYPES)}) or a name, got {body!r}"
-        )
+        body = BODY_TYPES.index(check_choice(body, "body (a body type name)", "body_skeleton", BODY_TYPES))
+    check_scalar(
+        body,
+        "body (an index or a name)",
+        "body_skeleton",
+        kind=numbers.Integral,
+        minimum=0,
+        maximum=len(BODY_TYPES) - 1,
+    )
     return Skeleton(JOINT_NAMES, PARENTS, BODY_MEASUREMENTS[int(body)].offsets())
 
 
@@ -289,8 +290,7 @@ def joint_impact_weights(skeleton: Skeleton | None = None, leaf_floor: float = 0
         float64 ``(J,)``, positive, mean 1.
     """
     skeleton = average_skeleton() if skeleton is None else skeleton
-    if not 0.0 <= leaf_floor <= 1.0:
-        raise ValueError(f"joint_impact_weights: leaf_floor must be in [0, 1], got {leaf_floor!r}")
+    check_scalar(leaf_floor, "leaf_floor", "joint_impact_weights", minimum=0, maximum=1)
     bones = skeleton.bone_lengths()
     reach = np.zeros(skeleton.n_joints)
     for j in range(skeleton.n_joints - 1, 0, -1):  # children come after parents
@@ -322,14 +322,11 @@ def forward_kinematics(
     Returns:
         ``positions (..., J, 3)`` and ``global_rotations (..., J, 4)``.
     Raises:
+        TypeError: ``rotations`` is not a floating-point tensor.
         ValueError: on mismatched shapes, a bad parent order, non-finite values or zero quaternions.
     """
     where = "forward_kinematics"
-    if not isinstance(rotations, torch.Tensor) or rotations.dim() < 2 or rotations.shape[-1] != 4:
-        shape = tuple(rotations.shape) if isinstance(rotations, torch.Tensor) else type(rotations).__name__
-        raise ValueError(f"{where}: rotations must be a tensor (..., J, 4), got {shape}")
-    if not rotations.is_floating_point():
-        raise ValueError(f"{where}: rotations must be floating point, got {rotations.dtype}")
+    check_tensor(rotations, "rotations", where, trailing=(None, 4), finite=False)
     n_joints = rotations.shape[-2]
     batch = rotations.shape[:-2]
     order = _check_parent_order(
@@ -354,8 +351,7 @@ def forward_kinematics(
             f"{where}: offsets {tuple(offsets.shape)} do not broadcast to the batch {tuple(batch)}"
         ) from exc
     for name, value in (("rotations", rotations), ("root_positions", root_positions), ("offsets", offsets)):
-        if not torch.isfinite(value).all():
-            raise ValueError(f"{where}: {name} contains NaN or infinite values")
+        check_finite(value, name, where)
     rotations = quat_normalize(rotations)
     global_rotations = [rotations[..., 0, :]]
     positions = [root_positions]

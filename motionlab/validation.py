@@ -11,18 +11,31 @@ of scikit-learn's ``check_scalar``. The policy:
 Messages name the function or class (``where``), the argument (``name``), what was expected and what came,
 and for tensors the index of the first bad entry, e.g. ``quat_mul: q1 contains NaN or infinite values
 (first at index (2, 0))``. All checks take their arguments in the order ``(value, name, where, ...)``.
+
+The array part (:func:`as_float_array`, :func:`check_array`, :func:`as_labels`, :func:`check_same_shape`,
+:func:`as_rng`) is the
+NumPy counterpart of :func:`check_tensor` for code that computes in NumPy (the metrics, the plots): it
+accepts NumPy arrays, torch tensors (any device, with or without grad) or nested lists, and follows the
+same policy.
 """
 
 from __future__ import annotations
 
 import math
 import numbers
-from collections.abc import Collection
+from collections.abc import Collection, Sequence
 from typing import Any, TypeVar
 
+import numpy as np
 import torch
 
 T = TypeVar("T")
+
+ArrayLike = np.ndarray | torch.Tensor | Sequence
+"""What the NumPy checks accept: a NumPy array, a torch tensor, or a (nested) list of numbers."""
+
+RngLike = np.random.Generator | int
+"""A NumPy generator, or a non-negative integer seed for one."""
 
 
 def _first_index(mask: torch.Tensor) -> tuple[int, ...]:
@@ -178,3 +191,165 @@ def check_none(bad: torch.Tensor, what: str, where: str) -> None:
     set."""
     if bool(bad.any()):
         raise ValueError(f"{where}: {what} at index {_first_index(bad)}")
+
+
+# --- NumPy arrays -------------------------------------------------------------------------------------------
+
+
+def as_array(x: ArrayLike, name: str, where: str) -> np.ndarray:
+    """``x`` as a NumPy array, unconverted dtype (a tensor is detached and copied to the CPU; bfloat16, which
+    NumPy lacks, becomes float32 exactly).
+
+    Raises:
+        ValueError: ``x`` is a ragged nested list (not a rectangular array).
+    """
+    if isinstance(x, torch.Tensor):
+        x = x.detach().cpu()
+        return (x.float() if x.dtype == torch.bfloat16 else x).numpy()
+    try:
+        return np.asarray(x)
+    except ValueError as exc:  # ragged nested lists
+        raise ValueError(f"{where}: {name} is not a rectangular array ({exc})") from exc
+
+
+def as_float_array(
+    x: ArrayLike,
+    name: str,
+    where: str,
+    *,
+    ndim: int | None = None,
+    min_ndim: int | None = None,
+    layout: str = "",
+    allow_empty: bool = False,
+) -> np.ndarray:
+    """``x`` as a finite float64 array, checked for its number of dimensions and (unless ``allow_empty``)
+    non-empty.
+
+    Args:
+        x: the input.
+        name, where: the argument and the function, used in error messages.
+        ndim: exact number of dimensions required (or ``None``).
+        min_ndim: minimum number of dimensions required (or ``None``).
+        layout: the expected layout for messages, e.g. ``"(N, D)"``.
+        allow_empty: accept an array without entries.
+
+    Raises:
+        TypeError: ``x`` does not hold real numbers (booleans and integers are converted).
+        ValueError: ragged, a wrong number of dimensions, empty, or a NaN or infinite entry (the message
+            names the first one's index).
+    """
+    arr = as_array(x, name, where)
+    if arr.dtype.kind not in "biuf":
+        raise TypeError(f"{where}: {name} must hold real numbers, got dtype {arr.dtype}")
+    arr = arr.astype(np.float64, copy=False)
+    hint = f" {layout}" if layout else ""
+    if ndim is not None and arr.ndim != ndim:
+        raise ValueError(f"{where}: {name} must be {ndim}-D{hint}, got shape {arr.shape}")
+    if min_ndim is not None and arr.ndim < min_ndim:
+        raise ValueError(
+            f"{where}: {name} must have at least {min_ndim} dimensions{hint}, got shape {arr.shape}"
+        )
+    if not allow_empty and arr.size == 0:
+        raise ValueError(f"{where}: {name} is empty (shape {arr.shape})")
+    return check_finite_array(arr, name, where)
+
+
+def check_array(
+    x: ArrayLike,
+    name: str,
+    where: str,
+    *,
+    trailing: tuple[int | None, ...] = (),
+    min_leading: int = 0,
+    floating: bool = True,
+    finite: bool = True,
+) -> np.ndarray:
+    """``x`` as a NumPy array of its own dtype (float32 stays float32), checked like :func:`check_tensor`.
+
+    Args:
+        x: the input.
+        name, where: the argument and the function, used in error messages.
+        trailing: the sizes its shape must end with (``None``: any size).
+        min_leading: the least number of dimensions before ``trailing``.
+        floating: require a floating-point dtype.
+        finite: reject NaN and infinities (naming the first one's index).
+
+    Raises:
+        TypeError: the dtype is not floating while ``floating``.
+        ValueError: ragged, too few dimensions, a wrong trailing shape, or a NaN or infinite entry.
+    """
+    arr = as_array(x, name, where)
+    if floating and not np.issubdtype(arr.dtype, np.floating):
+        raise TypeError(f"{where}: {name} must have a floating-point dtype, got {arr.dtype}")
+    if arr.ndim < len(trailing) + min_leading:
+        extra = f" with at least {min_leading} leading dimension(s)" if min_leading else ""
+        raise ValueError(f"{where}: {name} must have shape {_layout(trailing)}{extra}, got {arr.shape}")
+    if trailing:
+        actual = arr.shape[arr.ndim - len(trailing) :]
+        if any(want is not None and want != got for want, got in zip(trailing, actual)):
+            raise ValueError(f"{where}: {name} must have shape {_layout(trailing)}, got {arr.shape}")
+    if finite and arr.dtype.kind in "fc":
+        check_finite_array(arr, name, where)
+    return arr
+
+
+def check_finite_array(arr: np.ndarray, name: str, where: str) -> np.ndarray:
+    """Raise ``ValueError`` if ``arr`` holds a NaN or an infinity (naming the first one's index); return
+    ``arr``."""
+    finite = np.isfinite(arr)
+    if not finite.all():
+        index = tuple(int(i) for i in np.argwhere(~finite)[0])
+        raise ValueError(f"{where}: {name} contains NaN or infinite values (first at index {index})")
+    return arr
+
+
+def as_labels(x: ArrayLike, name: str, where: str, *, length: int | None = None) -> np.ndarray:
+    """``x`` as a non-empty 1-D array of labels (integers, booleans or strings; integral floats become
+    ``int64``), optionally of a given length.
+
+    Raises:
+        TypeError: the dtype holds neither integers, booleans, strings nor floats.
+        ValueError: not 1-D, empty, NaN or infinite, non-integral floats, or the wrong length.
+    """
+    arr = as_array(x, name, where)
+    if arr.ndim != 1:
+        raise ValueError(f"{where}: {name} must be 1-D (N,), got shape {arr.shape}")
+    if arr.size == 0:
+        raise ValueError(f"{where}: {name} is empty (shape {arr.shape})")
+    if arr.dtype.kind == "f":
+        check_finite_array(arr, name, where)
+        if not np.array_equal(arr, np.round(arr)):
+            raise ValueError(f"{where}: {name} must hold integer labels, got non-integer floats")
+        arr = arr.astype(np.int64)
+    elif arr.dtype.kind not in "biuUS":
+        raise TypeError(f"{where}: {name} must hold integer or string labels, got dtype {arr.dtype}")
+    if length is not None and arr.shape[0] != length:
+        raise ValueError(f"{where}: {name} must have one entry per item ({length}), got {arr.shape[0]}")
+    return arr
+
+
+def check_same_shape(a: Any, b: Any, names: tuple[str, str], where: str) -> None:
+    """Raise ``ValueError`` when two arrays (or tensors) differ in shape."""
+    if a.shape != b.shape:
+        raise ValueError(
+            f"{where}: {names[0]} and {names[1]} must have the same shape, "
+            f"got {tuple(a.shape)} and {tuple(b.shape)}"
+        )
+
+
+def as_rng(rng: RngLike, where: str) -> np.random.Generator:
+    """A NumPy generator from a generator or a non-negative integer seed.
+
+    Raises:
+        TypeError: ``rng`` is neither a generator nor an integer (a bool is not a seed).
+        ValueError: a negative seed.
+    """
+    if isinstance(rng, np.random.Generator):
+        return rng
+    if isinstance(rng, bool) or not isinstance(rng, (int, np.integer)):
+        raise TypeError(
+            f"{where}: rng must be a numpy.random.Generator or a non-negative integer seed, got {rng!r}"
+        )
+    if rng < 0:
+        raise ValueError(f"{where}: rng must be a non-negative integer seed, got {rng!r}")
+    return np.random.default_rng(int(rng))

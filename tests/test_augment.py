@@ -191,7 +191,7 @@ def test_random_yaw_is_seeded_and_uniform(clips):
 def test_augment_errors():
     with pytest.raises(ValueError, match=r"mirror_positions: permutation must be a permutation of 5"):
         mirror_positions(torch.zeros(5, 3))
-    with pytest.raises(ValueError, match=r"random_mirror: p must be a probability"):
+    with pytest.raises(ValueError, match=r"random_mirror: p \(a probability\) must be in \[0, 1\], got"):
         random_mirror(torch.zeros(2, 22, 3), torch.zeros(2, 22, 4), torch.Generator(), p=1.5)
     with pytest.raises(ValueError, match=r"rotate_yaw: angle must have the clips' leading shape \(2,\)"):
         rotate_yaw(torch.zeros(2, 3, 22, 3), torch.ones(2, 3, 22, 4), torch.zeros(3))

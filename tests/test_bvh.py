@@ -411,8 +411,12 @@ def test_rotation_order_argument_and_validation(tmp_path: Path) -> None:
     torch.testing.assert_close(
         again.reorder(motion.joint_names).global_positions(), motion.global_positions(), rtol=0, atol=1e-5
     )
-    with pytest.raises(ValueError, match="rotation_order"):
+    with pytest.raises(
+        ValueError, match="save_bvh: rotation_order must be a permutation of 'XYZ', got 'XYX'"
+    ):
         save_bvh(motion, tmp_path / "bad.bvh", rotation_order="XYX")
+    with pytest.raises(TypeError, match="save_bvh: rotation_order must be a string, got list"):
+        save_bvh(motion, tmp_path / "bad.bvh", rotation_order=["X", "Y", "Z"])
 
 
 def test_writer_refuses_what_the_channels_cannot_express(tmp_path: Path) -> None:

@@ -63,14 +63,16 @@ def test_moving_joints_use_their_translations() -> None:
         ({"parents": (0, 0, 1)}, r"parents\[0\]: joint 0 must be the root"),
         ({"parents": (-1, 2, 0)}, r"parents\[1\]: must be the index of an earlier joint"),
         ({"offsets": np.zeros((3, 2))}, r"offsets: expected shape \(3, 3\)"),
-        ({"offsets": [[0, 0, 0], [1, 0, np.nan], [1, 0, 0]]}, "offsets: contains NaN"),
+        (
+            {"offsets": [[0, 0, 0], [1, 0, np.nan], [1, 0, 0]]},
+            r"Motion: offsets contains NaN or infinite values \(first at index \(1, 2\)\)",
+        ),
         ({"rotations": torch.ones(3, 3, 4)}, "frame 0, joint 0 .* is not a unit quaternion"),
         ({"rotations": torch.zeros(0, 3, 4)}, "at least one frame"),
         ({"rotations": torch.ones(3, 4)}, r"rotations: expected shape \(T, 3, 4\)"),
         ({"root_positions": torch.zeros(2, 3)}, r"root_positions: expected shape \(3, 3\)"),
-        ({"root_positions": [["a", "b", "c"]] * 3}, "not a numeric array"),
-        ({"fps": 0}, "fps: must be a positive number"),
-        ({"fps": float("nan")}, "fps: must be a positive number"),
+        ({"fps": 0}, "Motion: fps must be greater than 0, got 0"),
+        ({"fps": float("nan")}, "Motion: fps must be a finite number, got nan"),
         ({"channels": [("Xrotation",), ("Xrotation", "Xrotation"), ()]}, "listed twice"),
         ({"channels": [("Wrotation",), (), ()]}, "unknown channel"),
         ({"channels": [()]}, "expected 3 entries"),
@@ -88,6 +90,20 @@ def test_moving_joints_use_their_translations() -> None:
 )
 def test_validation_names_the_problem(change: dict, message: str) -> None:
     with pytest.raises(ValueError, match=message):
+        replace(chain(), **change)
+
+
+@pytest.mark.parametrize(
+    "change, message",
+    [
+        ({"root_positions": [["a", "b", "c"]] * 3}, "Motion.root_positions: not a numeric array"),
+        ({"parents": (-1, 0.0, 1)}, r"Motion: parents\[1\] must be an integer, got 0.0 \(float\)"),
+        ({"joint_names": ("root", 7, "b")}, r"Motion.joint_names\[1\]: 7 is not a string"),
+        ({"fps": True}, "Motion: fps must be a real number, got True"),
+    ],
+)
+def test_wrong_types_raise_type_error(change: dict, message: str) -> None:
+    with pytest.raises(TypeError, match=message):
         replace(chain(), **change)
 
 
@@ -145,7 +161,7 @@ def test_resample_interpolates_between_frames() -> None:
     )
     up = replace(motion, fps=10).resample(30)
     assert up.num_frames == 4  # (2 - 1) frames of 0.1 s = 3 frames of 1/30 s, plus the first
-    with pytest.raises(ValueError, match="fps must be a positive number"):
+    with pytest.raises(ValueError, match="Motion.resample: fps must be greater than 0, got -1"):
         motion.resample(-1)
 
 
@@ -167,5 +183,5 @@ def test_reorder_permutes_everything() -> None:
 def test_scaled() -> None:
     motion = load_bvh(CMU_FILE)[:3]
     torch.testing.assert_close(motion.scaled(0.5).global_positions(), 0.5 * motion.global_positions())
-    with pytest.raises(ValueError, match="factor"):
+    with pytest.raises(ValueError, match="Motion.scaled: factor must be greater than 0, got 0"):
         motion.scaled(0)

@@ -44,8 +44,10 @@ def test_window_counts(n_frames, length, stride, count):
 def test_window_longer_than_clip_raises(clips):
     with pytest.raises(ValueError, match="window length 25 is longer than the clips \\(24 frames\\)"):
         motion_windows(clips, representation("odmo"), length=25, stride=1)
-    with pytest.raises(ValueError, match="stride must be a positive integer, got 0"):
+    with pytest.raises(ValueError, match="window_starts: stride must be at least 1, got 0"):
         window_starts(24, 8, 0)
+    with pytest.raises(TypeError, match=r"window_starts: length must be an integer, got 8.0 \(float\)"):
+        window_starts(24, 8.0, 1)
 
 
 @pytest.mark.parametrize("name", REPRESENTATION_NAMES)
@@ -106,8 +108,16 @@ def test_empty_split_raises():
         split_clips(torch.zeros(4, dtype=torch.long), (0.8, 0.1, 0.1))
     with pytest.raises(ValueError, match="fractions must be three positive numbers"):
         split_clips(torch.zeros(40, dtype=torch.long), (0.8, 0.2, 0.0))
-    with pytest.raises(ValueError, match="mode must be a 1-D integer array"):
+    with pytest.raises(
+        TypeError, match="split_clips: mode must be a 1-D integer array .N,., got dtype torch.float32"
+    ):
         split_clips(torch.zeros(40), (0.8, 0.1, 0.1))
+    with pytest.raises(
+        ValueError, match=r"split_clips: mode must be a 1-D integer array \(N,\), got shape \(4, 10\)"
+    ):
+        split_clips(torch.zeros(4, 10, dtype=torch.long), (0.8, 0.1, 0.1))
+    with pytest.raises(ValueError, match="split_clips: seed must be at least 0, got -1"):
+        split_clips(torch.zeros(40, dtype=torch.long), (0.8, 0.1, 0.1), seed=-1)
 
 
 def test_standardizer_round_trip_floor_and_state_dict():
@@ -136,10 +146,16 @@ def test_standardizer_errors():
         standardizer.transform(torch.zeros(2, 3))
     with pytest.raises(ValueError, match=r"Standardizer.fit: features must have shape \(\.\.\., 3\)"):
         standardizer.fit(torch.zeros(5, 4))
-    with pytest.raises(ValueError, match="contains NaN"):
+    with pytest.raises(
+        ValueError, match=r"Standardizer.fit: features contains NaN .* \(first at index \(0, 2\)\)"
+    ):
         standardizer.fit(torch.tensor([[0.0, 1.0, float("nan")], [0.0, 1.0, 2.0]]))
-    with pytest.raises(ValueError, match="min_std must be a finite positive number"):
+    with pytest.raises(TypeError, match="Standardizer.fit: features must have a floating-point dtype"):
+        standardizer.fit(torch.zeros(5, 3, dtype=torch.long))
+    with pytest.raises(ValueError, match="Standardizer: min_std must be greater than 0, got 0.0"):
         Standardizer(3, min_std=0.0)
+    with pytest.raises(TypeError, match="Standardizer: n_features must be an integer"):
+        Standardizer(3.0)
 
 
 def test_build_splits_uses_train_statistics_only(clips):

@@ -51,8 +51,12 @@ def test_features_reject_bad_input():
     bad = torch.zeros(1, 2, 22, 3)
     bad[..., 1, 1] = 0.1
     bad[0, 0, 5, 0] = float("nan")
-    with pytest.raises(ValueError, match="NaN"):
+    with pytest.raises(
+        ValueError, match=r"body_frame_features: positions contains NaN .* \(first at index \(0, 0, 5, 0\)\)"
+    ):
         body_frame_features(bad)
+    with pytest.raises(TypeError, match="body_frame_features: positions must have a floating-point dtype"):
+        body_frame_features(torch.zeros(1, 2, 22, 3, dtype=torch.long))
 
 
 @pytest.mark.parametrize("kind", ["conv", "gru"])
@@ -68,15 +72,25 @@ def test_classifier_shapes_and_deterministic_features(kind):
     assert model.features(x).shape == (4, model.feature_dim)
     acts = model.layer_activations(x)
     assert len(acts) == (4 if kind == "conv" else 2)
-    with pytest.raises(ValueError, match="expected frames"):
+    with pytest.raises(
+        ValueError, match=r"MotionClassifier: x must have shape \(\.\.\., 7\), got \(4, 9, 6\)"
+    ):
         model(torch.randn(4, 9, 6))
+    with pytest.raises(ValueError, match="MotionClassifier: x must be 3-dimensional"):
+        model(torch.randn(9, 7))
+    with pytest.raises(ValueError, match="MotionClassifier: x must hold at least one frame"):
+        model(torch.randn(4, 0, 7))
 
 
 def test_classifier_config_is_validated():
     with pytest.raises(ValueError, match="kind"):
         ClassifierConfig("rnn", 3, {"a": 2})
-    with pytest.raises(ValueError, match="classes"):
+    with pytest.raises(ValueError, match=r"ClassifierConfig: classes\['a'\] must be at least 2, got 1"):
         ClassifierConfig("gru", 3, {"a": 1})
+    with pytest.raises(ValueError, match="ClassifierConfig: classes needs at least one head"):
+        ClassifierConfig("gru", 3, {})
+    with pytest.raises(TypeError, match="ClassifierConfig: hidden must be an integer"):
+        ClassifierConfig("gru", 3, {"a": 2}, hidden=16.0)
 
 
 def test_evaluator_learns_actions_and_is_cached(clips):

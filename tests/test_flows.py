@@ -137,19 +137,29 @@ def test_affine_transform_is_invertible_and_its_logdet_is_log_scale(raw, shift, 
 
 
 @pytest.mark.parametrize(
-    "bad, message",
+    "bad, error, message",
     [
-        (torch.randn(2, 5), "shape"),
-        (torch.randn(2, 4, 3), "5 channels"),
-        (torch.full((2, 5, 3), float("nan")), "NaN"),
-        (torch.ones(2, 5, 3, dtype=torch.int64), "floating"),
+        (torch.randn(2, 5), ValueError, r"x must be 3-dimensional, got shape \(2, 5\)"),
+        (torch.randn(2, 4, 3), ValueError, r"x must have shape \(\.\.\., 5, \*\), got \(2, 4, 3\)"),
+        (
+            torch.full((2, 5, 3), float("nan")),
+            ValueError,
+            r"x contains NaN or infinite values \(first at index \(0, 0, 0\)\)",
+        ),
+        (
+            torch.ones(2, 5, 3, dtype=torch.int64),
+            TypeError,
+            "x must have a floating-point dtype, got torch.int64",
+        ),
+        ([[[0.0]]], TypeError, "x must be a torch.Tensor, got list"),
     ],
 )
-def test_bad_inputs_raise_clear_errors(bad, message):
+def test_bad_inputs_raise_clear_errors(bad, error, message):
     for layer in (ActNorm(5), InvertibleConv1x1(5), AffineCoupling(5)):
-        with pytest.raises(ValueError, match=message):
+        name = type(layer).__name__
+        with pytest.raises(error, match=f"{name}.forward: {message}"):
             layer(bad)
-        with pytest.raises(ValueError, match=message):
+        with pytest.raises(error, match=f"{name}.inverse: {message.replace('x ', 'y ', 1)}"):
             layer.inverse(bad)
 
 

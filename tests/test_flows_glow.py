@@ -77,9 +77,15 @@ def test_glow_config_and_input_errors():
     glow = _small_glow()
     with pytest.raises(ValueError, match="8 frames"):
         glow.log_prob(torch.randn(1, 4, 16, dtype=torch.float64), torch.randn(1, 2, 16, dtype=torch.float64))
-    with pytest.raises(ValueError, match="temperature"):
+    with pytest.raises(ValueError, match="Glow.sample: temperature must be at least 0, got -1.0"):
         glow.sample(torch.randn(1, 2, 8, dtype=torch.float64), temperature=-1.0)
-    with pytest.raises(ValueError, match="NaN"):
+    with pytest.raises(TypeError, match="Glow.sample: temperature must be a real number"):
+        glow.sample(torch.randn(1, 2, 8, dtype=torch.float64), temperature="hot")
+    with pytest.raises(TypeError, match="GlowConfig: levels must be an integer, got 2.0"):
+        GlowConfig(channels=4, length=8, levels=2.0)
+    with pytest.raises(
+        ValueError, match=r"Glow.forward: x contains NaN or infinite values \(first at index \(0, 0, 0\)\)"
+    ):
         nan = torch.full((1, 4, 8), float("nan"), dtype=torch.float64)
         glow.log_prob(nan, torch.zeros(1, 2, 8, dtype=torch.float64))
 
@@ -91,8 +97,12 @@ def test_standard_normal_matches_torch_distributions():
     assert torch.allclose(prior.log_prob(z), expected)
     sample = prior.sample((20000, 2), temperature=0.5, generator=torch.Generator().manual_seed(0))
     assert abs(float(sample.std()) - 0.5) < 0.01
-    with pytest.raises(ValueError):
+    with pytest.raises(
+        ValueError, match="StandardNormal.sample: temperature must be a finite number, got nan"
+    ):
         prior.sample((2,), temperature=float("nan"))
+    with pytest.raises(TypeError, match="StandardNormal.log_prob: z must be a torch.Tensor"):
+        prior.log_prob([0.0, 1.0])
 
 
 def test_diagonal_gaussian_matches_scipy():
@@ -111,5 +121,7 @@ def test_diagonal_gaussian_matches_scipy():
     )
     np.testing.assert_allclose(model.log_prob(test).numpy(), expected.sum(axis=(1, 2)), rtol=1e-6)
     assert math.isfinite(float(model.log_prob(test).sum()))
-    with pytest.raises(ValueError, match="3 channels"):
+    with pytest.raises(
+        ValueError, match=r"DiagonalGaussian.log_prob: x must have shape \(\.\.\., 3, \*\), got \(1, 2, 7\)"
+    ):
         model.log_prob(torch.randn(1, 2, 7))

@@ -55,14 +55,20 @@ def test_a_few_training_steps_lower_the_nll_and_sampling_is_seeded():
 
 def test_toy_inputs_are_checked():
     flow = ToyFlow(ToyFlowConfig(steps=1, hidden=4))
-    with pytest.raises(ValueError, match=r"\(n, 2\)"):
+    with pytest.raises(
+        ValueError, match=r"ToyFlow.log_prob: points must have shape \(\.\.\., 2\), got \(3, 3\)"
+    ):
         flow.log_prob(torch.zeros(3, 3))
-    with pytest.raises(ValueError, match="NaN"):
+    with pytest.raises(
+        ValueError, match=r"ToyFlow.log_prob: points contains NaN .* \(first at index \(0, 0\)\)"
+    ):
         flow.log_prob(torch.tensor([[float("nan"), 0.0]]))
-    with pytest.raises(ValueError):
+    with pytest.raises(ValueError, match="grid_density: resolution must be at least 2, got 1"):
         grid_density(flow, resolution=1)
-    with pytest.raises(ValueError):
+    with pytest.raises(ValueError, match="ToyFlowConfig: steps must be at least 1, got 0"):
         ToyFlowConfig(steps=0)
+    with pytest.raises(TypeError, match="ToyFlow.sample: n must be an integer, got 2.5"):
+        flow.sample(2.5)
 
 
 def test_toy_temperature_widget_callback_draws_seeded_samples():

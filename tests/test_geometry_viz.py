@@ -32,10 +32,14 @@ def test_show_interpolation_draws_both_paths_and_slerp_angle_is_linear():
 
 def test_plot_interpolation_checks_its_arguments():
     q = torch.tensor([1.0, 0, 0, 0])
-    with pytest.raises(ValueError, match="t must be in"):
+    with pytest.raises(ValueError, match=r"plot_interpolation: t must be in \[0, 1\], got 1.5"):
         plot_interpolation(q, q, 1.5)
-    with pytest.raises(ValueError, match="q1 must be one quaternion"):
+    with pytest.raises(ValueError, match=r"plot_interpolation: q1 must be 1-dimensional, got shape \(2, 4\)"):
         plot_interpolation(q, torch.ones(2, 4), 0.5)
+    with pytest.raises(ValueError, match=r"plot_interpolation: q1 must have shape \(\.\.\., 4\), got \(3,\)"):
+        plot_interpolation(q, torch.ones(3), 0.5)
+    with pytest.raises(TypeError, match="plot_interpolation: q0 must be a torch.Tensor, got list"):
+        plot_interpolation([1.0, 0.0, 0.0, 0.0], q, 0.5)
 
 
 def test_benchmark_reports_throughput_bandwidth_and_copy_reference():

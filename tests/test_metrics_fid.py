@@ -166,7 +166,7 @@ def test_property_invariant_to_a_common_rotation_and_translation(seed, n_a, n_b,
         (
             np.zeros((5, 2)),
             [[0.0, 1.0], [np.nan, 0.0]],
-            r"fid: b contains NaN or inf \(first at index \(1, 0\)\)",
+            r"fid: b contains NaN or infinite values \(first at index \(1, 0\)\)",
         ),
     ],
 )

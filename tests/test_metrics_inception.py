@@ -73,12 +73,20 @@ def test_zero_probabilities_are_fine():
         (np.ones(3) / 3, {}, "probs must be 2-D"),
         (np.eye(3), {"splits": 4}, "splits .4. cannot exceed"),
         (np.eye(3), {"splits": 0}, "splits must be at least 1"),
-        (np.eye(3), {"splits": 1.5}, "splits must be an integer"),
     ],
 )
 def test_bad_inputs(probs, kwargs, match):
     with pytest.raises(ValueError, match=f"inception_score: {match}"):
         inception_score(probs, **kwargs)
+
+
+def test_wrong_types_raise_type_error():
+    with pytest.raises(TypeError, match=r"inception_score: splits must be an integer, got 1.5 \(float\)"):
+        inception_score(np.eye(3), splits=1.5)
+    with pytest.raises(TypeError, match="inception_score: splits must be an integer, got True"):
+        inception_score(np.eye(3), splits=True)
+    with pytest.raises(TypeError, match="recognition_accuracy: labels must be integer class indices"):
+        recognition_accuracy(np.eye(3)[:2], ["a", "b"])
 
 
 def test_accuracy_matches_sklearn_for_logits_and_probabilities():

@@ -46,7 +46,7 @@ def test_covers_the_true_mean_about_95_percent_of_the_time():
         ([1.0], 0.95, "mean_ci: values needs at least 2 entries"),
         ([1.0, np.nan], 0.95, "mean_ci: values contains NaN"),
         ([[1.0, 2.0]], 0.95, "mean_ci: values must be 1-D"),
-        ([1.0, 2.0], 1.0, "mean_ci: confidence must lie strictly between 0 and 1"),
+        ([1.0, 2.0], 1.0, r"mean_ci: confidence must be in \(0, 1\), got 1.0"),
     ],
 )
 def test_mean_ci_bad_inputs(values, confidence, match):
@@ -95,7 +95,6 @@ def test_repeat_metric_with_several_metrics_per_sample_set():
         (lambda x: 1.0, {"n_repeats": 1}, "repeat_metric: n_repeats must be at least 2"),
         (lambda x: 1.0, {"seed": -1}, "repeat_metric: seed must be at least 0"),
         (lambda x: float("nan"), {}, "repeat_metric: fn on repeat 0 returned a non-finite value"),
-        (lambda x: "high", {}, "repeat_metric: fn on repeat 0 returned str, not a number"),
         (lambda x: {"a": 1.0} if x[0] > 0 else {"b": 1.0}, {"n_repeats": 40}, "fn must return the same keys"),
     ],
 )
@@ -103,3 +102,12 @@ def test_repeat_metric_bad_inputs(fn, kwargs, match):
     arguments = {"n_repeats": 3, "seed": 0} | kwargs
     with pytest.raises(ValueError, match=match):
         repeat_metric(fn, draw_normal, **arguments)
+
+
+def test_repeat_metric_wrong_types_raise_type_error():
+    with pytest.raises(TypeError, match="repeat_metric: fn on repeat 0 returned str, not a number"):
+        repeat_metric(lambda x: "high", draw_normal, 3, seed=0)
+    with pytest.raises(TypeError, match=r"repeat_metric: n_repeats must be an integer, got 2.0 \(float\)"):
+        repeat_metric(lambda x: 1.0, draw_normal, 2.0, seed=0)
+    with pytest.raises(TypeError, match="repeat_metric: confidence must be a real number"):
+        repeat_metric(lambda x: 1.0, draw_normal, 3, seed=0, confidence="0.9")

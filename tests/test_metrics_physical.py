@@ -100,9 +100,9 @@ def test_speed_scales_with_the_frame_rate():
         ({"contacts": np.ones((10, 3))}, r"foot_skating: contacts must have shape \(10, 4\)"),
         ({"contacts": np.full((10, 4), 0.5)}, "foot_skating: contacts must be booleans or 0/1"),
         ({"feet": [7, 30]}, r"foot_skating: feet must be distinct joint indices in \[0, 22\)"),
-        ({"fps": 0.0}, "foot_skating: fps must be a finite positive number"),
-        ({"height_threshold": -0.1}, "foot_skating: height_threshold must be a finite positive number"),
-        ({"speed_threshold": np.nan}, "foot_skating: speed_threshold must be a finite positive number"),
+        ({"fps": 0.0}, "foot_skating: fps must be greater than 0, got 0.0"),
+        ({"height_threshold": -0.1}, "foot_skating: height_threshold must be greater than 0, got -0.1"),
+        ({"speed_threshold": np.nan}, "foot_skating: speed_threshold must be a finite number, got nan"),
     ],
 )
 def test_foot_skating_bad_inputs(kwargs, match):
@@ -159,3 +159,10 @@ def test_bone_length_error_hand_value():
 def test_bone_length_error_bad_inputs(parents, reference, match):
     with pytest.raises(ValueError, match=match):
         bone_length_error(np.zeros((2, 3, 3)), parents, reference)
+
+
+def test_non_integer_parents_are_a_type_error():
+    with pytest.raises(
+        TypeError, match="bone_lengths: parents must be 3 integers .one per joint., got dtype float64"
+    ):
+        bone_lengths(np.zeros((2, 3, 3)), [-1.0, 0.0, 1.0])

@@ -112,7 +112,7 @@ def test_end_point_error_hand_value():
         ),
         (
             lambda: min_fde(np.zeros((2, 3, 4)), np.full((3, 4), np.inf)),
-            "min_fde: target contains NaN or inf",
+            "min_fde: target contains NaN or infinite values",
         ),
         (
             lambda: mmade(np.zeros((2, 3, 4)), np.zeros((3, 4))),
@@ -124,7 +124,7 @@ def test_end_point_error_hand_value():
         ),
         (
             lambda: multimodal_ground_truth(np.zeros((3, 2)), np.zeros((3, 2, 2)), 0.0),
-            "multimodal_ground_truth: threshold must be a finite positive number",
+            "multimodal_ground_truth: threshold must be greater than 0, got 0.0",
         ),
         (
             lambda: end_point_error(np.zeros((2, 5, 2)), np.zeros((2, 3))),

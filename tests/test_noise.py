@@ -53,19 +53,29 @@ def test_noise_is_seeded_and_validated(clean_positions):
     np.testing.assert_array_equal(a[0], b[0])
     np.testing.assert_array_equal(a[1], b[1])
     assert not np.array_equal(add_position_noise(clean_positions, 8)[0], a[0])
-    with pytest.raises(ValueError, match="expected a float array"):
+    with pytest.raises(ValueError, match=r"add_position_noise: positions must have shape \(\.\.\., \*, 3\)"):
         add_position_noise(clean_positions[..., :2], 0)
+    with pytest.raises(TypeError, match="add_position_noise: positions must have a floating-point dtype"):
+        add_position_noise(clean_positions.astype(np.int64), 0)
     bad = clean_positions.copy()
     bad[0, 0, 0, 0] = np.nan
-    with pytest.raises(ValueError, match="NaN"):
+    with pytest.raises(
+        ValueError, match=r"positions contains NaN or infinite values \(first at index \(0, 0, 0, 0\)\)"
+    ):
         add_position_noise(bad, 0)
-    with pytest.raises(ValueError, match="rng must be"):
+    with pytest.raises(ValueError, match="add_position_noise: rng must be a non-negative integer seed"):
         add_position_noise(clean_positions, -1)
-    with pytest.raises(ValueError, match="spike_frames"):
+    with pytest.raises(TypeError, match="add_rotation_noise: rng must be a numpy.random.Generator"):
+        add_rotation_noise(np.ones((1, 2, 3, 4)) / 2, 0.5)
+    with pytest.raises(ValueError, match=r"NoiseConfig: spike_frames\[1\] must be at least 3, got 2"):
         NoiseConfig(spike_frames=(3, 2))
-    with pytest.raises(ValueError, match="jitter"):
+    with pytest.raises(TypeError, match=r"NoiseConfig: spike_frames\[0\] must be an integer"):
+        NoiseConfig(spike_frames=(1.5, 2))
+    with pytest.raises(ValueError, match="NoiseConfig: jitter must be at least 0, got -0.1"):
         NoiseConfig(jitter=-0.1)
-    with pytest.raises(ValueError, match="spike_rate"):
+    with pytest.raises(
+        ValueError, match="NoiseConfig: spike_rate .a probability per frame and joint. must be in"
+    ):
         NoiseConfig(spike_rate=2.0)
 
 

@@ -369,7 +369,8 @@ def test_errors_name_the_problem(clips):
     bad = clips.positions.clone()
     bad[1, 4, 7, 0] = float("nan")
     with pytest.raises(
-        ValueError, match=r"to_trajevae: positions contains NaN or inf \(first at index \(1, 4, 7, 0\)"
+        ValueError,
+        match=r"to_trajevae: positions contains NaN or infinite values \(first at index \(1, 4, 7, 0\)",
     ):
         to_trajevae(bad)
     with pytest.raises(ValueError, match="must share"):
@@ -380,7 +381,15 @@ def test_errors_name_the_problem(clips):
         from_moglow(torch.zeros(2, 4, 67), RootStart(torch.zeros(3), torch.zeros(())))
     with pytest.raises(ValueError, match="needs the skeleton's offsets and parents"):
         representation("motion_cell").decode(torch.zeros(4, 90))
-    with pytest.raises(ValueError, match="unknown name 'smpl'"):
+    with pytest.raises(ValueError, match="representation: name must be one of 'motion_cell', .*, got 'smpl'"):
         representation("smpl")
+    with pytest.raises(ValueError, match="representation: n_joints must be at least 2, got 1"):
+        representation("odmo", n_joints=1)
+    with pytest.raises(TypeError, match="representation: n_joints must be an integer, got True"):
+        representation("odmo", n_joints=True)
     with pytest.raises(TypeError, match="must be a torch.Tensor"):
         to_odmo(clips.positions.numpy())
+    with pytest.raises(
+        TypeError, match="to_odmo: positions must have a floating-point dtype, got torch.int64"
+    ):
+        to_odmo(clips.positions.long())

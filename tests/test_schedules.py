@@ -55,18 +55,27 @@ def test_constant_and_piecewise_linear() -> None:
 @pytest.mark.parametrize(
     "build, message",
     [
-        (lambda: KLAnneal(max_value=-1.0, warmup=0, anneal=10), "max_value"),
-        (lambda: KLAnneal(max_value=float("nan"), warmup=0, anneal=10), "max_value"),
-        (lambda: KLAnneal(max_value=1.0, warmup=-1, anneal=10), "warmup"),
-        (lambda: KLAnneal(max_value=1.0, warmup=0, anneal=2.5), "anneal"),
+        (
+            lambda: KLAnneal(max_value=-1.0, warmup=0, anneal=10),
+            "KLAnneal: max_value must be at least 0, got -1.0",
+        ),
+        (
+            lambda: KLAnneal(max_value=float("nan"), warmup=0, anneal=10),
+            "KLAnneal: max_value must be a finite",
+        ),
+        (
+            lambda: KLAnneal(max_value=1.0, warmup=-1, anneal=10),
+            "KLAnneal: warmup must be at least 0, got -1",
+        ),
         (lambda: KLAnneal(max_value=1.0, warmup=10, anneal=10, cooldown_start=15), "cooldown_start"),
         (
             lambda: KLAnneal(max_value=1.0, warmup=0, anneal=10, cooldown_start=20, cooldown_value=2.0),
-            "cooldown_value",
+            r"KLAnneal: cooldown_value must be in \[0, 1\], got 2.0",
         ),
-        (lambda: LinearRamp(start=True, length=1, begin=0.0, end=1.0), "start"),
-        (lambda: LinearRamp(start=0, length=1, begin=0.0, end=math.inf), "end"),
-        (lambda: Constant("1"), "value"),
+        (
+            lambda: LinearRamp(start=0, length=1, begin=0.0, end=math.inf),
+            "LinearRamp: end must be a finite number",
+        ),
         (lambda: PiecewiseLinear(()), "empty"),
         (lambda: PiecewiseLinear(((5, 0.0), (4, 1.0))), "non-decreasing"),
         (lambda: PiecewiseLinear(((5, 0.0), (5, 1.0), (5, 2.0))), "more than two"),
@@ -78,10 +87,37 @@ def test_invalid_arguments_name_the_field(build, message: str) -> None:
         build()
 
 
-@pytest.mark.parametrize("step", [-1, 1.5, True, "3"])
-def test_invalid_steps_are_rejected(step) -> None:
-    for schedule in (Constant(1.0), LinearRamp(0, 5, 0.0, 1.0), KLAnneal(1.0, 0, 5)):
-        with pytest.raises(ValueError, match="step"):
+@pytest.mark.parametrize(
+    "build, message",
+    [
+        (
+            lambda: KLAnneal(max_value=1.0, warmup=0, anneal=2.5),
+            r"KLAnneal: anneal must be int, got 2.5 \(float\)",
+        ),
+        (
+            lambda: LinearRamp(start=True, length=1, begin=0.0, end=1.0),
+            "LinearRamp: start must be int, got True",
+        ),
+        (lambda: Constant("1"), "Constant: value must be int or float, got '1' \\(str\\)"),
+        (lambda: PiecewiseLinear(((0, 0.0), (1.5, 1.0))), r"PiecewiseLinear: points\[1\] step must be int"),
+    ],
+)
+def test_arguments_of_the_wrong_type_raise_type_error(build, message: str) -> None:
+    with pytest.raises(TypeError, match=message):
+        build()
+
+
+@pytest.mark.parametrize(
+    "step, error", [(-1, ValueError), (1.5, TypeError), (True, TypeError), ("3", TypeError)]
+)
+def test_invalid_steps_are_rejected(step, error) -> None:
+    for schedule in (
+        Constant(1.0),
+        LinearRamp(0, 5, 0.0, 1.0),
+        KLAnneal(1.0, 0, 5),
+        PiecewiseLinear(((0, 1.0),)),
+    ):
+        with pytest.raises(error, match=f"{type(schedule).__name__}: step must be"):
             schedule(step)
 
 

@@ -84,14 +84,24 @@ def test_skeleton_validation_and_helpers():
         Skeleton(("a", "b", "c"), (-1, 2, 0), np.zeros((3, 3)))
     with pytest.raises(ValueError, match="offsets must have shape"):
         Skeleton(("a", "b"), (-1, 0), np.zeros((3, 3)))
-    with pytest.raises(ValueError, match="NaN"):
+    with pytest.raises(
+        ValueError, match=r"Skeleton: offsets contains NaN or infinite values \(first at index \(1, 0\)\)"
+    ):
         Skeleton(("a", "b"), (-1, 0), np.array([[0, 0, 0], [np.nan, 0, 0]]))
     with pytest.raises(ValueError, match="unique"):
         Skeleton(("a", "a"), (-1, 0), np.zeros((2, 3)))
-    with pytest.raises(ValueError, match="body type"):
+    with pytest.raises(
+        ValueError, match=r"body_skeleton: body \(a body type name\) must be one of .*, got 'tall'"
+    ):
         body_skeleton("tall")
-    with pytest.raises(ValueError, match="index"):
+    with pytest.raises(
+        ValueError, match=r"body_skeleton: body \(an index or a name\) must be in \[0, 1\], got 2"
+    ):
         body_skeleton(2)
+    with pytest.raises(
+        TypeError, match=r"body_skeleton: body \(an index or a name\) must be an integer, got 1.0"
+    ):
+        body_skeleton(1.0)
 
 
 def test_forward_kinematics_hand_computed_chain():
@@ -149,8 +159,12 @@ def test_forward_kinematics_rejects_bad_input():
     q = torch.zeros(4, 3, 4)
     q[..., 0] = 1
     root, offsets = torch.zeros(4, 3), torch.zeros(3, 3)
-    with pytest.raises(ValueError, match="rotations must be a tensor"):
+    with pytest.raises(ValueError, match=r"forward_kinematics: rotations must have shape \(\.\.\., \*, 4\)"):
         forward_kinematics(q[..., :3], root, offsets, [-1, 0, 1])
+    with pytest.raises(TypeError, match="forward_kinematics: rotations must be a torch.Tensor, got ndarray"):
+        forward_kinematics(q.numpy(), root, offsets, [-1, 0, 1])
+    with pytest.raises(TypeError, match="forward_kinematics: rotations must have a floating-point dtype"):
+        forward_kinematics(q.long(), root, offsets, [-1, 0, 1])
     with pytest.raises(ValueError, match="root_positions must have shape"):
         forward_kinematics(q, torch.zeros(5, 3), offsets, [-1, 0, 1])
     with pytest.raises(ValueError, match="offsets must have shape"):
@@ -163,7 +177,9 @@ def test_forward_kinematics_rejects_bad_input():
         forward_kinematics(q, root, offsets, [-1, 0])
     bad = q.clone()
     bad[1, 2, 1] = float("nan")
-    with pytest.raises(ValueError, match="NaN"):
+    with pytest.raises(
+        ValueError, match=r"forward_kinematics: rotations contains NaN .* \(first at index \(1, 2, 1\)\)"
+    ):
         forward_kinematics(bad, root, offsets, [-1, 0, 1])
     with pytest.raises(ValueError):
         forward_kinematics(torch.zeros(4, 3, 4), root, offsets, [-1, 0, 1])  # zero quaternions
@@ -188,7 +204,7 @@ def test_joint_impact_weights_hand_computed():
     raw = np.array([3.0, 2.0, 0.3, 0.3])
     np.testing.assert_allclose(joint_impact_weights(skeleton), raw / raw.mean())
     np.testing.assert_allclose(joint_impact_weights(skeleton, leaf_floor=0.0), np.array([3, 2, 0, 0]) / 1.25)
-    with pytest.raises(ValueError, match="leaf_floor"):
+    with pytest.raises(ValueError, match=r"joint_impact_weights: leaf_floor must be in \[0, 1\], got 1.5"):
         joint_impact_weights(skeleton, leaf_floor=1.5)
 
 

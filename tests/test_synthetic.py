@@ -202,20 +202,36 @@ def test_contacts_agree_with_a_height_and_speed_detector(data):
 @pytest.mark.parametrize(
     ("kwargs", "message"),
     [
-        ({"seed": -1, "n_per_mode": 2}, "seed"),
-        ({"seed": 1.5, "n_per_mode": 2}, "seed"),
-        ({"seed": 0, "n_per_mode": 0}, "n_per_mode"),
+        ({"seed": -1, "n_per_mode": 2}, "generate: seed must be at least 0, got -1"),
+        ({"seed": 0, "n_per_mode": 0}, "generate: n_per_mode must be at least 1, got 0"),
         ({"seed": 0, "n_per_mode": -3}, "n_per_mode"),
-        ({"seed": 0, "n_per_mode": 2, "seconds": 0.0}, "seconds"),
+        ({"seed": 0, "n_per_mode": 2, "seconds": 0.0}, "generate: seconds must be at least"),
         ({"seed": 0, "n_per_mode": 2, "seconds": -1.0}, "seconds"),
-        ({"seed": 0, "n_per_mode": 2, "seconds": float("nan")}, "seconds"),
+        ({"seed": 0, "n_per_mode": 2, "seconds": float("nan")}, "generate: seconds must be a finite number"),
         ({"seed": 0, "n_per_mode": 2, "fps": 0}, "fps"),
-        ({"seed": 0, "n_per_mode": 2, "fps": 5}, "fps"),
-        ({"seed": 0, "n_per_mode": 2, "split": "dev"}, "split"),
+        ({"seed": 0, "n_per_mode": 2, "fps": 5}, "generate: fps must be at least"),
+        (
+            {"seed": 0, "n_per_mode": 2, "split": "dev"},
+            "generate: split must be one of 'train', 'val', 'test', got 'dev'",
+        ),
     ],
 )
 def test_bad_arguments_raise(kwargs, message):
     with pytest.raises(ValueError, match=message):
+        generate(**kwargs)
+
+
+@pytest.mark.parametrize(
+    ("kwargs", "message"),
+    [
+        ({"seed": 1.5, "n_per_mode": 2}, r"generate: seed must be an integer, got 1.5 \(float\)"),
+        ({"seed": 0, "n_per_mode": True}, "generate: n_per_mode must be an integer, got True"),
+        ({"seed": 0, "n_per_mode": 2, "fps": 30.0}, "generate: fps must be an integer"),
+        ({"seed": 0, "n_per_mode": 2, "seconds": "4"}, "generate: seconds must be a real number"),
+    ],
+)
+def test_wrong_argument_types_raise_type_error(kwargs, message):
+    with pytest.raises(TypeError, match=message):
         generate(**kwargs)
 
 

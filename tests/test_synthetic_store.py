@@ -62,6 +62,12 @@ def test_load_names_the_bad_file_and_key(data, tmp_path, change, message):
     assert "bad.npz" in str(info.value)
 
 
+def test_wrong_dtype_is_a_type_error_in_memory_and_a_value_error_in_a_file(data):
+    arrays = data.arrays() | {"positions": data.positions.astype(np.float64)}
+    with pytest.raises(TypeError, match="MotionSet: 'positions' must have dtype float32, got float64"):
+        MotionSet(**arrays)
+
+
 def test_load_rejects_files_that_are_not_archives(tmp_path):
     path = tmp_path / "broken.npz"
     path.write_text("hello")
@@ -79,7 +85,7 @@ def test_subset(data):
     np.testing.assert_array_equal(picked.mode, data.mode[[5, 0]])
     with pytest.raises(ValueError, match="mask must have shape"):
         data.subset(np.ones(3, bool))
-    with pytest.raises(ValueError, match="boolean mask or integer indices"):
+    with pytest.raises(TypeError, match="boolean mask or integer indices"):
         data.subset(np.array([0.5]))
 
 

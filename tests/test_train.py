@@ -249,12 +249,20 @@ def test_changing_term_names_is_rejected() -> None:
     [
         ({"steps": 3, "epochs": 2}, ValueError, "exactly one"),
         ({}, ValueError, "exactly one"),
-        ({"steps": 0}, ValueError, "steps"),
-        ({"steps": 3, "lr": -1.0}, ValueError, "lr"),
-        ({"steps": 3, "grad_clip": 0.0}, ValueError, "grad_clip"),
-        ({"steps": 3, "betas": (0.9, 1.0)}, ValueError, "betas"),
+        ({"steps": 0}, ValueError, "TrainConfig: steps must be at least 1, got 0"),
+        ({"steps": 3, "lr": -1.0}, ValueError, "TrainConfig: lr must be greater than 0, got -1.0"),
+        ({"steps": 3, "grad_clip": 0.0}, ValueError, "TrainConfig: grad_clip must be greater than 0"),
+        (
+            {"steps": 3, "betas": (0.9, 1.0)},
+            ValueError,
+            r"TrainConfig: betas\[1\] must be in \[0, 1\), got 1.0",
+        ),
+        ({"steps": 3, "betas": (0.9,)}, ValueError, r"TrainConfig: betas must be two numbers"),
         ({"steps": 3, "schedules": {"beta": lambda s: 1.0}}, TypeError, r"schedules\['beta'\]"),
-        ({"steps": 3, "seed": -2}, ValueError, "seed"),
+        ({"steps": 3, "seed": -2}, ValueError, "TrainConfig: seed must be at least 0, got -2"),
+        ({"steps": 3.0}, TypeError, r"TrainConfig: steps must be int, got 3.0 \(float\)"),
+        ({"epochs": 2, "batch_size": True}, TypeError, "TrainConfig: batch_size must be int, got True"),
+        ({"steps": 3, "lr": "0.1"}, TypeError, "TrainConfig: lr must be int or float"),
     ],
 )
 def test_train_config_validation(kwargs, error, message: str) -> None:

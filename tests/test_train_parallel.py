@@ -166,11 +166,13 @@ def test_a_background_call_runs_elsewhere_and_reports_its_result_or_error() -> N
         broken.wait()
 
 
-@pytest.mark.parametrize("processes", [0, -1, 1.5, True])
-def test_the_process_count_is_checked(processes) -> None:
-    with pytest.raises(ValueError, match="processes"):
+@pytest.mark.parametrize(
+    "processes, error", [(0, ValueError), (-1, ValueError), (1.5, TypeError), (True, TypeError)]
+)
+def test_the_process_count_is_checked(processes, error) -> None:
+    with pytest.raises(error, match="run_in_workers: processes must be"):
         run_in_workers(where_and_threads, [("a",), ("b",)], processes=processes)
-    with pytest.raises(ValueError, match="processes"):
+    with pytest.raises(error, match="worker_pool: processes must be"):
         worker_pool(processes)
 
 

@@ -80,10 +80,16 @@ def test_plot_pose_validates_its_input() -> None:
         plot_pose(ax3d, walk(1)[0], PARENTS[:-1])
     with pytest.raises(ValueError, match=r"parents\[3\] must be -1 or the index of another joint"):
         plot_pose(ax3d, walk(1)[0], PARENTS[:3] + [3] + PARENTS[4:])
-    with pytest.raises(ValueError, match="NaN"):
+    with pytest.raises(
+        ValueError, match=r"plot_pose: pos contains NaN or infinite values \(first at index \(0, 0\)\)"
+    ):
         plot_pose(ax3d, np.full((22, 3), np.nan), PARENTS)
-    with pytest.raises(ValueError, match="3D axis"):
+    with pytest.raises(TypeError, match="plot_pose: ax must be a 3D axis"):
         plot_pose(plt.figure().add_subplot(), walk(1)[0], PARENTS)
+    with pytest.raises(TypeError, match=r"plot_pose: parents\[2\] must be an integer, got 0.5 \(float\)"):
+        plot_pose(ax3d, walk(1)[0], PARENTS[:2] + [0.5] + PARENTS[3:])
+    with pytest.raises(TypeError, match="plot_pose: pos must hold real numbers, got dtype <U1"):
+        plot_pose(ax3d, np.full((22, 3), "a"), PARENTS)
 
 
 def test_scene_keeps_proportions_and_floor() -> None:
@@ -105,7 +111,7 @@ def test_filmstrip_panels_and_titles() -> None:
     assert titles == ["t = 0.00 s", "t = 0.33 s", "t = 0.63 s", "t = 0.97 s"]
     assert filmstrip(walk(3), PARENTS, n_frames=6).axes[-1].get_title() == "frame 2"  # short clip: 3 panels
     np.testing.assert_array_equal(keyframe_indices(30, 4), [0, 10, 19, 29])
-    with pytest.raises(ValueError, match="n_frames"):
+    with pytest.raises(ValueError, match="keyframe_indices: n_frames must be at least 1, got 0"):
         filmstrip(walk(3), PARENTS, n_frames=0)
     with pytest.raises(ValueError, match=r"filmstrip: pos must have shape \(T, J, 3\)"):
         filmstrip(np.zeros((3, 22, 2)), PARENTS)
@@ -179,9 +185,12 @@ def test_compare_animation_is_blue_and_orange() -> None:
         ),
         ({"motions": [], "parents": PARENTS}, "no motions"),
         ({"motions": walk(4), "parents": PARENTS[:5]}, "parents has 5 entries"),
-        ({"motions": walk(4), "parents": PARENTS, "step": 0}, "step must be a positive integer"),
+        (
+            {"motions": walk(4), "parents": PARENTS, "step": 0},
+            "animation_frames: step must be at least 1, got 0",
+        ),
         ({"motions": walk(4), "parents": PARENTS, "layout": "grid"}, "layout must be one of"),
-        ({"motions": walk(4), "parents": PARENTS, "fps": 0}, "fps must be a positive number"),
+        ({"motions": walk(4), "parents": PARENTS, "fps": 0}, "animate: fps must be greater than 0, got 0"),
         ({"motions": [walk(4), walk(4)], "parents": PARENTS, "colors": ["red"]}, "1 colors for 2 motions"),
     ],
 )
@@ -204,7 +213,9 @@ def test_plot_root_paths_marks_start_and_end() -> None:
     own_axis = plt.figure().add_subplot()
     assert plot_root_paths([walk(5), walk(9)], ax=own_axis, root=2) is own_axis
     np.testing.assert_allclose(np.ravel(own_axis.lines[1].get_data()), walk(5)[0, 2, :2])
-    with pytest.raises(ValueError, match="root must be a joint index"):
+    with pytest.raises(
+        ValueError, match=r"plot_root_paths: root \(a joint index\) must be in \[0, 21\], got 22"
+    ):
         plot_root_paths(walk(5), root=22)
     with pytest.raises(ValueError, match="2 labels for 1 motions"):
         plot_root_paths(walk(5), labels=["a", "b"])

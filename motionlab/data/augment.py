@@ -26,9 +26,10 @@ from collections.abc import Sequence
 import torch
 from torch import Tensor
 
-from motionlab.data.representations import check_tensor, rotate_xy, yaw_to_quat
+from motionlab.data.representations import rotate_xy, yaw_to_quat
 from motionlab.geometry import quat_mul
 from motionlab.skeleton import JOINT_NAMES
+from motionlab.validation import check_scalar, check_tensor
 
 _SIDES = ("left_", "right_")
 
@@ -74,7 +75,7 @@ def mirror_positions(positions: Tensor, permutation: Tensor | None = None) -> Te
 
     ``permutation`` ``(J,)`` defaults to :data:`DEFAULT_MIRROR` (22 joints).
     """
-    check_tensor(positions, "positions", "mirror_positions", (None, 3))
+    check_tensor(positions, "positions", "mirror_positions", trailing=(None, 3))
     permutation = _permutation(permutation, positions.shape[-2], "mirror_positions")
     reflected = positions * positions.new_tensor([1.0, -1.0, 1.0])
     return reflected[..., permutation, :]
@@ -85,15 +86,15 @@ def mirror_rotations(rotations: Tensor, permutation: Tensor | None = None) -> Te
 
     ``permutation`` ``(J,)`` defaults to :data:`DEFAULT_MIRROR` (22 joints).
     """
-    check_tensor(rotations, "rotations", "mirror_rotations", (None, 4))
+    check_tensor(rotations, "rotations", "mirror_rotations", trailing=(None, 4))
     permutation = _permutation(permutation, rotations.shape[-2], "mirror_rotations")
     reflected = rotations * rotations.new_tensor([1.0, -1.0, 1.0, -1.0])
     return reflected[..., permutation, :]
 
 
 def _check_clips(positions: Tensor, rotations: Tensor, func: str) -> None:
-    check_tensor(positions, "positions", func, (None, 3), min_leading=1)
-    check_tensor(rotations, "rotations", func, (None, 4), min_leading=1)
+    check_tensor(positions, "positions", func, trailing=(None, 3), min_leading=1)
+    check_tensor(rotations, "rotations", func, trailing=(None, 4), min_leading=1)
     if positions.shape[:-1] != rotations.shape[:-1]:
         raise ValueError(
             f"{func}: positions (..., T, J, 3) and rotations (..., T, J, 4) must share (..., T, J), "
@@ -117,8 +118,7 @@ def random_mirror(
         permutation: the left/right swap, :data:`DEFAULT_MIRROR` by default.
     """
     _check_clips(positions, rotations, "random_mirror")
-    if not 0.0 <= p <= 1.0:
-        raise ValueError(f"random_mirror: p must be a probability in [0, 1], got {p!r}")
+    check_scalar(p, "p (a probability)", "random_mirror", minimum=0, maximum=1)
     flip = torch.rand(positions.shape[:-3], generator=generator) < p
     flip = flip.to(positions.device)[..., None, None, None]
     mirrored_positions = mirror_positions(positions, permutation)
@@ -136,7 +136,7 @@ def rotate_yaw(positions: Tensor, rotations: Tensor, angle: Tensor) -> tuple[Ten
     """
     _check_clips(positions, rotations, "rotate_yaw")
     angle = check_tensor(
-        torch.as_tensor(angle, dtype=positions.dtype, device=positions.device), "angle", "rotate_yaw", ()
+        torch.as_tensor(angle, dtype=positions.dtype, device=positions.device), "angle", "rotate_yaw"
     )
     if angle.shape != positions.shape[:-3]:
         raise ValueError(

@@ -560,10 +560,13 @@ def save_bvh(motion: Motion, path: str | Path, rotation_order: str = "ZYX") -> N
     6 decimals; Euler angles are unwrapped over time so that animation curves stay continuous.
 
     Raises:
+        TypeError: ``rotation_order`` is not a string.
         ValueError: for a bad ``rotation_order``, or a motion its channels cannot express (a joint that
             moves or rotates about an axis it has no channel for, or no channels at all).
     """
-    if not isinstance(rotation_order, str) or sorted(rotation_order) != ["X", "Y", "Z"]:
+    if not isinstance(rotation_order, str):
+        raise TypeError(f"save_bvh: rotation_order must be a string, got {type(rotation_order).__name__}")
+    if sorted(rotation_order) != ["X", "Y", "Z"]:
         raise ValueError(f"save_bvh: rotation_order must be a permutation of 'XYZ', got {rotation_order!r}")
     channels = motion.channels if motion.channels is not None else _default_channels(motion, rotation_order)
     if not any(channels):

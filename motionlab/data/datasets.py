@@ -18,6 +18,7 @@ torch tensors.
 from __future__ import annotations
 
 import math
+import numbers
 from collections.abc import Callable, Sequence
 from typing import NamedTuple, Protocol
 
@@ -26,7 +27,8 @@ import torch
 from torch import Tensor, nn
 from torch.utils.data import Dataset
 
-from motionlab.data.representations import Representation, RootStart, check_tensor, root_start
+from motionlab.data.representations import Representation, RootStart, root_start
+from motionlab.validation import check_scalar, check_tensor
 
 LABELS = ("action", "mode", "body")
 """The per-clip integer labels every item carries."""
@@ -53,20 +55,13 @@ class MotionClips(Protocol):
 def _labels(values: np.ndarray | Tensor, name: str, func: str, length: int | None = None) -> Tensor:
     """``values`` as a 1-D int64 tensor (of ``length`` items if given)."""
     labels = torch.as_tensor(values)
-    if labels.dim() != 1 or labels.is_floating_point() or labels.is_complex() or labels.dtype == torch.bool:
-        raise ValueError(
-            f"{func}: {name} must be a 1-D integer array (N,), got {labels.dtype} of shape "
-            f"{tuple(labels.shape)}"
-        )
+    if labels.is_floating_point() or labels.is_complex() or labels.dtype == torch.bool:
+        raise TypeError(f"{func}: {name} must be a 1-D integer array (N,), got dtype {labels.dtype}")
+    if labels.dim() != 1:
+        raise ValueError(f"{func}: {name} must be a 1-D integer array (N,), got shape {tuple(labels.shape)}")
     if length is not None and labels.shape[0] != length:
         raise ValueError(f"{func}: {name} has {labels.shape[0]} entries but there are {length} items")
     return labels.to(torch.int64)
-
-
-def _count(value: int, name: str, func: str) -> int:
-    if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < 1:
-        raise ValueError(f"{func}: {name} must be a positive integer, got {value!r}")
-    return int(value)
 
 
 # ----------------------------------------------------------------------------------------------------
@@ -80,8 +75,10 @@ def window_starts(n_frames: int, length: int, stride: int) -> Tensor:
     left out. Raises ``ValueError`` when a window is longer than the clip.
     """
     func = "window_starts"
+    arguments = {"n_frames": n_frames, "length": length, "stride": stride}
     n_frames, length, stride = (
-        _count(v, n, func) for v, n in ((n_frames, "n_frames"), (length, "length"), (stride, "stride"))
+        int(check_scalar(value, name, func, kind=numbers.Integral, minimum=1))
+        for name, value in arguments.items()
     )
     if length > n_frames:
         raise ValueError(f"{func}: window length {length} is longer than the clips ({n_frames} frames)")
@@ -125,14 +122,14 @@ class WindowDataset(Dataset):
         body: Tensor,
     ) -> None:
         func = "WindowDataset"
-        check_tensor(features, "features", func, (None, representation.dim), min_leading=1)
+        check_tensor(features, "features", func, trailing=(None, representation.dim), min_leading=1)
         if features.dim() != 3:
             raise ValueError(
                 f"{func}: features must have shape (W, L, {representation.dim}), got {tuple(features.shape)}"
             )
         n_windows = features.shape[0]
-        position = check_tensor(root_start.position, "root_start.position", func, (3,))
-        yaw = check_tensor(root_start.yaw, "root_start.yaw", func, ())
+        position = check_tensor(root_start.position, "root_start.position", func, trailing=(3,))
+        yaw = check_tensor(root_start.yaw, "root_start.yaw", func)
         if position.shape != (n_windows, 3) or yaw.shape != (n_windows,):
             raise ValueError(
                 f"{func}: root_start must hold ({n_windows}, 3) positions and ({n_windows},) yaws, got "
@@ -194,8 +191,8 @@ def motion_windows(
     ``standardizer`` (optional, fitted) standardises the features.
     """
     func = "motion_windows"
-    positions = check_tensor(torch.as_tensor(clips.positions), "clips.positions", func, (None, 3))
-    rotations = check_tensor(torch.as_tensor(clips.rotations), "clips.rotations", func, (None, 4))
+    positions = check_tensor(torch.as_tensor(clips.positions), "clips.positions", func, trailing=(None, 3))
+    rotations = check_tensor(torch.as_tensor(clips.rotations), "clips.rotations", func, trailing=(None, 4))
     if positions.dim() != 4 or positions.shape[:-1] != rotations.shape[:-1]:
         raise ValueError(
             f"{func}: clips need positions (N, T, J, 3) and rotations (N, T, J, 4) with the same "
@@ -275,8 +272,7 @@ def split_clips(
             f"{func}: fractions must be three positive numbers (train, val, test) summing to 1, "
             f"got {tuple(fractions)}"
         )
-    if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0:
-        raise ValueError(f"{func}: seed must be a non-negative integer, got {seed!r}")
+    check_scalar(seed, "seed", func, kind=numbers.Integral, minimum=0)
     generator = torch.Generator().manual_seed(int(seed))
     modes = torch.unique(mode)
     order = []
@@ -318,9 +314,9 @@ class Standardizer(nn.Module):
 
     def __init__(self, n_features: int, min_std: float = 1e-4) -> None:
         super().__init__()
-        self.n_features = _count(n_features, "n_features", "Standardizer")
-        if not math.isfinite(min_std) or min_std <= 0:
-            raise ValueError(f"Standardizer: min_std must be a finite positive number, got {min_std!r}")
+        check_scalar(n_features, "n_features", "Standardizer", kind=numbers.Integral, minimum=1)
+        check_scalar(min_std, "min_std", "Standardizer", minimum=0, include_minimum=False)
+        self.n_features = int(n_features)
         self.min_std = float(min_std)
         self.register_buffer("mean", torch.zeros(self.n_features))
         self.register_buffer("std", torch.ones(self.n_features))
@@ -334,9 +330,6 @@ class Standardizer(nn.Module):
         """Whether :meth:`fit` (or a loaded state) has set the statistics."""
         return int(self.count) > 0
 
-    def _check(self, x: Tensor, name: str, func: str) -> Tensor:
-        return check_tensor(x, name, f"Standardizer.{func}", (self.n_features,))
-
     def fit(self, features: Tensor) -> Standardizer:
         """Set mean and std ``(D,)`` from ``features`` ``(..., D)`` (all leading entries pooled); returns
         self.
@@ -344,7 +337,8 @@ class Standardizer(nn.Module):
         The std is the population std (divide by the count), floored at ``min_std``; statistics are
         computed in float64.
         """
-        flat = self._check(features, "features", "fit").reshape(-1, self.n_features).double()
+        check_tensor(features, "features", "Standardizer.fit", trailing=(self.n_features,))
+        flat = features.reshape(-1, self.n_features).double()
         if flat.shape[0] < 2:
             raise ValueError(f"Standardizer.fit: needs at least 2 rows of features, got {flat.shape[0]}")
         self.mean.copy_(flat.mean(dim=0))
@@ -362,13 +356,13 @@ class Standardizer(nn.Module):
     def transform(self, features: Tensor) -> Tensor:
         """Standardised ``(features - mean) / std``, ``(..., D)``."""
         mean, std = self._statistics("transform")
-        features = self._check(features, "features", "transform")
+        check_tensor(features, "features", "Standardizer.transform", trailing=(self.n_features,))
         return (features - mean.to(features)) / std.to(features)
 
     def inverse(self, standardized: Tensor) -> Tensor:
         """Undo :meth:`transform`: ``standardized * std + mean``, ``(..., D)``."""
         mean, std = self._statistics("inverse")
-        standardized = self._check(standardized, "standardized", "inverse")
+        check_tensor(standardized, "standardized", "Standardizer.inverse", trailing=(self.n_features,))
         return standardized * std.to(standardized) + mean.to(standardized)
 
 

@@ -21,6 +21,7 @@ All tensors share one floating dtype: the dtype of ``rotations`` (the BVH loader
 
 from __future__ import annotations
 
+import numbers
 from collections.abc import Sequence
 from dataclasses import dataclass, replace
 from typing import Any
@@ -29,6 +30,7 @@ import numpy as np
 import torch
 
 from motionlab.skeleton import forward_kinematics
+from motionlab.validation import check_finite, check_scalar
 
 #: BVH channel names (canonical spelling); a joint lists a subset of them, each at most once.
 POSITION_CHANNELS = ("Xposition", "Yposition", "Zposition")
@@ -51,16 +53,13 @@ def _as_tensor(value: Any, name: str, dtype: torch.dtype | None = None) -> torch
         except ValueError as exc:
             raise ValueError(f"Motion.{name}: not a rectangular numeric array ({exc})") from exc
         if array.dtype.kind not in "fiub":
-            raise ValueError(f"Motion.{name}: not a numeric array (dtype {array.dtype})")
+            raise TypeError(f"Motion.{name}: not a numeric array (dtype {array.dtype})")
         tensor = torch.tensor(array)  # a copy (NumPy arrays may be read-only, torch wants writable memory)
     if dtype is not None:
         tensor = tensor.to(dtype)
     elif not tensor.is_floating_point():
         tensor = tensor.to(torch.float32)
-    if not torch.isfinite(tensor).all():
-        bad = torch.nonzero(~torch.isfinite(tensor))[0].tolist()
-        raise ValueError(f"Motion.{name}: contains NaN or infinite values (first at index {tuple(bad)})")
-    return tensor
+    return check_finite(tensor, name, "Motion")
 
 
 def _check_shape(tensor: torch.Tensor, name: str, shape: tuple[int | None, ...], meaning: str) -> None:
@@ -74,7 +73,9 @@ def _check_names(joint_names: Sequence[str]) -> tuple[str, ...]:
     if not names:
         raise ValueError("Motion.joint_names: a motion needs at least one joint")
     for j, name in enumerate(names):
-        if not isinstance(name, str) or not name or any(c.isspace() or c in "{}" for c in name):
+        if not isinstance(name, str):
+            raise TypeError(f"Motion.joint_names[{j}]: {name!r} is not a string")
+        if not name or any(c.isspace() or c in "{}" for c in name):
             raise ValueError(
                 f"Motion.joint_names[{j}]: {name!r} is not a valid joint name "
                 "(non-empty, no whitespace, no braces)"
@@ -91,9 +92,7 @@ def _check_parents(parents: Sequence[int] | torch.Tensor | np.ndarray, num_joint
         raise ValueError(f"Motion.parents: expected {num_joints} entries (one per joint), got {len(values)}")
     out = []
     for j, p in enumerate(values):
-        if isinstance(p, bool) or not isinstance(p, (int, np.integer)):
-            raise ValueError(f"Motion.parents[{j}]: expected an integer, got {p!r}")
-        out.append(int(p))
+        out.append(int(check_scalar(p, f"parents[{j}]", "Motion", kind=numbers.Integral)))
     if out[0] != -1:
         raise ValueError(f"Motion.parents[0]: joint 0 must be the root (parent -1), got {out[0]}")
     for j, p in enumerate(out[1:], start=1):
@@ -157,6 +156,7 @@ class Motion:
             ``root_positions``. ``None`` means each non-root joint stays at its offset.
 
     Raises:
+        TypeError: a field of the wrong type (a non-numeric array, a non-integer parent, a bool fps...).
         ValueError: naming the field and what is wrong (shape, NaN, non-unit quaternion, bad tree...).
     """
 
@@ -199,10 +199,9 @@ class Motion:
         _check_shape(root, "root_positions", (num_frames, 3), f"({num_frames}, 3) (T from rotations)")
         set_field(self, "root_positions", root)
 
-        fps = float(self.fps)
-        if not np.isfinite(fps) or fps <= 0:
-            raise ValueError(f"Motion.fps: must be a positive number, got {self.fps!r}")
-        set_field(self, "fps", fps)
+        set_field(
+            self, "fps", float(check_scalar(self.fps, "fps", "Motion", minimum=0, include_minimum=False))
+        )
 
         if self.channels is not None:
             set_field(self, "channels", _check_channels(self.channels, num_joints))
@@ -255,9 +254,7 @@ class Motion:
 
     def scaled(self, factor: float) -> Motion:
         """The same motion with every length (offsets, translations, end sites) multiplied by ``factor``."""
-        factor = float(factor)
-        if not np.isfinite(factor) or factor <= 0:
-            raise ValueError(f"Motion.scaled: factor must be a positive number, got {factor!r}")
+        factor = float(check_scalar(factor, "factor", "Motion.scaled", minimum=0, include_minimum=False))
         return replace(
             self,
             offsets=self.offsets * factor,
@@ -297,9 +294,7 @@ class Motion:
         nlerp and slerp agree to well below a degree. The new clip starts at the first frame and keeps
         every sample time ``k / fps`` that lies within the original duration ``(T - 1) / self.fps``.
         """
-        fps = float(fps)
-        if not np.isfinite(fps) or fps <= 0:
-            raise ValueError(f"Motion.resample: fps must be a positive number, got {fps!r}")
+        fps = float(check_scalar(fps, "fps", "Motion.resample", minimum=0, include_minimum=False))
         ratio = self.fps / fps
         count = int(np.floor((self.num_frames - 1) / ratio + 1e-9)) + 1
         times = torch.arange(count, dtype=torch.float64) * ratio

@@ -19,12 +19,14 @@ Everything is drawn from one ``numpy.random.Generator`` (or a seed for one), in 
 
 from __future__ import annotations
 
+import numbers
 from dataclasses import dataclass
 
 import numpy as np
 import torch
 
 from motionlab.geometry import axis_angle_to_quat, quat_mul
+from motionlab.validation import as_rng, check_array, check_scalar
 
 
 @dataclass(frozen=True)
@@ -37,42 +39,22 @@ class NoiseConfig:
     spike_size: float = 0.15
 
     def __post_init__(self) -> None:
-        for name in ("jitter", "spike_rate", "spike_size"):
-            value = getattr(self, name)
-            if not np.isfinite(value) or value < 0:
-                raise ValueError(f"NoiseConfig.{name} must be finite and >= 0, got {value!r}")
-        if self.spike_rate > 1:
-            raise ValueError(
-                f"NoiseConfig.spike_rate is a probability per frame and joint, got {self.spike_rate}"
-            )
+        check_scalar(self.jitter, "jitter", "NoiseConfig", minimum=0)
+        check_scalar(
+            self.spike_rate,
+            "spike_rate (a probability per frame and joint)",
+            "NoiseConfig",
+            minimum=0,
+            maximum=1,
+        )
+        check_scalar(self.spike_size, "spike_size", "NoiseConfig", minimum=0)
         lo, hi = self.spike_frames
-        if not (isinstance(lo, int) and isinstance(hi, int) and 1 <= lo <= hi):
-            raise ValueError(
-                f"NoiseConfig.spike_frames must be integers 1 <= lo <= hi, got {self.spike_frames!r}"
-            )
+        check_scalar(lo, "spike_frames[0]", "NoiseConfig", kind=numbers.Integral, minimum=1)
+        check_scalar(hi, "spike_frames[1]", "NoiseConfig", kind=numbers.Integral, minimum=lo)
 
 
 #: Defaults for rotations: 0.02 rad jitter, spikes of about 0.5 rad (29 degrees).
 ROTATION_NOISE = NoiseConfig(jitter=0.02, spike_size=0.5)
-
-
-def _generator(rng: np.random.Generator | int) -> np.random.Generator:
-    if isinstance(rng, np.random.Generator):
-        return rng
-    if isinstance(rng, (int, np.integer)) and not isinstance(rng, bool) and rng >= 0:
-        return np.random.default_rng(int(rng))
-    raise ValueError(f"rng must be a numpy Generator or a non-negative integer seed, got {rng!r}")
-
-
-def _check(values: np.ndarray, width: int, name: str) -> np.ndarray:
-    values = np.asarray(values)
-    if values.ndim < 3 or values.shape[-1] != width or not np.issubdtype(values.dtype, np.floating):
-        raise ValueError(
-            f"{name}: expected a float array (..., T, J, {width}), got {values.dtype} {values.shape}"
-        )
-    if not np.isfinite(values).all():
-        raise ValueError(f"{name}: input contains NaN or infinite values")
-    return values
 
 
 def _spikes(
@@ -113,8 +95,8 @@ def add_position_noise(
     positions: np.ndarray, rng: np.random.Generator | int, config: NoiseConfig = NoiseConfig()
 ) -> tuple[np.ndarray, np.ndarray]:
     """Noisy joint positions (same shape and dtype) and the spike mask ``(..., T, J)`` bool."""
-    clean = _check(positions, 3, "add_position_noise")
-    rng = _generator(rng)
+    clean = check_array(positions, "positions", "add_position_noise", trailing=(None, 3), min_leading=1)
+    rng = as_rng(rng, "add_position_noise")
     shape = clean.shape[:-1]
     jitter = config.jitter * rng.standard_normal(clean.shape)
     displacement = _random_directions(shape, rng) * _spike_lengths(shape, rng, config.spike_size)
@@ -130,8 +112,8 @@ def add_rotation_noise(
     The noise rotation is applied on the left (in the parent's frame) and is less than a half turn, so
     each noisy quaternion keeps the sign of its clean one (sign-continuous data stays continuous).
     """
-    clean = _check(rotations, 4, "add_rotation_noise")
-    rng = _generator(rng)
+    clean = check_array(rotations, "rotations", "add_rotation_noise", trailing=(None, 4), min_leading=1)
+    rng = as_rng(rng, "add_rotation_noise")
     shape = clean.shape[:-1]
     jitter = config.jitter * rng.standard_normal(shape + (3,))
     displacement = _random_directions(shape, rng) * _spike_lengths(shape, rng, config.spike_size)

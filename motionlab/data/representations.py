@@ -36,6 +36,7 @@ data sets and the models.
 from __future__ import annotations
 
 import math
+import numbers
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from typing import NamedTuple
@@ -43,6 +44,7 @@ from typing import NamedTuple
 import torch
 from torch import Tensor
 
+from motionlab import validation
 from motionlab.geometry import axis_angle_to_quat, quat_mul, quat_normalize, quat_to_axis_angle
 from motionlab.skeleton import forward_kinematics
 
@@ -71,6 +73,7 @@ class RootStart(NamedTuple):
 # input checks
 
 
+# Legacy, kept until the model families move: callers use motionlab.validation.check_tensor instead.
 def check_tensor(
     x: Tensor, name: str, func: str, trailing: tuple[int | None, ...], min_leading: int = 0
 ) -> Tensor:
@@ -103,8 +106,8 @@ def _check_start(start: RootStart | None, leading: torch.Size, like: Tensor, fun
     """``start`` checked against the clip's leading shape; ``None`` becomes the origin with yaw 0."""
     if start is None:
         return RootStart(like.new_zeros(leading + (3,)), like.new_zeros(leading))
-    position = check_tensor(start.position, "start.position", func, (3,))
-    yaw = check_tensor(start.yaw, "start.yaw", func, ())
+    position = validation.check_tensor(start.position, "start.position", func, trailing=(3,))
+    yaw = validation.check_tensor(start.yaw, "start.yaw", func)
     if position.shape[:-1] != leading or yaw.shape != leading:
         raise ValueError(
             f"{func}: start must have position {tuple(leading) + (3,)} and yaw {tuple(leading)} for "
@@ -147,7 +150,7 @@ def split_heading(root_rotation: Tensor) -> tuple[Tensor, Tensor]:
     ``root_rotation = yaw_to_quat(yaw) ⊗ tilt`` with ``tilt``'s rotation axis horizontal (its z
     component is zero) and ``yaw`` in ``[-pi, pi)``. Raises ``ValueError`` for a root turned upside down.
     """
-    check_tensor(root_rotation, "root_rotation", "split_heading", (4,))
+    validation.check_tensor(root_rotation, "root_rotation", "split_heading", trailing=(4,))
     q = quat_normalize(root_rotation)
     w, z = q[..., 0], q[..., 3]
     upside_down = w * w + z * z < UPSIDE_DOWN_TOLERANCE
@@ -181,8 +184,8 @@ def root_start(positions: Tensor, rotations: Tensor) -> RootStart:
         positions: global joint positions ``(..., T, J, 3)``, metres.
         rotations: local joint quaternions ``(..., T, J, 4)``; joint 0's is the root's global orientation.
     """
-    check_tensor(positions, "positions", "root_start", (None, 3), min_leading=1)
-    check_tensor(rotations, "rotations", "root_start", (None, 4), min_leading=1)
+    validation.check_tensor(positions, "positions", "root_start", trailing=(None, 3), min_leading=1)
+    validation.check_tensor(rotations, "rotations", "root_start", trailing=(None, 4), min_leading=1)
     return RootStart(positions[..., 0, 0, :], heading_yaw(rotations[..., 0, 0, :]))
 
 
@@ -200,8 +203,8 @@ def root_control(root_xy: Tensor, yaw: Tensor) -> Tensor:
     Frame ``t`` holds the step from ``t - 1`` to ``t``, the displacement in the heading frame of ``t - 1``;
     frame 0 is zero. :func:`integrate_root_control` inverts it.
     """
-    check_tensor(root_xy, "root_xy", "root_control", (2,), min_leading=1)
-    check_tensor(yaw, "yaw", "root_control", (), min_leading=1)
+    validation.check_tensor(root_xy, "root_xy", "root_control", trailing=(2,), min_leading=1)
+    validation.check_tensor(yaw, "yaw", "root_control", min_leading=1)
     if root_xy.shape[:-1] != yaw.shape:
         raise ValueError(
             f"root_control: root_xy (..., T, 2) and yaw (..., T) must share (..., T), "
@@ -220,9 +223,9 @@ def integrate_root_control(control: Tensor, start_xy: Tensor, start_yaw: Tensor)
     Frame 0's control is ignored: the clip starts at ``start_xy`` facing ``start_yaw``.
     """
     func = "integrate_root_control"
-    check_tensor(control, "control", func, (3,), min_leading=1)
-    check_tensor(start_xy, "start_xy", func, (2,))
-    check_tensor(start_yaw, "start_yaw", func, ())
+    validation.check_tensor(control, "control", func, trailing=(3,), min_leading=1)
+    validation.check_tensor(start_xy, "start_xy", func, trailing=(2,))
+    validation.check_tensor(start_yaw, "start_yaw", func)
     if start_xy.shape[:-1] != control.shape[:-2] or start_yaw.shape != control.shape[:-2]:
         raise ValueError(
             f"{func}: start_xy must be {tuple(control.shape[:-2]) + (2,)} and start_yaw "
@@ -255,8 +258,8 @@ def to_motion_cell(rotations: Tensor, root_positions: Tensor) -> Tensor:
     drops the right side) axes. Invert with :func:`from_motion_cell`.
     """
     func = "to_motion_cell"
-    check_tensor(rotations, "rotations", func, (None, 4), min_leading=1)
-    check_tensor(root_positions, "root_positions", func, (3,), min_leading=1)
+    validation.check_tensor(rotations, "rotations", func, trailing=(None, 4), min_leading=1)
+    validation.check_tensor(root_positions, "root_positions", func, trailing=(3,), min_leading=1)
     if rotations.shape[:-2] != root_positions.shape[:-1] or rotations.shape[-2] < 2:
         raise ValueError(
             f"{func}: rotations (..., T, J, 4) with J >= 2 and root_positions (..., T, 3) must share "
@@ -288,7 +291,7 @@ def from_motion_cell(features: Tensor, start: RootStart | None = None) -> tuple[
     positions (or use ``representation("motion_cell").decode``).
     """
     func = "from_motion_cell"
-    check_tensor(features, "features", func, (None,), min_leading=1)
+    validation.check_tensor(features, "features", func, trailing=(None,), min_leading=1)
     n_joints = _n_joints(features.shape[-1], 4, len(ROOT_FEATURES), "features", func)
     start = _check_start(start, features.shape[:-2], features, func)
     joints = quat_normalize(features[..., : -len(ROOT_FEATURES)].unflatten(-1, (n_joints - 1, 4)))
@@ -314,7 +317,7 @@ def to_odmo(positions: Tensor) -> Tensor:
     (not rotated, as in ODMO), then the root trajectory: root xyz minus the first frame's root xyz.
     Invert with :func:`from_odmo`.
     """
-    check_tensor(positions, "positions", "to_odmo", (None, 3), min_leading=1)
+    validation.check_tensor(positions, "positions", "to_odmo", trailing=(None, 3), min_leading=1)
     if positions.shape[-2] < 2:
         raise ValueError(f"to_odmo: positions need at least 2 joints, got shape {tuple(positions.shape)}")
     root = positions[..., 0, :]
@@ -330,7 +333,7 @@ def from_odmo(features: Tensor, start: RootStart | None = None) -> Tensor:
     default the origin, which puts the first frame's pelvis at height 0.
     """
     func = "from_odmo"
-    check_tensor(features, "features", func, (None,), min_leading=1)
+    validation.check_tensor(features, "features", func, trailing=(None,), min_leading=1)
     n_joints = _n_joints(features.shape[-1], 3, 3, "features", func)
     start = _check_start(start, features.shape[:-2], features, func)
     root = features[..., -3:] + start.position[..., None, :]
@@ -355,8 +358,8 @@ def to_moglow(positions: Tensor, root_rotations: Tensor) -> Tensor:
     left out. Invert with :func:`from_moglow`.
     """
     func = "to_moglow"
-    check_tensor(positions, "positions", func, (None, 3), min_leading=1)
-    check_tensor(root_rotations, "root_rotations", func, (4,), min_leading=1)
+    validation.check_tensor(positions, "positions", func, trailing=(None, 3), min_leading=1)
+    validation.check_tensor(root_rotations, "root_rotations", func, trailing=(4,), min_leading=1)
     if positions.shape[:-2] != root_rotations.shape[:-1] or positions.shape[-2] < 2:
         raise ValueError(
             f"{func}: positions (..., T, J, 3) with J >= 2 and root_rotations (..., T, 4) must share "
@@ -376,7 +379,7 @@ def from_moglow(features: Tensor, start: RootStart | None = None) -> Tensor:
     +x) and each frame's pose is turned to its heading and placed above the root's floor projection.
     """
     func = "from_moglow"
-    check_tensor(features, "features", func, (None,), min_leading=1)
+    validation.check_tensor(features, "features", func, trailing=(None,), min_leading=1)
     n_joints = _n_joints(features.shape[-1], 3, 1 + len(CONTROL_FEATURES), "features", func)
     start = _check_start(start, features.shape[:-2], features, func)
     height = features[..., :1]
@@ -401,7 +404,7 @@ def to_trajevae(positions: Tensor) -> Tensor:
     heights are untouched (the floor stays at z = 0). Joint 0's three channels are the root trajectory.
     Invert with :func:`from_trajevae`.
     """
-    check_tensor(positions, "positions", "to_trajevae", (None, 3), min_leading=1)
+    validation.check_tensor(positions, "positions", "to_trajevae", trailing=(None, 3), min_leading=1)
     first_pelvis = positions[..., 0, 0, :]
     shift = torch.cat([first_pelvis[..., :2], torch.zeros_like(first_pelvis[..., 2:])], dim=-1)
     return (positions - shift[..., None, None, :]).flatten(-2)
@@ -411,7 +414,7 @@ def from_trajevae(features: Tensor, start: RootStart | None = None) -> Tensor:
     """Invert :func:`to_trajevae`: global positions ``(..., T, J, 3)``, the first pelvis above ``start``'s
     xy."""
     func = "from_trajevae"
-    check_tensor(features, "features", func, (None,), min_leading=1)
+    validation.check_tensor(features, "features", func, trailing=(None,), min_leading=1)
     if features.shape[-1] % 3:
         raise ValueError(f"{func}: features has {features.shape[-1]} features; expected J * 3")
     start = _check_start(start, features.shape[:-2], features, func)
@@ -571,8 +574,6 @@ REPRESENTATION_NAMES = tuple(_BUILDERS)
 def representation(name: str, n_joints: int = 22) -> Representation:
     """The :class:`Representation` called ``name`` (one of :data:`REPRESENTATION_NAMES`) for ``n_joints``
     joints."""
-    if name not in _BUILDERS:
-        raise ValueError(f"representation: unknown name {name!r}; choose one of {REPRESENTATION_NAMES}")
-    if isinstance(n_joints, bool) or not isinstance(n_joints, int) or n_joints < 2:
-        raise ValueError(f"representation: n_joints must be an integer >= 2, got {n_joints!r}")
-    return _BUILDERS[name](n_joints)
+    validation.check_choice(name, "name", "representation", REPRESENTATION_NAMES)
+    validation.check_scalar(n_joints, "n_joints", "representation", kind=numbers.Integral, minimum=2)
+    return _BUILDERS[name](int(n_joints))

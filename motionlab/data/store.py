@@ -56,7 +56,8 @@ _PER_CLIP = ("positions", "rotations", "action", "mode", "body", "contacts")
 
 
 def _check_schema(arrays: dict[str, np.ndarray], where: str) -> None:
-    """Raise ``ValueError`` naming ``where`` and the key when keys, dtypes, shapes or values are wrong."""
+    """Raise naming ``where`` and the key: ``TypeError`` for a wrong dtype, ``ValueError`` when keys, shapes
+    or values are wrong."""
     missing = sorted(set(SCHEMA) - set(arrays))
     unknown = sorted(set(arrays) - set(SCHEMA))
     if missing or unknown:
@@ -68,7 +69,7 @@ def _check_schema(arrays: dict[str, np.ndarray], where: str) -> None:
         value = arrays[key]
         ok_dtype = value.dtype.kind == "U" if dtype == "str" else value.dtype == np.dtype(dtype)
         if not ok_dtype:
-            raise ValueError(f"{where}: '{key}' must have dtype {dtype}, got {value.dtype}")
+            raise TypeError(f"{where}: '{key}' must have dtype {dtype}, got {value.dtype}")
         if value.ndim != len(shape):
             raise ValueError(f"{where}: '{key}' must have shape {shape}, got {value.shape}")
         for axis, (name, size) in enumerate(zip(shape, value.shape)):
@@ -158,7 +159,7 @@ class MotionSet:
                 f"MotionSet.subset: a mask must have shape ({self.n_clips},), got {selection.shape}"
             )
         if selection.dtype != bool and selection.dtype.kind not in "iu":
-            raise ValueError(
+            raise TypeError(
                 f"MotionSet.subset: selection must be a boolean mask or integer indices, "
                 f"got {selection.dtype}"
             )
@@ -208,5 +209,5 @@ class MotionSet:
             )
         try:
             return cls(**arrays)
-        except ValueError as exc:
+        except (TypeError, ValueError) as exc:  # a bad file is a bad value, whatever is wrong inside it
             raise ValueError(f"MotionSet.load: {path}: {exc}") from exc

@@ -29,6 +29,7 @@ import argparse
 import hashlib
 import json
 import math
+import numbers
 import sys
 import time
 from pathlib import Path
@@ -42,6 +43,7 @@ from motionlab.data.body import BodyBatch, pose
 from motionlab.data.store import MotionSet
 from motionlab.data.styles import DRAWS_PER_CLIP, Draws
 from motionlab.skeleton import BODY_MEASUREMENTS, BODY_TYPES, PARENTS
+from motionlab.validation import check_choice, check_scalar
 
 SPLITS = ("train", "val", "test")
 
@@ -66,25 +68,12 @@ def generator_fingerprint() -> str:
 
 
 def _check_arguments(seed: int, n_per_mode: int, seconds: float, fps: int, split: str) -> None:
-    def integer(value: object) -> bool:
-        return isinstance(value, (int, np.integer)) and not isinstance(value, bool)
-
-    if not integer(seed) or seed < 0:
-        raise ValueError(f"generate: seed must be a non-negative integer, got {seed!r}")
-    if not integer(n_per_mode) or n_per_mode < 1:
-        raise ValueError(f"generate: n_per_mode must be a positive integer, got {n_per_mode!r}")
-    if not integer(fps) or fps < MIN_FPS:
-        raise ValueError(f"generate: fps must be an integer of at least {MIN_FPS}, got {fps!r}")
-    if (
-        not isinstance(seconds, (int, float, np.floating))
-        or not math.isfinite(seconds)
-        or seconds < MIN_SECONDS
-    ):
-        raise ValueError(
-            f"generate: seconds must be a finite number of at least {MIN_SECONDS}, got {seconds!r}"
-        )
-    if split not in SPLITS:
-        raise ValueError(f"generate: split must be one of {SPLITS}, got {split!r}")
+    """The arguments :func:`generate` and :func:`load_or_generate` share, checked."""
+    check_scalar(seed, "seed", "generate", kind=numbers.Integral, minimum=0)
+    check_scalar(n_per_mode, "n_per_mode", "generate", kind=numbers.Integral, minimum=1)
+    check_scalar(fps, "fps", "generate", kind=numbers.Integral, minimum=MIN_FPS)
+    check_scalar(seconds, "seconds", "generate", minimum=MIN_SECONDS)
+    check_choice(split, "split", "generate", SPLITS)
 
 
 def generate(
@@ -99,7 +88,8 @@ def generate(
         fps: frames per second, at least :data:`MIN_FPS`.
         split: ``"train"``, ``"val"`` or ``"test"``: which family of random streams to draw from.
     Raises:
-        ValueError: on a bad argument.
+        TypeError: an argument of the wrong type (a float seed, a bool count...).
+        ValueError: an argument out of range, or an unknown split.
     """
     _check_arguments(seed, n_per_mode, seconds, fps, split)
     n_frames = int(round(seconds * fps))

@@ -13,8 +13,9 @@ from __future__ import annotations
 import torch
 from torch import Tensor
 
-from motionlab.data.representations import check_tensor, to_moglow, yaw_to_quat
+from motionlab.data.representations import to_moglow, yaw_to_quat
 from motionlab.skeleton import JOINT
+from motionlab.validation import check_tensor
 
 #: Features per frame for the 22-joint skeleton: 1 root height + 21 × 3 joint coordinates + 3 velocities.
 EVAL_FEATURES = 67
@@ -26,7 +27,7 @@ def hip_heading(positions: Tensor) -> Tensor:
     The character's left is the direction from the right hip to the left hip; its forward direction is
     that vector turned by -90° about z (left × up), so a character at rest facing +x gets yaw 0.
     """
-    check_tensor(positions, "positions", "hip_heading", (22, 3), min_leading=1)
+    check_tensor(positions, "positions", "hip_heading", trailing=(22, 3), min_leading=1)
     across = positions[..., JOINT["left_hip"], :2] - positions[..., JOINT["right_hip"], :2]
     if bool((across.norm(dim=-1) < 1e-6).any()):
         raise ValueError("hip_heading: the hips coincide in some frame, so the heading is undefined")
@@ -35,7 +36,5 @@ def hip_heading(positions: Tensor) -> Tensor:
 
 def body_frame_features(positions: Tensor) -> Tensor:
     """Classifier input ``(..., T, 67)`` from global joint positions ``(..., T, 22, 3)`` (metres, z up)."""
-    check_tensor(positions, "positions", "body_frame_features", (22, 3), min_leading=1)
-    if not bool(torch.isfinite(positions).all()):
-        raise ValueError("body_frame_features: positions contain NaN or inf")
+    check_tensor(positions, "positions", "body_frame_features", trailing=(22, 3), min_leading=1)
     return to_moglow(positions, yaw_to_quat(hip_heading(positions)))

@@ -14,8 +14,9 @@ module                 metrics
 :mod:`.intervals`      :func:`mean_ci`, :func:`repeat_metric`, :class:`Interval`
 =====================  =====================================================================================
 
-All metrics take NumPy arrays or torch tensors, compute in float64 and return Python floats; bad input
-(wrong shapes, NaN/inf, empty or too-small sets) raises ``ValueError`` naming the function and argument.
+All metrics take NumPy arrays or torch tensors, compute in float64 and return Python floats. Their inputs are
+checked through :mod:`motionlab.validation`: a wrong type or dtype raises ``TypeError``, a wrong value (wrong
+shapes, NaN/inf, empty or too-small sets) ``ValueError``, both naming the function and argument.
 """
 
 from motionlab.metrics.diversity import (

@@ -22,12 +22,13 @@ APD of the real sequences of that class, averaged over classes. 1 means "as dive
 
 from __future__ import annotations
 
+import numbers
 from collections.abc import Hashable
 
 import numpy as np
 from scipy.spatial.distance import pdist
 
-from motionlab.metrics._inputs import ArrayLike, RngLike, as_float_array, as_labels, as_rng, check_count
+from motionlab.validation import ArrayLike, RngLike, as_float_array, as_labels, as_rng, check_scalar
 
 #: Pairs drawn by :func:`diversity` in Action2Motion's protocol (``S_d``).
 DIVERSITY_PAIRS = 200
@@ -71,7 +72,7 @@ def diversity(features: ArrayLike, n_pairs: int, rng: RngLike) -> float:
     x = as_float_array(features, "features", func, ndim=2, layout="(N, D)")
     if x.shape[0] < 2:
         raise ValueError(f"{func}: features needs at least 2 rows, got {x.shape[0]}")
-    count = check_count(n_pairs, "n_pairs", func)
+    count = int(check_scalar(n_pairs, "n_pairs", func, kind=numbers.Integral, minimum=1))
     return _mean_pair_distance(x, np.arange(x.shape[0]), count, as_rng(rng, func))
 
 
@@ -88,7 +89,7 @@ def multimodality(features: ArrayLike, labels: ArrayLike, n_pairs: int, rng: Rng
     func = "multimodality"
     x = as_float_array(features, "features", func, ndim=2, layout="(N, D)")
     y = as_labels(labels, "labels", func, length=x.shape[0])
-    count = check_count(n_pairs, "n_pairs", func)
+    count = int(check_scalar(n_pairs, "n_pairs", func, kind=numbers.Integral, minimum=1))
     generator = as_rng(rng, func)
     classes, codes, sizes = np.unique(y, return_inverse=True, return_counts=True)
     too_small = classes[sizes < 2]

@@ -43,7 +43,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from motionlab.metrics._inputs import ArrayLike, as_float_array, check_same_shape
+from motionlab.validation import ArrayLike, as_float_array, check_same_shape
 
 
 def _psd_sqrt(matrix: np.ndarray) -> np.ndarray:

@@ -15,12 +15,13 @@ evenly (flat :math:`p(y)`); it lies between 1 (all predictions identical) and th
 
 from __future__ import annotations
 
+import numbers
 from typing import overload
 
 import numpy as np
 from scipy.special import rel_entr
 
-from motionlab.metrics._inputs import ArrayLike, as_float_array, as_labels, check_count
+from motionlab.validation import ArrayLike, as_float_array, as_labels, check_scalar
 
 _ROW_SUM_TOLERANCE = 1e-4
 
@@ -57,7 +58,7 @@ def inception_score(probs: ArrayLike, splits: int | None = None) -> float | tupl
     p = _probabilities(probs, "inception_score")
     if splits is None:
         return _score(p)
-    count = check_count(splits, "splits", "inception_score")
+    count = int(check_scalar(splits, "splits", "inception_score", kind=numbers.Integral, minimum=1))
     if count > p.shape[0]:
         raise ValueError(f"inception_score: splits ({count}) cannot exceed the number of rows ({p.shape[0]})")
     scores = np.array([_score(chunk) for chunk in np.array_split(p, count)])
@@ -76,7 +77,7 @@ def recognition_accuracy(logits_or_probs: ArrayLike, labels: ArrayLike) -> float
     scores = as_float_array(logits_or_probs, "logits_or_probs", func, ndim=2, layout="(N, C)")
     target = as_labels(labels, "labels", func, length=scores.shape[0])
     if target.dtype.kind not in "biu":
-        raise ValueError(f"{func}: labels must be integer class indices, got dtype {target.dtype}")
+        raise TypeError(f"{func}: labels must be integer class indices, got dtype {target.dtype}")
     n_classes = scores.shape[1]
     if target.min() < 0 or target.max() >= n_classes:
         raise ValueError(

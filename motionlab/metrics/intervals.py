@@ -13,6 +13,7 @@ per cent. Student's t is the exact interval for normally distributed values.)
 
 from __future__ import annotations
 
+import numbers
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from typing import Any
@@ -21,17 +22,10 @@ import numpy as np
 import torch
 from scipy import stats
 
-from motionlab.metrics._inputs import ArrayLike, as_float_array, check_count
+from motionlab.validation import ArrayLike, as_float_array, check_scalar
 
 MetricValue = float | Mapping[str, float]
 """What a repeated metric returns per sample set: one number, or several by name."""
-
-
-def _check_confidence(confidence: float, func: str) -> float:
-    level = float(confidence)
-    if not 0.0 < level < 1.0:
-        raise ValueError(f"{func}: confidence must lie strictly between 0 and 1, got {confidence!r}")
-    return level
 
 
 def mean_ci(values: ArrayLike, confidence: float = 0.95) -> tuple[float, float]:
@@ -41,7 +35,11 @@ def mean_ci(values: ArrayLike, confidence: float = 0.95) -> tuple[float, float]:
     v = as_float_array(values, "values", func, ndim=1, layout="(n,)")
     if v.shape[0] < 2:
         raise ValueError(f"{func}: values needs at least 2 entries for an interval, got {v.shape[0]}")
-    level = _check_confidence(confidence, func)
+    level = float(
+        check_scalar(
+            confidence, "confidence", func, minimum=0, maximum=1, include_minimum=False, include_maximum=False
+        )
+    )
     n = v.shape[0]
     quantile = stats.t.ppf(0.5 * (1.0 + level), df=n - 1)
     return float(v.mean()), float(quantile * v.std(ddof=1) / np.sqrt(n))
@@ -74,7 +72,7 @@ def _number(value: Any, where: str) -> float:
     try:
         number = float(value)
     except (TypeError, ValueError) as exc:
-        raise ValueError(f"repeat_metric: {where} returned {type(value).__name__}, not a number") from exc
+        raise TypeError(f"repeat_metric: {where} returned {type(value).__name__}, not a number") from exc
     if not np.isfinite(number):
         raise ValueError(f"repeat_metric: {where} returned a non-finite value ({number})")
     return number
@@ -103,9 +101,13 @@ def repeat_metric(
         An :class:`Interval` when ``fn`` returns a number, else ``{name: Interval}`` in ``fn``'s key order.
     """
     func = "repeat_metric"
-    count = check_count(n_repeats, "n_repeats", func, minimum=2)
-    master = check_count(seed, "seed", func, minimum=0)
-    level = _check_confidence(confidence, func)
+    count = int(check_scalar(n_repeats, "n_repeats", func, kind=numbers.Integral, minimum=2))
+    master = int(check_scalar(seed, "seed", func, kind=numbers.Integral, minimum=0))
+    level = float(
+        check_scalar(
+            confidence, "confidence", func, minimum=0, maximum=1, include_minimum=False, include_maximum=False
+        )
+    )
     results = [fn(sample_fn(torch.Generator().manual_seed(repeat_seed(master, r)))) for r in range(count)]
     if not isinstance(results[0], Mapping):
         return _interval([_number(value, f"fn on repeat {r}") for r, value in enumerate(results)], level)

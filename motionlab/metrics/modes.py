@@ -27,7 +27,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from motionlab.metrics._inputs import ArrayLike, as_labels
+from motionlab.validation import ArrayLike, as_labels
 
 
 def contingency_table(discovered: ArrayLike, truth: ArrayLike) -> np.ndarray:

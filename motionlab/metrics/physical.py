@@ -20,7 +20,7 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from motionlab.metrics._inputs import ArrayLike, as_float_array, check_positive
+from motionlab.validation import ArrayLike, as_float_array, check_scalar
 
 #: Foot joints of the default 22-joint skeleton: left/right ankle (7, 8) and left/right foot (10, 11).
 FOOT_JOINTS = (7, 8, 10, 11)
@@ -59,15 +59,20 @@ def infer_foot_contacts(
     func = "infer_foot_contacts"
     x = _positions(positions, func, min_frames=2)
     indices = _foot_indices(feet, x.shape[-2], func)
-    return _contacts(x, indices, check_positive(fps, "fps", func), height_threshold, speed_threshold, func)
+    rate = float(check_scalar(fps, "fps", func, minimum=0, include_minimum=False))
+    return _contacts(x, indices, rate, height_threshold, speed_threshold, func)
 
 
 def _contacts(
     x: np.ndarray, feet: list[int], fps: float, height_threshold: float, speed_threshold: float, func: str
 ) -> np.ndarray:
     """Contact flags ``(..., T, F)`` of the joints ``feet`` in positions ``x`` ``(..., T, J, 3)``."""
-    max_height = check_positive(height_threshold, "height_threshold", func)
-    max_speed = check_positive(speed_threshold, "speed_threshold", func)
+    max_height = float(
+        check_scalar(height_threshold, "height_threshold", func, minimum=0, include_minimum=False)
+    )
+    max_speed = float(
+        check_scalar(speed_threshold, "speed_threshold", func, minimum=0, include_minimum=False)
+    )
     foot = x[..., feet, :]
     height = foot[..., 2] - foot[..., 2].min(axis=-2, keepdims=True)
     speed = np.linalg.norm(np.gradient(foot[..., :2], axis=-3), axis=-1) * fps
@@ -99,7 +104,7 @@ def foot_skating(
     func = "foot_skating"
     x = _positions(positions, func, min_frames=2)
     indices = _foot_indices(feet, x.shape[-2], func)
-    rate = check_positive(fps, "fps", func)
+    rate = float(check_scalar(fps, "fps", func, minimum=0, include_minimum=False))
     if contacts is None:
         planted = _contacts(x, indices, rate, height_threshold, speed_threshold, func)
     else:
@@ -124,7 +129,9 @@ def foot_skating(
 
 def _parents(parents: ArrayLike | Sequence[int], n_joints: int, func: str) -> np.ndarray:
     p = np.asarray(parents)
-    if p.ndim != 1 or p.shape[0] != n_joints or p.dtype.kind not in "iu":
+    if p.size and p.dtype.kind not in "iu":  # an empty list is a wrong length, not a wrong type
+        raise TypeError(f"{func}: parents must be {n_joints} integers (one per joint), got dtype {p.dtype}")
+    if p.ndim != 1 or p.shape[0] != n_joints:
         raise ValueError(f"{func}: parents must be {n_joints} integers (one per joint), got {p.tolist()}")
     joints = np.arange(n_joints)
     if (p < -1).any() or (p >= n_joints).any() or (p == joints).any() or not (p == -1).any():

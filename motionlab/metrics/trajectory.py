@@ -25,7 +25,7 @@ from __future__ import annotations
 import numpy as np
 from scipy.spatial.distance import cdist
 
-from motionlab.metrics._inputs import ArrayLike, as_float_array, check_positive
+from motionlab.validation import ArrayLike, as_float_array, check_scalar
 
 
 def _samples_and_targets(
@@ -93,7 +93,7 @@ def multimodal_ground_truth(start_poses: ArrayLike, futures: ArrayLike, threshol
             f"{func}: start_poses and futures must have the same N, got {starts.shape[0]} and "
             f"{ahead.shape[0]}"
         )
-    radius = check_positive(threshold, "threshold", func)
+    radius = float(check_scalar(threshold, "threshold", func, minimum=0, include_minimum=False))
     distances = cdist(starts.reshape(starts.shape[0], -1), starts.reshape(starts.shape[0], -1))
     return [ahead[np.flatnonzero(row < radius)] for row in distances]
 

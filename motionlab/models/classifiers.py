@@ -14,11 +14,14 @@ output head per label (``action``, ``mode``, ``body``) on a shared trunk.
 
 from __future__ import annotations
 
+import numbers
 from dataclasses import dataclass, field
 from typing import Literal
 
 import torch
 from torch import Tensor, nn
+
+from motionlab.validation import check_choice, check_scalar, check_tensor
 
 HEADS = ("action", "mode", "body")
 
@@ -45,12 +48,14 @@ class ClassifierConfig:
     kernel_size: int = 5
 
     def __post_init__(self) -> None:
-        if self.kind not in ("conv", "gru"):
-            raise ValueError(f"ClassifierConfig.kind must be 'conv' or 'gru', got {self.kind!r}")
-        if not self.classes or any(n < 2 for n in self.classes.values()):
-            raise ValueError(
-                f"ClassifierConfig.classes needs at least one head with >= 2 classes, got {self.classes}"
-            )
+        where = "ClassifierConfig"
+        check_choice(self.kind, "kind", where, ("conv", "gru"))
+        for name in ("in_features", "hidden", "feature_dim", "kernel_size"):
+            check_scalar(getattr(self, name), name, where, kind=numbers.Integral, minimum=1)
+        if not self.classes:
+            raise ValueError(f"{where}: classes needs at least one head, got {self.classes}")
+        for head, count in self.classes.items():
+            check_scalar(count, f"classes[{head!r}]", where, kind=numbers.Integral, minimum=2)
         if self.kernel_size % 2 != 1:
             raise ValueError(f"ClassifierConfig.kernel_size must be odd, got {self.kernel_size}")
 
@@ -75,14 +80,6 @@ class MotionClassifier(nn.Module):
         self.feature_dim = width
         self.heads = nn.ModuleDict({name: nn.Linear(width, n) for name, n in cfg.classes.items()})
 
-    def _check(self, x: Tensor) -> Tensor:
-        if x.dim() != 3 or x.shape[-1] != self.cfg.in_features or x.shape[1] < 1:
-            raise ValueError(
-                f"MotionClassifier: expected frames (B, T, {self.cfg.in_features}) with T >= 1, "
-                f"got {tuple(x.shape)}"
-            )
-        return x
-
     def layer_activations(self, x: Tensor) -> list[Tensor]:
         """The trunk's intermediate activations, in order; the last one is the feature vector.
 
@@ -90,7 +87,9 @@ class MotionClassifier(nn.Module):
         (the input of the paper's final FC layer); for ``gru``: the GRU outputs ``(B, T, hidden)`` then the
         30-d tanh features ``(B, feature_dim)``. (Inputs to the Motion Cell's feature-matching loss.)
         """
-        x = self._check(x)
+        check_tensor(x, "x", "MotionClassifier", ndim=3, trailing=(self.cfg.in_features,), finite=False)
+        if x.shape[1] < 1:
+            raise ValueError(f"MotionClassifier: x must hold at least one frame, got shape {tuple(x.shape)}")
         if self.cfg.kind == "conv":
             acts, h = [], x.transpose(1, 2)
             for conv in self.convs:

@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import atexit
 import multiprocessing
+import numbers
 import os
 import signal
 import threading
@@ -24,6 +25,7 @@ from concurrent.futures.process import BrokenProcessPool
 from typing import Any, TypeVar
 
 from motionlab import config
+from motionlab.validation import check_scalar
 
 R = TypeVar("R")
 K = TypeVar("K")
@@ -47,11 +49,6 @@ def _in_worker(function: Callable[..., R], arguments: tuple[Any, ...], environme
 
 def _package_environment() -> dict[str, str]:
     return {name: value for name, value in os.environ.items() if name.startswith(_ENV_PREFIX)}
-
-
-def _check_processes(processes: int, where: str) -> None:
-    if isinstance(processes, bool) or not isinstance(processes, int) or processes < 1:
-        raise ValueError(f"{where}: processes must be a positive integer, got {processes!r}")
 
 
 #: How often a worker checks that the process that started it is still there (seconds).
@@ -80,7 +77,7 @@ def _start_worker(parent: int) -> None:
 def worker_pool(processes: int = 2) -> ProcessPoolExecutor:
     """A pool of ``processes`` fresh (``spawn``) worker processes that end with this process; submit work with
     :func:`submit`."""
-    _check_processes(processes, "worker_pool")
+    check_scalar(processes, "processes", "worker_pool", kind=numbers.Integral, minimum=1)
     return ProcessPoolExecutor(
         max_workers=processes,
         mp_context=multiprocessing.get_context("spawn"),
@@ -96,7 +93,7 @@ def shared_pool(processes: int = 2) -> ProcessPoolExecutor:
     calls of a chapter share one pool instead of starting a pool each. Every call still runs as in a
     fresh worker (:func:`submit`); the pool ends when this process does, or with :func:`close_shared_pools`.
     """
-    _check_processes(processes, "shared_pool")
+    check_scalar(processes, "processes", "shared_pool", kind=numbers.Integral, minimum=1)
     if processes not in _shared_pools:
         _shared_pools[processes] = worker_pool(processes)
     return _shared_pools[processes]
@@ -137,7 +134,7 @@ def run_in_workers(
     Calls start in the order given (put the longest first, so the last one to finish is short). With one
     process, or one call, everything runs here, in this process. An exception in a call is raised here.
     """
-    _check_processes(processes, "run_in_workers")
+    check_scalar(processes, "processes", "run_in_workers", kind=numbers.Integral, minimum=1)
     if processes == 1 or len(calls) <= 1:
         return [function(*arguments) for arguments in calls]
     return [results[0] for results in run_chains([[(function, arguments)] for arguments in calls], processes)]
@@ -160,7 +157,7 @@ def run_chains(chains: Sequence[Sequence[Step]], processes: int = 2) -> list[lis
     that one runs), the running ones finish, and the exception of the first failed call (in the order
     given) is raised here. With one process everything runs here, in order.
     """
-    _check_processes(processes, "run_chains")
+    check_scalar(processes, "processes", "run_chains", kind=numbers.Integral, minimum=1)
     if processes == 1:
         return [[function(*arguments) for function, arguments in chain] for chain in chains]
     results: list[list[Any]] = [[None] * len(chain) for chain in chains]

@@ -21,9 +21,15 @@ schedules that differ in any argument never share a cached model.
 
 from __future__ import annotations
 
-import math
+import numbers
 from dataclasses import dataclass
 from typing import Protocol, runtime_checkable
+
+from motionlab.validation import check_scalar
+
+#: The types a schedule's numbers may have: plain Python numbers, since a schedule's fields go into the cache
+#: key of a training run (JSON).
+_NUMBER = (int, float)
 
 
 @runtime_checkable
@@ -33,29 +39,14 @@ class Schedule(Protocol):
     def __call__(self, step: int) -> float: ...
 
 
-def _check_step(step: int) -> int:
-    if isinstance(step, bool) or not isinstance(step, int) or step < 0:
-        raise ValueError(f"schedule step must be a non-negative int, got {step!r}")
-    return step
-
-
-def _check_count(owner: str, name: str, value: int) -> None:
-    if isinstance(value, bool) or not isinstance(value, int) or value < 0:
-        raise ValueError(f"{owner}.{name} must be a non-negative int, got {value!r}")
-
-
-def _check_finite(owner: str, name: str, value: float) -> None:
-    if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
-        raise ValueError(f"{owner}.{name} must be a finite number, got {value!r}")
-
-
-def _interpolate(points: tuple[tuple[int, float], ...], step: int) -> float:
+def _interpolate(points: tuple[tuple[int, float], ...], step: int, owner: str) -> float:
     """Piecewise-linear value at ``step`` through ``points`` (steps non-decreasing; equal steps mean a jump).
 
     Before the first point: the first value. At or after the last: the last value. At a jump (two points
-    with the same step) the later point's value applies from that step on.
+    with the same step) the later point's value applies from that step on. ``owner`` names the schedule in
+    the error for a bad ``step``.
     """
-    _check_step(step)
+    check_scalar(step, "step", owner, kind=numbers.Integral, minimum=0)
     last_reached = -1
     for index, (at, _) in enumerate(points):
         if at <= step:
@@ -88,8 +79,8 @@ class PiecewiseLinear:
         if not points:
             raise ValueError("PiecewiseLinear.points must not be empty")
         for index, (at, value) in enumerate(points):
-            _check_count("PiecewiseLinear", f"points[{index}] step", at)
-            _check_finite("PiecewiseLinear", f"points[{index}] value", value)
+            check_scalar(at, f"points[{index}] step", "PiecewiseLinear", kind=int, minimum=0)
+            check_scalar(value, f"points[{index}] value", "PiecewiseLinear", kind=_NUMBER)
         for index in range(1, len(points)):
             if points[index][0] < points[index - 1][0]:
                 raise ValueError(
@@ -100,7 +91,7 @@ class PiecewiseLinear:
         object.__setattr__(self, "points", tuple((at, float(value)) for at, value in points))
 
     def __call__(self, step: int) -> float:
-        return _interpolate(self.points, step)
+        return _interpolate(self.points, step, "PiecewiseLinear")
 
 
 @dataclass(frozen=True)
@@ -110,10 +101,10 @@ class Constant:
     value: float
 
     def __post_init__(self) -> None:
-        _check_finite("Constant", "value", self.value)
+        check_scalar(self.value, "value", "Constant", kind=_NUMBER)
 
     def __call__(self, step: int) -> float:
-        _check_step(step)
+        check_scalar(step, "step", "Constant", kind=numbers.Integral, minimum=0)
         return float(self.value)
 
 
@@ -132,13 +123,15 @@ class LinearRamp:
     end: float
 
     def __post_init__(self) -> None:
-        _check_count("LinearRamp", "start", self.start)
-        _check_count("LinearRamp", "length", self.length)
-        _check_finite("LinearRamp", "begin", self.begin)
-        _check_finite("LinearRamp", "end", self.end)
+        check_scalar(self.start, "start", "LinearRamp", kind=int, minimum=0)
+        check_scalar(self.length, "length", "LinearRamp", kind=int, minimum=0)
+        check_scalar(self.begin, "begin", "LinearRamp", kind=_NUMBER)
+        check_scalar(self.end, "end", "LinearRamp", kind=_NUMBER)
 
     def __call__(self, step: int) -> float:
-        return _interpolate(((self.start, self.begin), (self.start + self.length, self.end)), step)
+        return _interpolate(
+            ((self.start, self.begin), (self.start + self.length, self.end)), step, "LinearRamp"
+        )
 
 
 @dataclass(frozen=True)
@@ -166,20 +159,14 @@ class KLAnneal:
     cooldown_value: float = 0.0
 
     def __post_init__(self) -> None:
-        _check_finite("KLAnneal", "max_value", self.max_value)
-        if self.max_value < 0:
-            raise ValueError(f"KLAnneal.max_value must be >= 0, got {self.max_value}")
-        _check_count("KLAnneal", "warmup", self.warmup)
-        _check_count("KLAnneal", "anneal", self.anneal)
-        _check_count("KLAnneal", "cooldown", self.cooldown)
-        _check_finite("KLAnneal", "cooldown_value", self.cooldown_value)
-        if not 0 <= self.cooldown_value <= self.max_value:
-            raise ValueError(
-                f"KLAnneal.cooldown_value must lie in [0, max_value={self.max_value}], got "
-                f"{self.cooldown_value}"
-            )
+        check_scalar(self.max_value, "max_value", "KLAnneal", kind=_NUMBER, minimum=0)
+        for name in ("warmup", "anneal", "cooldown"):
+            check_scalar(getattr(self, name), name, "KLAnneal", kind=int, minimum=0)
+        check_scalar(
+            self.cooldown_value, "cooldown_value", "KLAnneal", kind=_NUMBER, minimum=0, maximum=self.max_value
+        )
         if self.cooldown_start is not None:
-            _check_count("KLAnneal", "cooldown_start", self.cooldown_start)
+            check_scalar(self.cooldown_start, "cooldown_start", "KLAnneal", kind=int, minimum=0)
             if self.cooldown_start < self.warmup + self.anneal:
                 raise ValueError(
                     f"KLAnneal.cooldown_start ({self.cooldown_start}) must be >= warmup + anneal "
@@ -196,4 +183,4 @@ class KLAnneal:
                 (self.cooldown_start, self.max_value),
                 (self.cooldown_start + self.cooldown, self.cooldown_value),
             )
-        return _interpolate(points, step)
+        return _interpolate(points, step, "KLAnneal")

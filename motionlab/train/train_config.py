@@ -3,25 +3,15 @@
 from __future__ import annotations
 
 import dataclasses
-import math
 from dataclasses import dataclass, field
 from typing import Any
 
 from motionlab.checkpoints import config_dict
 from motionlab.train.schedules import Schedule
+from motionlab.validation import check_scalar
 
-
-def _is_int(value: Any) -> bool:
-    return isinstance(value, int) and not isinstance(value, bool)
-
-
-def _check_positive_int(name: str, value: Any, allow_none: bool = False) -> None:
-    if value is None and allow_none:
-        return
-    if not _is_int(value) or value < 1:
-        raise ValueError(
-            f"TrainConfig.{name} must be a positive int{' or None' if allow_none else ''}, got {value!r}"
-        )
+#: The types of the numeric fields: plain Python numbers, since the fields go into the cache key (JSON).
+_NUMBER = (int, float)
 
 
 def _check_schedule(name: str, schedule: Any) -> None:
@@ -81,34 +71,23 @@ class TrainConfig:
                 f"TrainConfig: set exactly one of steps and epochs, got steps={self.steps}, "
                 f"epochs={self.epochs}"
             )
-        _check_positive_int("steps", self.steps, allow_none=True)
-        _check_positive_int("epochs", self.epochs, allow_none=True)
-        _check_positive_int("batch_size", self.batch_size)
-        _check_positive_int("val_every", self.val_every, allow_none=True)
-        _check_positive_int("log_every", self.log_every)
-        _check_positive_int("checkpoint_every", self.checkpoint_every, allow_none=True)
-        if not _is_int(self.seed) or self.seed < 0:
-            raise ValueError(f"TrainConfig.seed must be a non-negative int, got {self.seed!r}")
-        if not isinstance(self.lr, (int, float)) or not math.isfinite(self.lr) or self.lr <= 0:
-            raise ValueError(f"TrainConfig.lr must be a finite positive number, got {self.lr!r}")
-        if (
-            not isinstance(self.weight_decay, (int, float))
-            or not math.isfinite(self.weight_decay)
-            or self.weight_decay < 0
-        ):
-            raise ValueError(
-                f"TrainConfig.weight_decay must be a finite number >= 0, got {self.weight_decay!r}"
+        where = "TrainConfig"
+        optional = ("steps", "epochs", "val_every", "checkpoint_every")  # None: not set
+        for name in ("steps", "epochs", "batch_size", "val_every", "log_every", "checkpoint_every"):
+            value = getattr(self, name)
+            if value is not None or name not in optional:
+                check_scalar(value, name, where, kind=int, minimum=1)
+        check_scalar(self.seed, "seed", where, kind=int, minimum=0)
+        check_scalar(self.lr, "lr", where, kind=_NUMBER, minimum=0, include_minimum=False)
+        check_scalar(self.weight_decay, "weight_decay", where, kind=_NUMBER, minimum=0)
+        if len(self.betas) != 2:
+            raise ValueError(f"{where}: betas must be two numbers in [0, 1), got {self.betas!r}")
+        for index, beta in enumerate(self.betas):
+            check_scalar(
+                beta, f"betas[{index}]", where, kind=_NUMBER, minimum=0, maximum=1, include_maximum=False
             )
-        if len(self.betas) != 2 or not all(isinstance(b, (int, float)) and 0 <= b < 1 for b in self.betas):
-            raise ValueError(f"TrainConfig.betas must be two numbers in [0, 1), got {self.betas!r}")
-        if self.grad_clip is not None and (
-            not isinstance(self.grad_clip, (int, float))
-            or not math.isfinite(self.grad_clip)
-            or self.grad_clip <= 0
-        ):
-            raise ValueError(
-                f"TrainConfig.grad_clip must be a finite positive number or None, got {self.grad_clip!r}"
-            )
+        if self.grad_clip is not None:
+            check_scalar(self.grad_clip, "grad_clip", where, kind=_NUMBER, minimum=0, include_minimum=False)
         if not isinstance(self.schedules, dict):
             raise TypeError(
                 f"TrainConfig.schedules must be a dict name -> schedule, got {type(self.schedules).__name__}"

@@ -2,7 +2,8 @@
 
 Every function takes global joint positions (``(T, J, 3)`` or one pose ``(J, 3)``, z up) and the
 skeleton's ``parents`` list, so it draws any representation once it has been through forward
-kinematics. NumPy arrays and torch tensors are both accepted; bad shapes raise ``ValueError``.
+kinematics. NumPy arrays and torch tensors are both accepted; following :mod:`motionlab.validation`, a wrong
+type raises ``TypeError`` and a bad shape or value ``ValueError``.
 
 - :func:`plot_pose`: one pose on a 3D axis (equal aspect, floor grid).
 - :func:`filmstrip`: keyframes side by side in one figure.

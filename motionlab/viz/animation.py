@@ -13,6 +13,7 @@ as a stray static image in a notebook and is freed as soon as the HTML is made.
 
 from __future__ import annotations
 
+import numbers
 from collections.abc import Sequence
 from dataclasses import dataclass
 
@@ -22,6 +23,7 @@ from matplotlib.animation import FuncAnimation
 from matplotlib.figure import Figure
 from mpl_toolkits.mplot3d import Axes3D
 
+from motionlab.validation import check_choice, check_scalar
 from motionlab.viz.inputs import ArrayLike, as_parents, as_sequence_list
 from motionlab.viz.stick_figure import (
     GENERATED_COLOR,
@@ -40,8 +42,7 @@ LAYOUTS = ("overlay", "side")
 
 def animation_frames(num_frames: int, step: int) -> list[int]:
     """The frame indices an animation of ``num_frames`` frames shows with ``step``: 0, step, 2·step, ..."""
-    if isinstance(step, bool) or not isinstance(step, (int, np.integer)) or step < 1:
-        raise ValueError(f"step must be a positive integer, got {step!r}")
+    check_scalar(step, "step", "animation_frames", kind=numbers.Integral, minimum=1)
     return list(range(0, num_frames, int(step)))
 
 
@@ -83,11 +84,8 @@ def build_animation(
     func = "animate"
     sequences = as_sequence_list(motions, func)
     parent_index = as_parents(parents, sequences[0].shape[1], func)
-    if layout not in LAYOUTS:
-        raise ValueError(f"{func}: layout must be one of {LAYOUTS}, got {layout!r}")
-    fps = float(fps)
-    if not np.isfinite(fps) or fps <= 0:
-        raise ValueError(f"{func}: fps must be a positive number, got {fps!r}")
+    check_choice(layout, "layout", func, LAYOUTS)
+    fps = float(check_scalar(fps, "fps", func, minimum=0, include_minimum=False))
     count = len(sequences)
     colors = [f"C{i % 10}" for i in range(count)] if colors is None else list(colors)
     if len(colors) != count:

@@ -1,38 +1,29 @@
 """Input checks for the plotting functions: positions and parent lists, as NumPy, with clear errors.
 
-Every plotting function accepts NumPy arrays or torch tensors (any device, with or without grad) and
-raises ``ValueError`` naming the function, the argument and the shape it got, for example
-``animate: motion 1 must have shape (T, 22, 3), got (30, 21, 3)``.
+Every plotting function accepts NumPy arrays or torch tensors (any device, with or without grad). The
+conversion and the finiteness check are :func:`motionlab.validation.as_float_array`; the checks here add
+the layouts of positions and parents. Following :mod:`motionlab.validation`, a wrong type or dtype raises
+``TypeError`` and a wrong shape or value ``ValueError``, naming the function, the argument and what it got,
+for example ``animate: motion 1 must have shape (T, 22, 3), got (30, 21, 3)``.
 """
 
 from __future__ import annotations
 
+import numbers
 from collections.abc import Sequence
 
 import numpy as np
 import torch
 
+from motionlab.validation import as_float_array, check_scalar
+
 ArrayLike = np.ndarray | torch.Tensor
 """Joint positions as a NumPy array or a torch tensor."""
 
 
-def to_numpy(x: ArrayLike | Sequence, name: str, func: str) -> np.ndarray:
-    """``x`` as a float64 NumPy array; rejects non-numeric, ragged and non-finite input."""
-    if isinstance(x, torch.Tensor):
-        array = x.detach().cpu().to(torch.float64).numpy()
-    else:
-        try:
-            array = np.asarray(x, dtype=np.float64)
-        except (TypeError, ValueError) as exc:
-            raise ValueError(f"{func}: {name} is not a numeric array ({exc})") from exc
-    if not np.isfinite(array).all():
-        raise ValueError(f"{func}: {name} contains NaN or infinite values")
-    return array
-
-
 def as_sequence(positions: ArrayLike, name: str, func: str) -> np.ndarray:
     """Positions ``(T, J, 3)`` or one pose ``(J, 3)`` as a ``(T, J, 3)`` array (T >= 1, J >= 1)."""
-    array = to_numpy(positions, name, func)
+    array = as_float_array(positions, name, func, allow_empty=True)
     if array.ndim == 2:
         array = array[None]
     if array.ndim != 3 or array.shape[-1] != 3 or array.shape[0] == 0 or array.shape[1] == 0:
@@ -44,7 +35,7 @@ def as_sequence(positions: ArrayLike, name: str, func: str) -> np.ndarray:
 
 def as_pose(pose: ArrayLike, name: str, func: str) -> np.ndarray:
     """One pose ``(J, 3)`` (J >= 1)."""
-    array = to_numpy(pose, name, func)
+    array = as_float_array(pose, name, func, allow_empty=True)
     if array.ndim != 2 or array.shape[-1] != 3 or array.shape[0] == 0:
         raise ValueError(
             f"{func}: {name} must have shape (J, 3) (one pose; use filmstrip or animate for "
@@ -91,6 +82,7 @@ def as_parents(parents: Sequence[int] | ArrayLike, num_joints: int, func: str) -
             f"{func}: parents has {len(values)} entries but the positions have {num_joints} joints"
         )
     for j, p in enumerate(values):
-        if isinstance(p, bool) or not isinstance(p, (int, np.integer)) or not -1 <= p < num_joints or p == j:
+        check_scalar(p, f"parents[{j}]", func, kind=numbers.Integral)
+        if not -1 <= p < num_joints or p == j:
             raise ValueError(f"{func}: parents[{j}] must be -1 or the index of another joint, got {p!r}")
     return np.asarray(values, dtype=np.int64)

@@ -2,11 +2,13 @@
 
 from __future__ import annotations
 
+import numbers
 from collections.abc import Sequence
 
 import matplotlib.pyplot as plt
 from matplotlib.axes import Axes
 
+from motionlab.validation import check_scalar
 from motionlab.viz.inputs import ArrayLike, as_sequence_list
 
 
@@ -36,8 +38,7 @@ def plot_root_paths(
     func = "plot_root_paths"
     paths = as_sequence_list(positions, func)
     joints = paths[0].shape[1]
-    if isinstance(root, bool) or not isinstance(root, int) or not 0 <= root < joints:
-        raise ValueError(f"{func}: root must be a joint index in 0..{joints - 1}, got {root!r}")
+    check_scalar(root, "root (a joint index)", func, kind=numbers.Integral, minimum=0, maximum=joints - 1)
     count = len(paths)
     colors = [f"C{i % 10}" for i in range(count)] if colors is None else list(colors)
     if len(colors) != count:

@@ -22,6 +22,7 @@ from motionlab.geometry import (
     quat_nlerp,
     quat_slerp,
 )
+from motionlab.validation import check_scalar, check_tensor
 
 _FRAME_COLORS = ("tab:red", "tab:green", "tab:blue")
 _PATH_STYLES = {"slerp": dict(color="tab:blue", marker="o"), "nlerp": dict(color="tab:orange", marker="x")}
@@ -47,12 +48,9 @@ def plot_interpolation(q0: torch.Tensor, q1: torch.Tensor, t: float, n: int = 21
     speed), an S-curve for nlerp.
     Returns the figure (created with pyplot, so the inline backend shows it).
     """
-    if not 0.0 <= float(t) <= 1.0:
-        raise ValueError(f"plot_interpolation: t must be in [0, 1], got {t!r}")
+    check_scalar(t, "t", "plot_interpolation", minimum=0, maximum=1)
     for name, q in (("q0", q0), ("q1", q1)):
-        if not isinstance(q, torch.Tensor) or tuple(q.shape) != (4,):
-            shape = tuple(q.shape) if isinstance(q, torch.Tensor) else type(q).__name__
-            raise ValueError(f"plot_interpolation: {name} must be one quaternion of shape (4,), got {shape}")
+        check_tensor(q, name, "plot_interpolation", ndim=1, trailing=(4,), floating=False)
     q0, q1 = q0.double(), q1.double()
     paths = interpolation_paths(q0, q1, n)
     forward = torch.tensor([1.0, 0.0, 0.0], dtype=torch.float64)

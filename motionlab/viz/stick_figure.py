@@ -10,6 +10,7 @@ scales on all three axes (the box keeps the data's proportions), axis panes hidd
 
 from __future__ import annotations
 
+import numbers
 from collections.abc import Sequence
 from dataclasses import dataclass, replace
 
@@ -19,6 +20,7 @@ from matplotlib.figure import Figure
 from mpl_toolkits.mplot3d import Axes3D
 from mpl_toolkits.mplot3d.art3d import Line3D
 
+from motionlab.validation import check_scalar
 from motionlab.viz.inputs import ArrayLike, as_parents, as_pose, as_sequence
 
 #: Colours of the Motion Cell paper's comparison figure: real motion blue, generated motion orange.
@@ -211,15 +213,14 @@ def plot_pose(
     pose = as_pose(pos, "pos", "plot_pose")
     parent_index = as_parents(parents, pose.shape[0], "plot_pose")
     if not isinstance(ax, Axes3D):
-        raise ValueError(f"plot_pose: ax must be a 3D axis (projection='3d'), got {type(ax).__name__}")
+        raise TypeError(f"plot_pose: ax must be a 3D axis (projection='3d'), got {type(ax).__name__}")
     setup_axes(ax, Scene.around(pose) if scene is None else scene, elev=elev, azim=azim)
     return draw_stick_figure(ax, pose, parent_index, color, label=label)
 
 
 def keyframe_indices(num_frames: int, n_frames: int) -> np.ndarray:
     """``n_frames`` frame indices spread evenly from the first to the last of ``num_frames`` frames."""
-    if n_frames < 1:
-        raise ValueError(f"n_frames must be at least 1, got {n_frames}")
+    check_scalar(n_frames, "n_frames", "keyframe_indices", kind=numbers.Integral, minimum=1)
     return np.unique(np.round(np.linspace(0, num_frames - 1, min(n_frames, num_frames))).astype(np.int64))
 
 

@@ -18,6 +18,7 @@ first clip of that mode and body in every ``generate(s, n_per_mode=N)``.
 
 from __future__ import annotations
 
+import numbers
 from collections.abc import Sequence
 from dataclasses import dataclass
 from functools import lru_cache
@@ -34,6 +35,7 @@ from motionlab.data.store import MotionSet
 from motionlab.data.synthetic import generate
 from motionlab.metrics.physical import FOOT_JOINTS
 from motionlab.skeleton import BODY_TYPES, JOINT_NAMES
+from motionlab.validation import as_float_array, check_choice, check_scalar
 from motionlab.viz import filmstrip, plot_root_paths
 
 #: A pose counts as moving when some joint is more than this far (metres) from the reference pose.
@@ -42,8 +44,7 @@ STILL_TOLERANCE = 0.01
 
 def mode_choices(action: str) -> tuple[str, ...]:
     """The style modes of ``action`` (e.g. ``("upright", "hunched")`` for ``"walk"``), in mode-id order."""
-    if action not in ACTION_NAMES:
-        raise ValueError(f"unknown action {action!r}; choose one of {ACTION_NAMES}")
+    check_choice(action, "action", "mode_choices", ACTION_NAMES)
     return CATALOGUE[ACTION_NAMES.index(action)].modes
 
 
@@ -108,12 +109,10 @@ def _check_clip(
     positions: np.ndarray, contacts: np.ndarray, fps: float, feet: Sequence[int]
 ) -> tuple[np.ndarray, np.ndarray, float, list[int]]:
     func = "summarise_clip"
-    positions = np.asarray(positions, dtype=np.float64)
+    positions = as_float_array(positions, "positions", func, allow_empty=True)
     contacts = np.asarray(contacts)
     if positions.ndim != 3 or positions.shape[-1] != 3 or positions.shape[0] < 2:
         raise ValueError(f"{func}: positions must have shape (T, J, 3) with T >= 2, got {positions.shape}")
-    if not np.isfinite(positions).all():
-        raise ValueError(f"{func}: positions contain NaN or infinite values")
     feet = [int(j) for j in feet]
     if not feet or min(feet) < 0 or max(feet) >= positions.shape[1] or len(set(feet)) != len(feet):
         raise ValueError(
@@ -125,10 +124,8 @@ def _check_clip(
             f"(frames x feet), got {contacts.shape}"
         )
     if contacts.dtype != bool:
-        raise ValueError(f"{func}: contacts must be booleans, got dtype {contacts.dtype}")
-    fps = float(fps)
-    if not np.isfinite(fps) or fps <= 0:
-        raise ValueError(f"{func}: fps must be a positive number, got {fps!r}")
+        raise TypeError(f"{func}: contacts must be booleans, got dtype {contacts.dtype}")
+    fps = float(check_scalar(fps, "fps", func, minimum=0, include_minimum=False))
     return positions, contacts, fps, feet
 
 
@@ -197,15 +194,13 @@ def browse_clip(action: str, mode: str, body: str, seed: int) -> BrowsedClip:
     Returns:
         A :class:`BrowsedClip` (copies; changing them does not change later calls).
     Raises:
-        ValueError: naming the argument that is not one of the choices.
+        ValueError: naming the argument that is not one of the choices (or a negative seed).
+        TypeError: a seed that is not an integer.
     """
-    styles = mode_choices(action)
-    if mode not in styles:
-        raise ValueError(f"browse_clip: {action!r} has no mode {mode!r}; choose one of {styles}")
-    if body not in BODY_TYPES:
-        raise ValueError(f"browse_clip: unknown body {body!r}; choose one of {BODY_TYPES}")
-    if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0:
-        raise ValueError(f"browse_clip: seed must be a non-negative integer, got {seed!r}")
+    check_choice(action, "action", "browse_clip", ACTION_NAMES)
+    check_choice(mode, f"mode (a style of {action!r})", "browse_clip", mode_choices(action))
+    check_choice(body, "body", "browse_clip", BODY_TYPES)
+    check_scalar(seed, "seed", "browse_clip", kind=numbers.Integral, minimum=0)
     data = _clip_set(int(seed))
     mode_name = f"{action}_{mode}"
     mode_id = list(data.mode_names).index(mode_name)

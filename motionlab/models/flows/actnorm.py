@@ -8,10 +8,13 @@ diagonal, so ``log |det J| = time * sum(log_scale)`` for every sequence.
 
 from __future__ import annotations
 
+import numbers
+
 import torch
 from torch import Tensor, nn
 
 from motionlab.models.flows.base import FlowLayer, check_sequence
+from motionlab.validation import check_scalar
 
 
 class ActNorm(FlowLayer):
@@ -30,8 +33,7 @@ class ActNorm(FlowLayer):
 
     def __init__(self, channels: int, eps: float = 1e-6) -> None:
         super().__init__()
-        if isinstance(channels, bool) or not isinstance(channels, int) or channels < 1:
-            raise ValueError(f"ActNorm: channels must be a positive int, got {channels!r}")
+        check_scalar(channels, "channels", "ActNorm", kind=numbers.Integral, minimum=1)
         self.channels = channels
         self.eps = float(eps)
         self.bias = nn.Parameter(torch.zeros(channels))

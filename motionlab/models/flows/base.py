@@ -1,4 +1,4 @@
-"""The interface every flow layer implements, input checks, and :class:`FlowSequence`.
+"""The interface every flow layer implements, the flow layout's input checks, and :class:`FlowSequence`.
 
 A flow layer is an invertible map of sequences ``x`` of shape ``(batch, channels, time)``:
 
@@ -17,31 +17,18 @@ from __future__ import annotations
 from abc import ABC, abstractmethod
 from collections.abc import Iterable
 
-import torch
 from torch import Tensor, nn
+
+from motionlab.validation import check_tensor
 
 
 def check_sequence(x: Tensor, name: str, where: str, channels: int | None = None) -> Tensor:
     """Check that ``x`` is a finite floating tensor ``(batch, channels, time)``; return it.
 
-    Raises ``TypeError``/``ValueError`` naming ``where`` and ``name`` otherwise.
+    The flow layout spelled for :func:`motionlab.validation.check_tensor` (``TypeError`` for a wrong type or
+    dtype, ``ValueError`` for a wrong shape or a NaN, naming ``where``, ``name`` and the first bad index).
     """
-    if not isinstance(x, Tensor):
-        raise TypeError(f"{where}: {name} must be a torch.Tensor, got {type(x).__name__}")
-    if not x.is_floating_point():
-        raise ValueError(f"{where}: {name} must be a floating-point tensor, got dtype {x.dtype}")
-    if x.dim() != 3:
-        raise ValueError(f"{where}: {name} must have shape (batch, channels, time), got {tuple(x.shape)}")
-    if channels is not None and x.shape[1] != channels:
-        raise ValueError(f"{where}: {name} must have {channels} channels (dim 1), got shape {tuple(x.shape)}")
-    if not bool(
-        torch.isfinite(x.sum())
-    ):  # one cheap pass; scan element-wise only when it fails (or overflows)
-        finite = torch.isfinite(x)
-        if not bool(finite.all()):
-            index = tuple(int(i) for i in torch.nonzero(~finite)[0])
-            raise ValueError(f"{where}: {name} contains NaN or inf (first at index {index})")
-    return x
+    return check_tensor(x, name, where, ndim=3, trailing=(channels, None))
 
 
 def check_cond(cond: Tensor | None, x: Tensor, cond_channels: int, where: str) -> Tensor | None:

@@ -17,11 +17,14 @@ contraction and a deep flow starts close to the identity.
 
 from __future__ import annotations
 
+import numbers
+
 import torch
 import torch.nn.functional as F
 from torch import Tensor, nn
 
 from motionlab.models.flows.base import FlowLayer, check_cond, check_sequence
+from motionlab.validation import check_scalar
 
 #: Glow's offset inside the sigmoid: a fresh coupling scales by sigmoid(2) = 0.88.
 SCALE_OFFSET = 2.0
@@ -76,14 +79,13 @@ class AffineCoupling(FlowLayer):
         scale_offset: float = SCALE_OFFSET,
     ) -> None:
         super().__init__()
-        if isinstance(channels, bool) or not isinstance(channels, int) or channels < 2:
-            raise ValueError(f"AffineCoupling: channels must be an int >= 2, got {channels!r}")
-        if not isinstance(cond_channels, int) or cond_channels < 0:
-            raise ValueError(f"AffineCoupling: cond_channels must be an int >= 0, got {cond_channels!r}")
-        if not isinstance(hidden, int) or hidden < 1:
-            raise ValueError(f"AffineCoupling: hidden must be a positive int, got {hidden!r}")
-        if not isinstance(kernel_size, int) or kernel_size < 1 or kernel_size % 2 == 0:
-            raise ValueError(f"AffineCoupling: kernel_size must be a positive odd int, got {kernel_size!r}")
+        where = "AffineCoupling"
+        check_scalar(channels, "channels", where, kind=numbers.Integral, minimum=2)
+        check_scalar(cond_channels, "cond_channels", where, kind=numbers.Integral, minimum=0)
+        check_scalar(hidden, "hidden", where, kind=numbers.Integral, minimum=1)
+        check_scalar(kernel_size, "kernel_size", where, kind=numbers.Integral, minimum=1)
+        if kernel_size % 2 == 0:
+            raise ValueError(f"{where}: kernel_size must be odd, got {kernel_size!r}")
         self.channels, self.cond_channels = channels, cond_channels
         self.n_a = channels // 2
         self.n_b = channels - self.n_a

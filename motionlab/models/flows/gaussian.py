@@ -7,11 +7,14 @@ log-likelihood is the bar a flow has to clear to show that it captured any struc
 
 from __future__ import annotations
 
+import numbers
+
 import torch
 from torch import Tensor, nn
 
 from motionlab.models.flows.base import check_sequence
 from motionlab.models.flows.prior import LOG_2PI
+from motionlab.validation import check_scalar
 
 
 class DiagonalGaussian(nn.Module):
@@ -27,8 +30,7 @@ class DiagonalGaussian(nn.Module):
 
     def __init__(self, channels: int, min_std: float = 1e-6) -> None:
         super().__init__()
-        if isinstance(channels, bool) or not isinstance(channels, int) or channels < 1:
-            raise ValueError(f"DiagonalGaussian: channels must be a positive int, got {channels!r}")
+        check_scalar(channels, "channels", "DiagonalGaussian", kind=numbers.Integral, minimum=1)
         self.channels, self.min_std = channels, float(min_std)
         self.register_buffer("mean", torch.zeros(channels))
         self.register_buffer("std", torch.ones(channels))

@@ -19,6 +19,7 @@ motion model of MoGlow's §3.4: one flow over a whole clip, with exact log-likel
 
 from __future__ import annotations
 
+import numbers
 from dataclasses import dataclass
 
 import torch
@@ -29,6 +30,7 @@ from motionlab.models.flows.base import FlowLayer, FlowSequence, check_cond, che
 from motionlab.models.flows.coupling import AffineCoupling
 from motionlab.models.flows.invconv import InvertibleConv1x1
 from motionlab.models.flows.prior import StandardNormal, check_temperature
+from motionlab.validation import check_scalar
 
 
 def squeeze_time(x: Tensor) -> Tensor:
@@ -157,11 +159,8 @@ class GlowConfig:
 
     def __post_init__(self) -> None:
         for name in ("channels", "length", "levels", "steps_per_level", "hidden", "kernel_size"):
-            value = getattr(self, name)
-            if isinstance(value, bool) or not isinstance(value, int) or value < 1:
-                raise ValueError(f"GlowConfig.{name} must be a positive int, got {value!r}")
-        if not isinstance(self.cond_channels, int) or self.cond_channels < 0:
-            raise ValueError(f"GlowConfig.cond_channels must be an int >= 0, got {self.cond_channels!r}")
+            check_scalar(getattr(self, name), name, "GlowConfig", kind=numbers.Integral, minimum=1)
+        check_scalar(self.cond_channels, "cond_channels", "GlowConfig", kind=numbers.Integral, minimum=0)
         if self.length % 2**self.levels:
             raise ValueError(
                 f"GlowConfig: length {self.length} must be divisible by 2**levels = {2**self.levels}"

@@ -10,10 +10,13 @@ step where float32 round-off grows with depth, so the inverse matrix is computed
 
 from __future__ import annotations
 
+import numbers
+
 import torch
 from torch import Tensor, nn
 
 from motionlab.models.flows.base import FlowLayer, check_sequence
+from motionlab.validation import check_scalar
 
 
 def random_rotation(channels: int) -> Tensor:
@@ -47,8 +50,7 @@ class InvertibleConv1x1(FlowLayer):
 
     def __init__(self, channels: int) -> None:
         super().__init__()
-        if isinstance(channels, bool) or not isinstance(channels, int) or channels < 1:
-            raise ValueError(f"InvertibleConv1x1: channels must be a positive int, got {channels!r}")
+        check_scalar(channels, "channels", "InvertibleConv1x1", kind=numbers.Integral, minimum=1)
         self.channels = channels
         p, lower, upper = torch.linalg.lu(random_rotation(channels))
         s = torch.diagonal(upper)

@@ -12,18 +12,14 @@ import math
 import torch
 from torch import Tensor
 
+from motionlab.validation import check_scalar, check_tensor
+
 LOG_2PI = math.log(2.0 * math.pi)
 
 
 def check_temperature(temperature: float, where: str) -> float:
-    """``temperature`` as a float, or ``ValueError`` unless it is finite and ``>= 0``."""
-    try:
-        value = float(temperature)
-    except (TypeError, ValueError) as exc:
-        raise TypeError(f"{where}: temperature must be a number, got {type(temperature).__name__}") from exc
-    if not math.isfinite(value) or value < 0:
-        raise ValueError(f"{where}: temperature must be finite and >= 0, got {temperature!r}")
-    return value
+    """``temperature`` as a float, checked by :func:`motionlab.validation.check_scalar` (finite, ``>= 0``)."""
+    return float(check_scalar(temperature, "temperature", where, minimum=0))
 
 
 class StandardNormal:
@@ -31,10 +27,7 @@ class StandardNormal:
 
     def log_prob(self, z: Tensor) -> Tensor:
         """``log N(z; 0, I)`` per batch element, ``(batch,)``."""
-        if not isinstance(z, Tensor) or not z.is_floating_point() or z.dim() < 1:
-            raise ValueError(
-                f"StandardNormal.log_prob: z must be a floating tensor (batch, ...), got {z!r:.60}"
-            )
+        check_tensor(z, "z", "StandardNormal.log_prob", min_leading=1, finite=False)
         flat = z.reshape(z.shape[0], -1)
         return -0.5 * (flat.pow(2).sum(dim=1) + flat.shape[1] * LOG_2PI)
 

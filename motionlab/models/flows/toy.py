@@ -9,6 +9,7 @@ change-of-variables bookkeeping as a whole: a correct flow's density integrates 
 from __future__ import annotations
 
 import math
+import numbers
 from dataclasses import dataclass
 from typing import NamedTuple
 
@@ -19,6 +20,7 @@ from torch import Tensor, nn
 from motionlab.models.flows.base import FlowSequence
 from motionlab.models.flows.glow import GlowStep
 from motionlab.models.flows.prior import StandardNormal, check_temperature
+from motionlab.validation import check_scalar, check_tensor
 
 #: Centre and scale that bring the two moons of :func:`two_moons` to roughly zero mean and unit spread.
 MOONS_CENTER = (0.5, 0.25)
@@ -32,10 +34,8 @@ def two_moons(n: int, noise: float = 0.06, seed: int = 0) -> Tensor:
     ``a ~ U(0, pi)``, each point on either with probability 1/2; then ``noise`` (std, in moon units) is added
     and the points are shifted by :data:`MOONS_CENTER` and divided by :data:`MOONS_SCALE`.
     """
-    if isinstance(n, bool) or not isinstance(n, int) or n < 1:
-        raise ValueError(f"two_moons: n must be a positive int, got {n!r}")
-    if not math.isfinite(noise) or noise < 0:
-        raise ValueError(f"two_moons: noise must be finite and >= 0, got {noise!r}")
+    check_scalar(n, "n", "two_moons", kind=numbers.Integral, minimum=1)
+    check_scalar(noise, "noise", "two_moons", minimum=0)
     rng = np.random.default_rng(seed)
     angle = rng.uniform(0.0, math.pi, n)
     lower = rng.random(n) < 0.5
@@ -54,23 +54,7 @@ class ToyFlowConfig:
 
     def __post_init__(self) -> None:
         for name in ("steps", "hidden"):
-            value = getattr(self, name)
-            if isinstance(value, bool) or not isinstance(value, int) or value < 1:
-                raise ValueError(f"ToyFlowConfig.{name} must be a positive int, got {value!r}")
-
-
-def _check_points(points: Tensor, where: str) -> Tensor:
-    if (
-        not isinstance(points, Tensor)
-        or not points.is_floating_point()
-        or points.dim() != 2
-        or points.shape[1] != 2
-    ):
-        shape = tuple(points.shape) if isinstance(points, Tensor) else type(points).__name__
-        raise ValueError(f"{where}: points must be a floating tensor (n, 2), got {shape}")
-    if not bool(torch.isfinite(points).all()):
-        raise ValueError(f"{where}: points contain NaN or inf")
-    return points
+            check_scalar(getattr(self, name), name, "ToyFlowConfig", kind=numbers.Integral, minimum=1)
 
 
 class ToyFlow(nn.Module):
@@ -84,15 +68,15 @@ class ToyFlow(nn.Module):
 
     def log_prob(self, points: Tensor) -> Tensor:
         """``log p(points)`` ``(n,)`` for points ``(n, 2)``, in nats."""
-        z, logdet = self.flow(_check_points(points, "ToyFlow.log_prob")[:, :, None])
+        check_tensor(points, "points", "ToyFlow.log_prob", ndim=2, trailing=(2,))
+        z, logdet = self.flow(points[:, :, None])
         return self.prior.log_prob(z) + logdet
 
     @torch.no_grad()
     def sample(self, n: int, temperature: float = 1.0, generator: torch.Generator | None = None) -> Tensor:
         """``n`` points ``(n, 2)`` drawn at ``temperature``."""
         temperature = check_temperature(temperature, "ToyFlow.sample")
-        if isinstance(n, bool) or not isinstance(n, int) or n < 1:
-            raise ValueError(f"ToyFlow.sample: n must be a positive int, got {n!r}")
+        check_scalar(n, "n", "ToyFlow.sample", kind=numbers.Integral, minimum=1)
         z = self.prior.sample((n, 2, 1), temperature, generator, next(self.parameters()).dtype)
         return self.flow.inverse(z)[:, :, 0]
 
@@ -121,10 +105,8 @@ def grid_density(
 ) -> GridDensity:
     """Evaluate ``model``'s density at the centres of ``resolution**2`` cells covering ``[-extent,
     extent]**2``."""
-    if not math.isfinite(extent) or extent <= 0:
-        raise ValueError(f"grid_density: extent must be finite and > 0, got {extent!r}")
-    if isinstance(resolution, bool) or not isinstance(resolution, int) or resolution < 2:
-        raise ValueError(f"grid_density: resolution must be an int >= 2, got {resolution!r}")
+    check_scalar(extent, "extent", "grid_density", minimum=0, include_minimum=False)
+    check_scalar(resolution, "resolution", "grid_density", kind=numbers.Integral, minimum=2)
     step = 2.0 * extent / resolution
     centres = -extent + step * (np.arange(resolution) + 0.5)
     gx, gy = np.meshgrid(centres, centres)
