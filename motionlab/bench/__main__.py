@@ -1,8 +1,8 @@
-"""Run the benchmark modules of :mod:`motionlab.bench` and write ``build/bench.json``.
+"""Run the entries of the benchmark registry (:data:`motionlab.bench.ENTRIES`) and write ``build/bench.json``.
 
-Usage: ``python -m motionlab.bench [ENTRY ...] [--out FILE]``: every entry (module) by default, or only the
-named ones; ``--out`` replaces ``build/bench.json``. Each module runs in its own process, with torch on one
-thread unless the module says otherwise, so that one area's peak memory (``ru_maxrss``) does not leak into
+Usage: ``python -m motionlab.bench [ENTRY ...] [--out FILE]``: every entry of the registry by default, or only
+the named ones; ``--out`` replaces ``build/bench.json``. Each entry runs in its own process, with torch on
+one thread unless the module says otherwise, so that one area's peak memory (``ru_maxrss``) does not leak into
 another's.
 """
 
@@ -10,24 +10,23 @@ from __future__ import annotations
 
 import argparse
 import json
-import pkgutil
 import platform
 import subprocess
 import sys
 import time
 from pathlib import Path
 
-import motionlab.bench
 from motionlab import cli, config
+from motionlab.bench import ENTRIES
 
 PROG = "python -m motionlab.bench"
 
 _CHILD = """
 import json, resource, sys, time
-import importlib
-module = importlib.import_module("motionlab.bench." + sys.argv[1])
+from motionlab.bench import ENTRIES
+measure = ENTRIES[sys.argv[1]].load()
 start = time.perf_counter()
-result = module.run()
+result = measure()
 result["bench_seconds"] = time.perf_counter() - start
 result["peak_rss_mb"] = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
 print("BENCH-JSON " + json.dumps(result))
@@ -35,10 +34,8 @@ print("BENCH-JSON " + json.dumps(result))
 
 
 def entry_names() -> list[str]:
-    """The benchmark entries: the public modules of :mod:`motionlab.bench`, sorted."""
-    return sorted(
-        m.name for m in pkgutil.iter_modules(motionlab.bench.__path__) if not m.name.startswith("_")
-    )
+    """The benchmark entries of the registry (:data:`motionlab.bench.ENTRIES`), in its order."""
+    return list(ENTRIES)
 
 
 def _run_entries(names: list[str], out: Path | None) -> int:

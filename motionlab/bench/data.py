@@ -2,8 +2,8 @@
 
 The command ``python -m motionlab.data.synthetic --n-per-mode 84`` (12 modes x 84 clips, 120 frames each)
 runs as a subprocess pinned to one CPU core with single-threaded BLAS, so the wall time includes process
-start-up (importing numpy and torch) and writing the file. ``run()`` reports the wall time, clips per
-second, the subprocess's peak memory, the file size, and the load average while measuring.
+start-up (importing numpy and torch) and writing the file. :func:`generation_speed` reports the wall time,
+clips per second, the subprocess's peak memory, the file size, and the load average while measuring.
 """
 
 from __future__ import annotations
@@ -26,7 +26,7 @@ def _pin_to_one_core() -> None:
     os.sched_setaffinity(0, {min(os.sched_getaffinity(0))})
 
 
-def run() -> dict:
+def generation_speed() -> dict:
     """Measure one command-line run; numbers are keyed ``data.*``."""
     env = dict(os.environ, OMP_NUM_THREADS="1", OPENBLAS_NUM_THREADS="1", MKL_NUM_THREADS="1")
     with tempfile.TemporaryDirectory() as folder:

@@ -43,7 +43,7 @@ def _median_seconds(
     return statistics.median(times["fn"]), statistics.median(times["reference"])
 
 
-def run(n_items: int = 1_000_000, repeats: int = 7) -> dict:
+def kernel_speed(n_items: int = 1_000_000, repeats: int = 7) -> dict:
     """Measure the kernels on ``n_items`` random rotations; return a flat dictionary of numbers."""
     threads = config.set_threads(1)
     gen = torch.Generator().manual_seed(0)

@@ -20,7 +20,7 @@ FPS = 30
 FRAMES = 4 * FPS
 
 
-def run() -> dict:
+def sampling_speed() -> dict:
     """Sampling speed of the Motion Cell (see the module notes)."""
     config.set_threads(1)
     settings = ExperimentConfig.current()

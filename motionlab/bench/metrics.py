@@ -10,7 +10,7 @@ from motionlab.bench._timing import best_seconds
 from motionlab.metrics import apd, fid
 
 
-def run() -> dict:
+def metric_timings() -> dict:
     config.set_threads()
     rng = np.random.default_rng(0)
     real, generated = rng.normal(size=(2000, 30)), rng.normal(size=(2000, 30)) + 0.1

@@ -21,7 +21,7 @@ FPS = 30
 SECONDS = 4
 
 
-def run() -> dict:
+def generation_speed() -> dict:
     """``rtf_b1_1thread`` (target >= 100), ``seconds_b1`` and ``frames_per_second_batched``."""
     config.set_threads(1)
     torch.manual_seed(0)

@@ -4,7 +4,7 @@ Four models the size of the course's (a 2-layer GRU(128) on 64 clips x 60 frames
 3x256 on a batch of 256, a 1-layer LSTM(64) on the same clips, a 1D conv net over them), each trained with
 AdamW. Thread counts are interleaved in short blocks (a warm-up step, then timed steps) so that background
 load on the shared machine hits both counts alike; the reported time is the median per step.
-``run()`` returns, for each model, the median milliseconds on 1 and on 2 threads and their ratio
+:func:`thread_scaling` returns, for each model, the median milliseconds on 1 and on 2 threads and their ratio
 (``speedup_2_threads`` above 1 means two threads are faster), plus the load average while measuring.
 """
 
@@ -104,7 +104,7 @@ def _median_step_ms(step: Callable[[], None]) -> dict[int, float]:
     return {n: statistics.median(values) for n, values in times.items()}
 
 
-def run() -> dict:
+def thread_scaling() -> dict:
     """Median training-step milliseconds per model on 1 and 2 threads (see the module docstring)."""
     config.seed_everything(0)
     result: dict = {"cpu_count": os.cpu_count(), "load_average_before": os.getloadavg()[0]}

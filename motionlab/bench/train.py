@@ -98,7 +98,7 @@ def _measure(
     }
 
 
-def run() -> dict:
+def step_throughput() -> dict:
     """Throughput of the training loop on a GRU and an MLP VAE (see the module docstring)."""
     threads = config.set_threads()
     gen = config.seed_everything(0)

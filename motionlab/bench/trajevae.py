@@ -18,7 +18,7 @@ from motionlab.models.trajevae.masks import first_joints, given_trajectories
 from motionlab.models.trajevae.model import TrajeVAE
 
 
-def run() -> dict[str, float]:
+def completion_speed() -> dict[str, float]:
     config.set_threads(1)
     cfg = ExperimentConfig.full().trajevae
     model = TrajeVAE(cfg).eval()

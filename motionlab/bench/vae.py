@@ -20,7 +20,7 @@ FPS = 30
 N_ACTIONS = 6
 
 
-def run() -> dict:
+def generation_speed() -> dict:
     """``rtf_b1_1thread``, ``seconds_b1`` and ``frames_per_second_batched`` of sampling one 2-second clip."""
     config.set_threads(1)
     torch.manual_seed(0)

@@ -36,7 +36,7 @@ def sine_gait(frames: int = FRAMES, fps: int = FPS, phase: float = 0.0) -> torch
     return skeleton.forward_kinematics(axis_angle_to_quat(axis_angles), root, offsets, skeleton.PARENTS)[0]
 
 
-def run() -> dict:
+def render_timings() -> dict:
     config.set_threads()
     real, generated = sine_gait(), sine_gait(phase=1.0)
     return {
