@@ -12,7 +12,7 @@ import torch
 
 from motionlab.data.synthetic import generate
 from motionlab.models.vae.evaluate import latent_summary, plausibility
-from motionlab.models.vae.experiment import ExperimentConfig, VAERun, runs
+from motionlab.models.vae.experiment import ExperimentConfig, VAERun, runs, start_all
 from motionlab.models.vae.losses import kl_weight
 
 
@@ -89,3 +89,20 @@ def test_runs_are_named_picklable_and_keep_their_cache_names():
     assert named["cvae_no_anneal"].train_config.schedules["beta"](0) == 1.0
     assert named["pose_ae"].model.variational is False
     assert math.exp(named["pose_vae_small_prior"].model.prior_logvar) == pytest.approx(cfg.small_prior_var)
+
+
+def test_a_run_trains_into_the_cache_and_loads_the_same_weights(tmp_path, monkeypatch):
+    monkeypatch.setenv("MOTIONLAB_BUILD", str(tmp_path))
+    cfg = ExperimentConfig(pose_every=20, pose_hidden=8, pose_steps=3, clip_hidden=8, clip_steps=3)
+    run = runs(cfg, n_actions=6)["cvae"]
+    assert not run.is_cached()
+    model, result = run.train(progress=False)
+    assert run.is_cached() and not result.loaded_from_cache and result.metrics["steps"] == 3
+    again, cached = run.train(progress=False)
+    assert cached.loaded_from_cache
+    for (key, value), (other, loaded) in zip(model.state_dict().items(), again.state_dict().items()):
+        assert key == other and torch.equal(value, loaded)
+    x, label = cfg.clips.training_inputs()
+    assert x.shape[1:] == (cfg.clip_length, 67) and label.shape == x.shape[:1]
+    pending = start_all(cfg, n_actions=6, processes=1)  # one process: nothing starts before .result()
+    assert pending.done()

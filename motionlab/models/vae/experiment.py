@@ -23,7 +23,7 @@ from motionlab.models.vae.data import CLIP_FEATURES, POSE_FEATURES, BenchmarkCli
 from motionlab.models.vae.losses import elbo_loss, kl_weight
 from motionlab.models.vae.model import MLPVAE, VAEConfig
 from motionlab.train import TensorBatches, TrainConfig, TrainResult, build_seeded, is_cached, train_or_load
-from motionlab.train.many import Trained, train_many
+from motionlab.train.many import PendingTraining, Trained, start_training, train_many
 from motionlab.validation import check_scalar
 
 
@@ -230,3 +230,9 @@ def train_all(
     """Train (or load from the cache) every run of :func:`runs` on ``processes`` worker processes;
     ``{name: Trained}``, every model loaded here."""
     return train_many(runs(cfg, n_actions), processes=processes, progress=progress)
+
+
+def start_all(cfg: ExperimentConfig, n_actions: int, processes: int = 2) -> PendingTraining:
+    """:func:`train_all` without waiting: hand the runs that are not cached to the workers and return at once
+    (``.result()`` waits and returns ``{name: Trained}``), so the chapter can queue more work behind them."""
+    return start_training(runs(cfg, n_actions), processes)
