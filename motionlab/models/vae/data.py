@@ -123,6 +123,8 @@ class ClipSplits(NamedTuple):
 
 @functools.cache
 def _benchmark_poses(every: int, profile: str) -> PoseSplits:
+    """:meth:`BenchmarkPoses.load`, cached per process; ``profile`` only keys the cache (the benchmark's
+    size depends on it)."""
     benchmark = load_benchmark()
     poses = pose_features(benchmark.train, every=every)
     test_poses = pose_features(benchmark.test, every=every)
@@ -134,6 +136,7 @@ def _benchmark_poses(every: int, profile: str) -> PoseSplits:
 
 @functools.cache
 def _benchmark_clips(length: int, stride: int, profile: str) -> ClipSplits:
+    """:meth:`BenchmarkClips.load`, cached per process; ``profile`` only keys the cache."""
     benchmark = load_benchmark()
     codec, train, (test,) = clip_windows(benchmark.train, (benchmark.test,), length, stride)
     return ClipSplits(codec, train, test)

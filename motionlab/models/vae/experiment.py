@@ -177,6 +177,7 @@ class VAERun:
         return {"x": data_fingerprint(x), "label": None if label is None else data_fingerprint(label.float())}
 
     def is_cached(self) -> bool:
+        """Whether the checkpoint cache holds this run (then :meth:`train` loads it)."""
         return is_cached(self.name, self.model, self.train_config, self._data_config())
 
     def train(self, progress: bool | None = None) -> tuple[MLPVAE, TrainResult]:
