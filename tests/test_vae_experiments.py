@@ -1,22 +1,19 @@
-"""Chapter 03's measurements: latent summaries, pose plausibility, KL schedules and the settings."""
+"""Chapter 03's measurements (latent summaries, pose plausibility), the KL schedule, the experiment config and
+its runs."""
 
 from __future__ import annotations
 
 import math
+import pickle
 
 import numpy as np
 import pytest
 import torch
 
 from motionlab.data.synthetic import generate
-from motionlab.models.vae_experiments import (
-    chapter_settings,
-    clip_cvae_config,
-    kl_weight,
-    latent_summary,
-    plausibility,
-    pose_vae_config,
-)
+from motionlab.models.vae.evaluate import latent_summary, plausibility
+from motionlab.models.vae.experiment import ExperimentConfig, VAERun, runs, start_all
+from motionlab.models.vae.losses import kl_weight
 
 
 def test_latent_summary_measures_activity_in_prior_units():
@@ -52,9 +49,60 @@ def test_kl_weight_and_configs():
     ramp = kl_weight(600, anneal=True)
     assert ramp(0) == 0.0 and ramp(150) == pytest.approx(0.5) and ramp(300) == 1.0 and ramp(599) == 1.0
     assert kl_weight(600, anneal=False)(0) == 1.0
-    settings = chapter_settings()
-    cvae = clip_cvae_config(settings, n_actions=6, prior_var=0.05)
-    assert cvae.input_shape == (settings.clip_length, 67) and cvae.n_classes == 6
+    with pytest.raises(ValueError, match="kl_weight: steps must be at least 1"):
+        kl_weight(0, anneal=True)
+    cfg = ExperimentConfig.current()
+    cvae = cfg.clip_model(n_actions=6, prior_var=0.05)
+    assert cvae.input_shape == (cfg.clip_length, 67) and cvae.n_classes == 6
     assert math.exp(cvae.obs_logvar) == pytest.approx(33.5)
     assert math.exp(cvae.prior_logvar) == pytest.approx(0.05)
-    assert pose_vae_config(settings, variational=False).variational is False
+    assert cfg.pose_model(variational=False).variational is False
+
+
+def test_experiment_config_profiles_and_checks():
+    quick, full = ExperimentConfig.quick(), ExperimentConfig.full()
+    assert quick.pose_steps < full.pose_steps and quick.clip_hidden < full.clip_hidden
+    assert ExperimentConfig.current() in (quick, full)
+    with pytest.raises(ValueError, match="ExperimentConfig: clip_steps must be at least 1"):
+        ExperimentConfig(clip_steps=0)
+    with pytest.raises(TypeError, match="ExperimentConfig: pose_every must be an integer"):
+        ExperimentConfig(pose_every=2.5)
+    with pytest.raises(ValueError, match="ExperimentConfig: lr must be greater than 0"):
+        ExperimentConfig(lr=0.0)
+
+
+def test_runs_are_named_picklable_and_keep_their_cache_names():
+    cfg = ExperimentConfig.quick()
+    named = runs(cfg, n_actions=6)
+    assert list(named) == ["cvae", "cvae_no_anneal", "pose_ae", "pose_vae", "pose_vae_small_prior"]
+    assert {name: run.name for name, run in named.items()} == {
+        "cvae": "vae03_cvae",
+        "cvae_no_anneal": "vae03_cvae_no_anneal",
+        "pose_ae": "vae03_pose_ae",
+        "pose_vae": "vae03_pose_vae",
+        "pose_vae_small_prior": "vae03_pose_vae_small_prior",
+    }
+    assert all(isinstance(run, VAERun) for run in named.values())
+    assert pickle.loads(pickle.dumps(named)) == named
+    assert named["cvae"].model == named["cvae_no_anneal"].model
+    assert named["cvae"].train_config.schedules["beta"](0) == 0.0
+    assert named["cvae_no_anneal"].train_config.schedules["beta"](0) == 1.0
+    assert named["pose_ae"].model.variational is False
+    assert math.exp(named["pose_vae_small_prior"].model.prior_logvar) == pytest.approx(cfg.small_prior_var)
+
+
+def test_a_run_trains_into_the_cache_and_loads_the_same_weights(tmp_path, monkeypatch):
+    monkeypatch.setenv("MOTIONLAB_BUILD", str(tmp_path))
+    cfg = ExperimentConfig(pose_every=20, pose_hidden=8, pose_steps=3, clip_hidden=8, clip_steps=3)
+    run = runs(cfg, n_actions=6)["cvae"]
+    assert not run.is_cached()
+    model, result = run.train(progress=False)
+    assert run.is_cached() and not result.loaded_from_cache and result.metrics["steps"] == 3
+    again, cached = run.train(progress=False)
+    assert cached.loaded_from_cache
+    for (key, value), (other, loaded) in zip(model.state_dict().items(), again.state_dict().items()):
+        assert key == other and torch.equal(value, loaded)
+    x, label = cfg.clips.training_inputs()
+    assert x.shape[1:] == (cfg.clip_length, 67) and label.shape == x.shape[:1]
+    pending = start_all(cfg, n_actions=6, processes=1)  # one process: nothing starts before .result()
+    assert pending.done()

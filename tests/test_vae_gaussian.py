@@ -10,14 +10,8 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from torch.distributions import Normal, kl_divergence
 
-from motionlab.models.gaussian import (
-    active_units,
-    gaussian_kl,
-    gaussian_nll,
-    kl_per_dimension,
-    reparameterize,
-    unit_activity,
-)
+from motionlab.models.gaussian import gaussian_kl, gaussian_nll, reparameterize
+from motionlab.models.vae.evaluate import active_units, kl_per_dimension, unit_activity
 
 
 def _random_params(seed: int, shape=(7, 5)):
@@ -106,7 +100,11 @@ def test_bad_inputs_raise():
         gaussian_kl(mu, mu, prior_logvar=torch.zeros(2))
     with pytest.raises(TypeError, match="reparameterize: mu must be a torch.Tensor"):
         reparameterize([0.0], torch.zeros(1))
-    with pytest.raises(ValueError, match="unit_activity: mu must be 2-D"):
+    with pytest.raises(TypeError, match="gaussian_nll: x must have a floating-point dtype"):
+        gaussian_nll(torch.zeros(3, dtype=torch.long), torch.zeros(3))
+    with pytest.raises(ValueError, match="unit_activity: mu must be 2-dimensional"):
         active_units(torch.zeros(3))
-    with pytest.raises(ValueError, match="threshold must be positive"):
+    with pytest.raises(ValueError, match="unit_activity: mu must hold at least 2 rows"):
+        active_units(torch.zeros(1, 3))
+    with pytest.raises(ValueError, match="active_units: threshold must be greater than 0"):
         active_units(mu, threshold=0.0)

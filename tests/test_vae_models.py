@@ -8,16 +8,10 @@ import pytest
 import torch
 from torch.distributions import Normal, kl_divergence
 
-from motionlab.models.vae import (
-    MLPVAE,
-    RecurrentVAE,
-    RecurrentVAEConfig,
-    VAEConfig,
-    elbo_loss,
-    elbo_terms,
-    encode_all,
-    interpolate_codes,
-)
+from motionlab.models.vae.evaluate import encode_all
+from motionlab.models.vae.losses import elbo_loss, elbo_terms
+from motionlab.models.vae.model import MLPVAE, RecurrentVAE, RecurrentVAEConfig, VAEConfig
+from motionlab.models.vae.sampling import interpolate_codes
 from motionlab.train import Constant, TensorBatches, TrainConfig, train
 
 
@@ -135,7 +129,7 @@ def test_bad_inputs_raise():
         model(torch.randn(2, 6))
     with pytest.raises(ValueError, match=r"label values must lie in \[0, 2\)"):
         model(torch.randn(2, 6), torch.tensor([0, 2]))
-    with pytest.raises(ValueError, match=r"x must have shape \(B, 6\)"):
+    with pytest.raises(ValueError, match=r"MLPVAE.encode: x must have shape \(\.\.\., 6\)"):
         model(torch.randn(2, 5), torch.tensor([0, 1]))
     with pytest.raises(ValueError, match="x contains NaN"):
         model(torch.full((2, 6), float("nan")), torch.tensor([0, 1]))
@@ -143,11 +137,21 @@ def test_bad_inputs_raise():
         MLPVAE(VAEConfig((3,), latent_dim=2, hidden=4))(torch.randn(2, 3), torch.tensor([0, 1]))
     with pytest.raises(ValueError, match="this model is conditional"):
         model.sample(3)
-    with pytest.raises(ValueError, match=r"x must have shape \(B, L, 4\)"):
+    with pytest.raises(ValueError, match=r"x must have shape \(\.\.\., \*, 4\)"):
         _clip_vae()(torch.randn(2, 5, 3), torch.tensor([0, 1]))
-    with pytest.raises(ValueError, match="latent_dim must be an integer >= 1"):
+    with pytest.raises(TypeError, match="label must have an integer dtype"):
+        model(torch.randn(2, 6), torch.tensor([0.0, 1.0]))
+    with pytest.raises(ValueError, match=r"label must have shape \(2,\)"):
+        model(torch.randn(2, 6), torch.tensor([0, 1, 1]))
+    with pytest.raises(ValueError, match="VAEConfig: latent_dim must be at least 1"):
         VAEConfig((3,), latent_dim=0)
-    with pytest.raises(ValueError, match="prior_logvar must be a finite number"):
+    with pytest.raises(TypeError, match="VAEConfig: hidden must be an integer"):
+        VAEConfig((3,), hidden=2.5)
+    with pytest.raises(ValueError, match="RecurrentVAEConfig: prior_logvar must be a finite number"):
         RecurrentVAEConfig(4, prior_logvar=float("inf"))
-    with pytest.raises(ValueError, match="input_shape"):
+    with pytest.raises(ValueError, match=r"frame_dropout must be in \[0, 1\)"):
+        RecurrentVAEConfig(4, frame_dropout=1.0)
+    with pytest.raises(ValueError, match="input_shape must be a non-empty tuple"):
         VAEConfig(())
+    with pytest.raises(TypeError, match="prior_sample: n must be an integer"):
+        model.prior_sample(2.0)

@@ -12,8 +12,8 @@ import pytest  # noqa: E402
 import torch  # noqa: E402
 
 from motionlab.data.synthetic import generate  # noqa: E402
-from motionlab.models.vae import MLPVAE, VAEConfig  # noqa: E402
-from motionlab.models.vae_data import clip_windows, pose_features, pose_to_positions  # noqa: E402
+from motionlab.models.vae.data import clip_windows, pose_features, pose_to_positions  # noqa: E402
+from motionlab.models.vae.model import MLPVAE, VAEConfig  # noqa: E402
 from motionlab.widgets.vae import decode_clip, prior_code, show_cvae_sample, show_latent_interpolation  # noqa: E402
 
 LENGTH = 20
@@ -63,7 +63,9 @@ def test_clip_codec_round_trip(clips, codec_and_windows):
     np.testing.assert_allclose(positions[..., 2], original[..., 2], atol=1e-4)
     flat = lambda p: p.reshape(p.shape[0], -1, 3)  # noqa: E731
     np.testing.assert_allclose(_pairwise(flat(positions)), _pairwise(flat(original)), atol=1e-3)
-    with pytest.raises(ValueError, match="features must be"):
+    with pytest.raises(
+        ValueError, match=r"ClipCodec.to_positions: features must have shape \(\.\.\., 20, 67\)"
+    ):
         codec.to_positions(torch.zeros(2, LENGTH + 1, 67))
 
 
@@ -116,13 +118,13 @@ def test_interpolation_endpoints_are_the_two_samples(clips, codec_and_windows):
 def test_widget_bad_inputs(clips, codec_and_windows):
     codec, _, _ = codec_and_windows
     model = _cvae()
-    with pytest.raises(ValueError, match=r"action must be an integer in \[0, 6\)"):
+    with pytest.raises(ValueError, match=r"decode_clip: action must be in \[0, 5\]"):
         decode_clip(model, codec, torch.zeros(4), 6)
-    with pytest.raises(ValueError, match="t must lie in"):
+    with pytest.raises(ValueError, match=r"show_latent_interpolation: t must be in \[0, 1\]"):
         show_latent_interpolation(model, codec, clips.parents, 0, 1, 2, t=1.5)
-    with pytest.raises(ValueError, match="seed must be a non-negative integer"):
+    with pytest.raises(ValueError, match="prior_code: seed must be at least 0"):
         prior_code(model, -1)
-    with pytest.raises(ValueError, match="every must be a positive integer"):
+    with pytest.raises(ValueError, match="pose_features: every must be at least 1"):
         pose_features(clips, every=0)
-    with pytest.raises(ValueError, match="poses must be a tensor"):
+    with pytest.raises(ValueError, match=r"pose_to_positions: poses must have shape \(\.\.\., 64\)"):
         pose_to_positions(torch.zeros(3, 63))

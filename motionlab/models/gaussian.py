@@ -2,8 +2,10 @@
 
 A diagonal Gaussian is carried as two tensors of the same shape ``(..., D)``: its mean ``mu`` and its
 log-variance ``logvar`` (natural log of sigma squared). Every function is batched over the leading dims,
-works with autograd, and raises ``ValueError`` naming the function and the argument for bad input
-(wrong shape, NaN or infinity) instead of returning silent NaNs.
+works with autograd, and checks its arguments through :mod:`motionlab.validation` (``TypeError`` for a
+non-tensor or an integer dtype, ``ValueError`` naming the function and the argument for a wrong shape, NaN
+or infinity) instead of returning silent NaNs. The measurements of latent use (KL per dimension, active
+units) are the VAE chapter's: :mod:`motionlab.models.vae.evaluate`.
 """
 
 from __future__ import annotations
@@ -12,18 +14,9 @@ import math
 
 import torch
 
+from motionlab.validation import check_tensor
+
 _LOG_2PI = math.log(2.0 * math.pi)
-
-
-def _check_tensor(x: object, where: str, name: str) -> torch.Tensor:
-    if not isinstance(x, torch.Tensor):
-        raise TypeError(f"{where}: {name} must be a torch.Tensor, got {type(x).__name__}")
-    if not x.is_floating_point():
-        raise TypeError(f"{where}: {name} must have a floating-point dtype, got {x.dtype}")
-    if x.numel() and not bool(torch.isfinite(x.detach()).all()):
-        first = tuple(int(i) for i in (~torch.isfinite(x.detach())).nonzero()[0])
-        raise ValueError(f"{where}: {name} contains NaN or infinite values (first at index {first})")
-    return x
 
 
 def _check_same_shape(a: torch.Tensor, b: torch.Tensor, where: str, names: str) -> None:
@@ -41,7 +34,7 @@ def _prior_tensor(
         return torch.zeros((), dtype=like.dtype, device=like.device)
     if not isinstance(value, torch.Tensor):
         value = torch.tensor(float(value), dtype=like.dtype, device=like.device)
-    _check_tensor(value, where, name)
+    check_tensor(value, name, where)
     try:
         torch.broadcast_shapes(value.shape, like.shape)
     except RuntimeError as exc:
@@ -63,8 +56,8 @@ def reparameterize(
     Returns:
         ``(..., D)`` samples, differentiable with respect to ``mu`` and ``logvar``.
     """
-    _check_tensor(mu, "reparameterize", "mu")
-    _check_tensor(logvar, "reparameterize", "logvar")
+    check_tensor(mu, "mu", "reparameterize")
+    check_tensor(logvar, "logvar", "reparameterize")
     _check_same_shape(mu, logvar, "reparameterize", "mu and logvar")
     eps = torch.randn(mu.shape, generator=generator, dtype=mu.dtype, device=mu.device)
     return mu + torch.exp(0.5 * logvar) * eps
@@ -93,52 +86,12 @@ def gaussian_kl(
     Returns:
         ``(..., D)`` KL per dimension, in nats (sum over the last dim for the KL of the whole vector).
     """
-    _check_tensor(mu, "gaussian_kl", "mu")
-    _check_tensor(logvar, "gaussian_kl", "logvar")
+    check_tensor(mu, "mu", "gaussian_kl")
+    check_tensor(logvar, "logvar", "gaussian_kl")
     _check_same_shape(mu, logvar, "gaussian_kl", "mu and logvar")
     p_mu = _prior_tensor(prior_mu, mu, "gaussian_kl", "prior_mu")
     p_logvar = _prior_tensor(prior_logvar, mu, "gaussian_kl", "prior_logvar")
     return 0.5 * (p_logvar - logvar + (torch.exp(logvar) + (mu - p_mu) ** 2) * torch.exp(-p_logvar) - 1.0)
-
-
-def kl_per_dimension(
-    mu: torch.Tensor,
-    logvar: torch.Tensor,
-    prior_mu: torch.Tensor | float | None = None,
-    prior_logvar: torch.Tensor | float | None = None,
-) -> torch.Tensor:
-    """KL of each latent dimension averaged over the data: ``(N, D)`` posteriors -> ``(D,)`` nats.
-
-    A dimension whose average KL is near zero carries no information about x: its posterior equals the
-    prior for every input (posterior collapse of that unit).
-    """
-    if mu.dim() != 2:
-        raise ValueError(f"kl_per_dimension: mu must be 2-D (N, D), got shape {tuple(mu.shape)}")
-    return gaussian_kl(mu, logvar, prior_mu, prior_logvar).mean(dim=0)
-
-
-def unit_activity(mu: torch.Tensor) -> torch.Tensor:
-    """Variance over the data of the posterior mean E_q[z | x], per dimension: ``(N, D)`` -> ``(D,)``.
-
-    Burda et al. (2016), "Importance Weighted Autoencoders": a unit whose posterior mean does not move
-    with x is inactive, whatever its posterior variance.
-    """
-    _check_tensor(mu, "unit_activity", "mu")
-    if mu.dim() != 2 or mu.shape[0] < 2:
-        raise ValueError(f"unit_activity: mu must be 2-D (N, D) with N >= 2, got shape {tuple(mu.shape)}")
-    return mu.detach().var(dim=0, unbiased=True)
-
-
-def active_units(mu: torch.Tensor, threshold: float = 0.01) -> int:
-    """Number of latent dimensions whose :func:`unit_activity` exceeds ``threshold`` (Burda et al.: 0.01).
-
-    Args:
-        mu: ``(N, D)`` posterior means of N data points.
-        threshold: activity above which a unit counts as active (positive).
-    """
-    if not threshold > 0:
-        raise ValueError(f"active_units: threshold must be positive, got {threshold}")
-    return int((unit_activity(mu) > threshold).sum())
 
 
 def gaussian_nll(x: torch.Tensor, mean: torch.Tensor, logvar: torch.Tensor | float = 0.0) -> torch.Tensor:
@@ -155,8 +108,8 @@ def gaussian_nll(x: torch.Tensor, mean: torch.Tensor, logvar: torch.Tensor | flo
     Returns:
         Tensor of ``x``'s shape, in nats.
     """
-    _check_tensor(x, "gaussian_nll", "x")
-    _check_tensor(mean, "gaussian_nll", "mean")
+    check_tensor(x, "x", "gaussian_nll")
+    check_tensor(mean, "mean", "gaussian_nll")
     _check_same_shape(x, mean, "gaussian_nll", "x and mean")
     lv = _prior_tensor(logvar, x, "gaussian_nll", "logvar")
     return 0.5 * (_LOG_2PI + lv + (x - mean) ** 2 * torch.exp(-lv))

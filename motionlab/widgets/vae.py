@@ -1,39 +1,35 @@
 """Widget callbacks of chapter 03: sample a conditional VAE, and walk between two latent codes.
 
 Both are plain functions that draw a figure, so they are unit-tested without a browser; the notebook binds
-the trained model, its :class:`~motionlab.models.vae_data.ClipCodec` and the skeleton with
+the trained model, its :class:`~motionlab.models.vae.data.ClipCodec` and the skeleton with
 ``functools.partial`` and wires the remaining arguments to ipywidgets controls.
 """
 
 from __future__ import annotations
 
+import numbers
 from collections.abc import Sequence
 
-import numpy as np
 import torch
 from matplotlib.figure import Figure
 
-from motionlab.models.vae import MLPVAE, interpolate_codes
-from motionlab.models.vae_data import ClipCodec
+from motionlab.models.vae.data import ClipCodec
+from motionlab.models.vae.model import MLPVAE
+from motionlab.models.vae.sampling import interpolate_codes
+from motionlab.validation import check_scalar
 from motionlab.viz import GENERATED_COLOR, filmstrip
 
 
-def _check_action(model: MLPVAE, action: int) -> int:
+def _check_action(model: MLPVAE, action: int, where: str) -> int:
     if model.cfg.n_classes == 0:
-        raise ValueError("the model is not conditional: it has no actions to pick from")
-    if (
-        isinstance(action, bool)
-        or not isinstance(action, (int, np.integer))
-        or not 0 <= action < model.cfg.n_classes
-    ):
-        raise ValueError(f"action must be an integer in [0, {model.cfg.n_classes}), got {action!r}")
+        raise ValueError(f"{where}: the model is not conditional: it has no actions to pick from")
+    check_scalar(action, "action", where, kind=numbers.Integral, minimum=0, maximum=model.cfg.n_classes - 1)
     return int(action)
 
 
 def prior_code(model: MLPVAE, seed: int) -> torch.Tensor:
     """The latent code ``(latent_dim,)`` drawn from the model's prior with ``seed`` (same seed, same code)."""
-    if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0:
-        raise ValueError(f"seed must be a non-negative integer, got {seed!r}")
+    check_scalar(seed, "seed", "prior_code", kind=numbers.Integral, minimum=0)
     return model.prior_sample(1, torch.Generator().manual_seed(int(seed)))[0]
 
 
@@ -41,7 +37,7 @@ def prior_code(model: MLPVAE, seed: int) -> torch.Tensor:
 def decode_clip(model: MLPVAE, codec: ClipCodec, z: torch.Tensor, action: int) -> torch.Tensor:
     """Global positions ``(L, 22, 3)`` of the clip the CVAE decodes from code ``z`` ``(latent_dim,)`` for
     ``action``."""
-    action = _check_action(model, action)
+    action = _check_action(model, action, "decode_clip")
     was_training = model.training
     model.eval()
     try:
@@ -88,8 +84,7 @@ def show_latent_interpolation(
 ) -> Figure:
     """Keyframes of the clip decoded at ``(1 - t) z_a + t z_b`` for ``action``; ``z_a``, ``z_b`` from
     ``seed_a``, ``seed_b``."""
-    if not 0.0 <= float(t) <= 1.0:
-        raise ValueError(f"t must lie in [0, 1], got {t!r}")
+    check_scalar(t, "t", "show_latent_interpolation", minimum=0.0, maximum=1.0)
     z = interpolate_codes(prior_code(model, seed_a), prior_code(model, seed_b), float(t))[0]
     positions = decode_clip(model, codec, z, action)
     name = action_names[action] if action_names is not None else f"action {action}"

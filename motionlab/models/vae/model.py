@@ -1,8 +1,8 @@
 """Variational autoencoders for poses and clips: an MLP (C)VAE and a recurrent CVAE with an autoregressive
 decoder.
 
-Both models share one interface, so one loss function (:func:`elbo_loss`) trains either through
-:func:`motionlab.train.train_or_load`:
+Both models share one interface, so one loss function (:func:`~motionlab.models.vae.losses.elbo_loss`)
+trains either through :func:`motionlab.train.train_or_load`:
 
 * ``encode(x, label) -> (mu, logvar)``: the Gaussian posterior q(z | x, c), ``(B, latent_dim)`` each;
 * ``decode(z, label) -> mean``: the mean of the likelihood p(x | z, c) = N(mean, sigma_x^2 I), shaped like x;
@@ -19,6 +19,7 @@ With ``variational=False`` the MLP model is a plain autoencoder: the code is ``m
 from __future__ import annotations
 
 import math
+import numbers
 from dataclasses import dataclass
 from typing import NamedTuple
 
@@ -26,7 +27,8 @@ import torch
 import torch.nn.functional as F
 from torch import Tensor, nn
 
-from motionlab.models.gaussian import gaussian_kl, gaussian_nll, reparameterize
+from motionlab.models.gaussian import reparameterize
+from motionlab.validation import check_scalar, check_tensor
 
 
 class VAEOutput(NamedTuple):
@@ -39,19 +41,14 @@ class VAEOutput(NamedTuple):
     z: Tensor
 
 
-def _check_common(
-    latent_dim: int, hidden: int, n_classes: int, obs_logvar: float, prior_logvar: float, owner: str
-) -> None:
-    for name, value, least in (
-        ("latent_dim", latent_dim, 1),
-        ("hidden", hidden, 1),
-        ("n_classes", n_classes, 0),
-    ):
-        if isinstance(value, bool) or not isinstance(value, int) or value < least:
-            raise ValueError(f"{owner}.{name} must be an integer >= {least}, got {value!r}")
-    for name, value in (("obs_logvar", obs_logvar), ("prior_logvar", prior_logvar)):
-        if not isinstance(value, (int, float)) or not math.isfinite(value):
-            raise ValueError(f"{owner}.{name} must be a finite number, got {value!r}")
+def _check_common(cfg: VAEConfig | RecurrentVAEConfig) -> None:
+    """The checks both configs share: sizes, class count, the two log-variances."""
+    where = type(cfg).__name__
+    check_scalar(cfg.latent_dim, "latent_dim", where, kind=numbers.Integral, minimum=1)
+    check_scalar(cfg.hidden, "hidden", where, kind=numbers.Integral, minimum=1)
+    check_scalar(cfg.n_classes, "n_classes", where, kind=numbers.Integral, minimum=0)
+    check_scalar(cfg.obs_logvar, "obs_logvar", where)
+    check_scalar(cfg.prior_logvar, "prior_logvar", where)
 
 
 @dataclass(frozen=True)
@@ -80,16 +77,13 @@ class VAEConfig:
 
     def __post_init__(self) -> None:
         shape = tuple(self.input_shape)
-        if not shape or any(isinstance(s, bool) or not isinstance(s, int) or s < 1 for s in shape):
-            raise ValueError(
-                f"VAEConfig.input_shape must be a non-empty tuple of positive ints, got {self.input_shape!r}"
-            )
+        if not shape:
+            raise ValueError(f"VAEConfig: input_shape must be a non-empty tuple, got {self.input_shape!r}")
+        for i, size in enumerate(shape):
+            check_scalar(size, f"input_shape[{i}]", "VAEConfig", kind=numbers.Integral, minimum=1)
         object.__setattr__(self, "input_shape", shape)
-        if isinstance(self.depth, bool) or not isinstance(self.depth, int) or self.depth < 1:
-            raise ValueError(f"VAEConfig.depth must be an integer >= 1, got {self.depth!r}")
-        _check_common(
-            self.latent_dim, self.hidden, self.n_classes, self.obs_logvar, self.prior_logvar, "VAEConfig"
-        )
+        check_scalar(self.depth, "depth", "VAEConfig", kind=numbers.Integral, minimum=1)
+        _check_common(self)
 
     @property
     def input_size(self) -> int:
@@ -124,29 +118,13 @@ class RecurrentVAEConfig:
     prior_logvar: float = 0.0
 
     def __post_init__(self) -> None:
-        if not isinstance(self.frame_dropout, (int, float)) or not 0.0 <= self.frame_dropout < 1.0:
-            raise ValueError(
-                f"RecurrentVAEConfig.frame_dropout must lie in [0, 1), got {self.frame_dropout!r}"
-            )
-        for name in ("n_features", "length"):
-            value = getattr(self, name)
-            if isinstance(value, bool) or not isinstance(value, int) or value < 1:
-                raise ValueError(f"RecurrentVAEConfig.{name} must be an integer >= 1, got {value!r}")
-        _check_common(
-            self.latent_dim,
-            self.hidden,
-            self.n_classes,
-            self.obs_logvar,
-            self.prior_logvar,
-            "RecurrentVAEConfig",
+        where = "RecurrentVAEConfig"
+        check_scalar(self.n_features, "n_features", where, kind=numbers.Integral, minimum=1)
+        check_scalar(self.length, "length", where, kind=numbers.Integral, minimum=1)
+        check_scalar(
+            self.frame_dropout, "frame_dropout", where, minimum=0.0, maximum=1.0, include_maximum=False
         )
-
-
-def _check_finite(x: Tensor, where: str) -> Tensor:
-    if not bool(torch.isfinite(x.detach()).all()):
-        first = tuple(int(i) for i in (~torch.isfinite(x.detach())).nonzero()[0])
-        raise ValueError(f"{where}: x contains NaN or infinite values (first at index {first})")
-    return x
+        _check_common(self)
 
 
 def _mlp(sizes: list[int]) -> nn.Sequential:
@@ -181,11 +159,10 @@ class LatentVariableModel(nn.Module):
         if label is None:
             raise ValueError(f"{where}: this model is conditional on {n_classes} classes; pass label (B,)")
         label = torch.as_tensor(label)
-        if label.dim() != 1 or label.shape[0] != batch or label.is_floating_point():
-            raise ValueError(
-                f"{where}: label must be an integer tensor of shape ({batch},), got {label.dtype} "
-                f"{tuple(label.shape)}"
-            )
+        if label.is_floating_point() or label.dtype == torch.bool:
+            raise TypeError(f"{where}: label must have an integer dtype, got {label.dtype}")
+        if label.dim() != 1 or label.shape[0] != batch:
+            raise ValueError(f"{where}: label must have shape ({batch},), got {tuple(label.shape)}")
         if batch and (int(label.min()) < 0 or int(label.max()) >= n_classes):
             raise ValueError(
                 f"{where}: label values must lie in [0, {n_classes}), got [{int(label.min())}, "
@@ -208,8 +185,7 @@ class LatentVariableModel(nn.Module):
 
     def prior_sample(self, n: int, generator: torch.Generator | None = None) -> Tensor:
         """``n`` draws ``(n, latent_dim)`` from the prior N(0, sigma_p^2 I)."""
-        if isinstance(n, bool) or not isinstance(n, int) or n < 1:
-            raise ValueError(f"prior_sample: n must be a positive integer, got {n!r}")
+        check_scalar(n, "n", "prior_sample", kind=numbers.Integral, minimum=1)
         eps = torch.randn(n, self.cfg.latent_dim, generator=generator)
         return eps * math.exp(0.5 * self.cfg.prior_logvar)
 
@@ -240,20 +216,11 @@ class MLPVAE(LatentVariableModel):
         self.encoder = _mlp([cfg.input_size + cfg.n_classes] + [cfg.hidden] * cfg.depth + [code_size])
         self.decoder = _mlp([cfg.latent_dim + cfg.n_classes] + [cfg.hidden] * cfg.depth + [cfg.input_size])
 
-    def _check_input(self, x: Tensor, where: str) -> Tensor:
-        if not isinstance(x, Tensor) or not x.is_floating_point():
-            raise TypeError(f"{where}: x must be a floating-point tensor, got {type(x).__name__}")
-        if tuple(x.shape[1:]) != self.cfg.input_shape:
-            raise ValueError(
-                f"{where}: x must have shape (B, {', '.join(map(str, self.cfg.input_shape))}), "
-                f"got {tuple(x.shape)}"
-            )
-        return _check_finite(x, where)
-
     def encode(self, x: Tensor, label: Tensor | None = None) -> tuple[Tensor, Tensor | None]:
-        """Posterior parameters ``mu``, ``logvar`` ``(B, latent_dim)`` (``logvar`` is ``None`` for an
-        autoencoder)."""
-        x = self._check_input(x, "MLPVAE.encode")
+        """Posterior parameters ``mu``, ``logvar`` ``(B, latent_dim)`` of inputs ``x`` ``(B, *input_shape)``
+        (``logvar`` is ``None`` for an autoencoder)."""
+        shape = self.cfg.input_shape
+        x = check_tensor(x, "x", "MLPVAE.encode", ndim=len(shape) + 1, trailing=shape)
         c = self.condition(label, x.shape[0], "MLPVAE.encode")
         h = x.flatten(1) if c is None else torch.cat([x.flatten(1), c], dim=-1)
         code = self.encoder(h)
@@ -264,10 +231,7 @@ class MLPVAE(LatentVariableModel):
 
     def decode(self, z: Tensor, label: Tensor | None = None) -> Tensor:
         """Likelihood mean ``(B, *input_shape)`` from codes ``z`` ``(B, latent_dim)``."""
-        if z.dim() != 2 or z.shape[1] != self.cfg.latent_dim:
-            raise ValueError(
-                f"MLPVAE.decode: z must have shape (B, {self.cfg.latent_dim}), got {tuple(z.shape)}"
-            )
+        check_tensor(z, "z", "MLPVAE.decode", ndim=2, trailing=(self.cfg.latent_dim,), finite=False)
         c = self.condition(label, z.shape[0], "MLPVAE.decode")
         h = z if c is None else torch.cat([z, c], dim=-1)
         return self.decoder(h).unflatten(1, self.cfg.input_shape)
@@ -294,13 +258,11 @@ class RecurrentVAE(LatentVariableModel):
         self.to_frame = nn.Linear(cfg.hidden, cfg.n_features)
 
     def _check_clip(self, x: Tensor, where: str) -> Tensor:
-        if not isinstance(x, Tensor) or not x.is_floating_point():
-            raise TypeError(f"{where}: x must be a floating-point tensor, got {type(x).__name__}")
-        if x.dim() != 3 or x.shape[1] < 1 or x.shape[2] != self.cfg.n_features:
-            raise ValueError(
-                f"{where}: x must have shape (B, L, {self.cfg.n_features}) with L >= 1, got {tuple(x.shape)}"
-            )
-        return _check_finite(x, where)
+        """Clips ``(B, L, n_features)`` with ``L >= 1``, finite."""
+        check_tensor(x, "x", where, ndim=3, trailing=(None, self.cfg.n_features))
+        if x.shape[1] < 1:
+            raise ValueError(f"{where}: x must hold at least one frame, got shape {tuple(x.shape)}")
+        return x
 
     def encode(self, x: Tensor, label: Tensor | None = None) -> tuple[Tensor, Tensor]:
         """Posterior parameters ``mu``, ``logvar`` ``(B, latent_dim)`` of clips ``x`` ``(B, L,
@@ -315,8 +277,7 @@ class RecurrentVAE(LatentVariableModel):
     def _context(self, z: Tensor, label: Tensor | None, where: str) -> tuple[Tensor, Tensor]:
         """The per-frame context ``[z, c]`` ``(B, latent + n_classes)`` and the initial decoder state ``(1, B,
         hidden)``."""
-        if z.dim() != 2 or z.shape[1] != self.cfg.latent_dim:
-            raise ValueError(f"{where}: z must have shape (B, {self.cfg.latent_dim}), got {tuple(z.shape)}")
+        check_tensor(z, "z", where, ndim=2, trailing=(self.cfg.latent_dim,), finite=False)
         c = self.condition(label, z.shape[0], where)
         context = z if c is None else torch.cat([z, c], dim=-1)
         return context, torch.tanh(self.to_state(context))[None]
@@ -344,6 +305,7 @@ class RecurrentVAE(LatentVariableModel):
         An autoregressive decoder feeds each frame's mean back as the next frame's input.
         """
         length = self.cfg.length if length is None else length
+        check_scalar(length, "length", "RecurrentVAE.decode", kind=numbers.Integral, minimum=1)
         context, state = self._context(z, label, "RecurrentVAE.decode")
         if not self.cfg.autoregressive:
             out, _ = self.decoder(context[:, None].expand(-1, length, -1), state)
@@ -355,73 +317,3 @@ class RecurrentVAE(LatentVariableModel):
             frame = self.to_frame(out)
             frames.append(frame)
         return torch.cat(frames, dim=1)
-
-
-def elbo_terms(
-    model: LatentVariableModel,
-    x: Tensor,
-    label: Tensor | None = None,
-    generator: torch.Generator | None = None,
-) -> dict[str, Tensor]:
-    """The negative ELBO's two terms for a batch, in nats per sample (means over the batch).
-
-    ``recon`` = E_q[-log p(x | z)], one draw of z, summed over all of x's numbers;
-    ``kl`` = KL(q(z | x) || p(z)) summed over the latent dimensions (zero for an autoencoder).
-    Also returns ``kl_per_dim`` ``(latent_dim,)`` (batch mean), for monitoring collapse.
-    """
-    out = model(x, label, generator)
-    recon = gaussian_nll(x, out.mean, model.cfg.obs_logvar).flatten(1).sum(-1).mean()
-    if out.logvar is None:
-        kl_dims = torch.zeros(model.cfg.latent_dim, dtype=x.dtype, device=x.device)
-    else:
-        kl_dims = gaussian_kl(out.mu, out.logvar, prior_logvar=model.cfg.prior_logvar).mean(0)
-    return {"recon": recon, "kl": kl_dims.sum(), "kl_per_dim": kl_dims}
-
-
-def elbo_loss(
-    model: LatentVariableModel, batch: Tensor | tuple[Tensor, Tensor], step: int, coeffs: dict[str, float]
-) -> dict[str, Tensor]:
-    """Loss function for :func:`motionlab.train.train`: ``recon + beta * kl`` (``beta`` from the schedules,
-    default 1).
-
-    ``batch`` is ``x`` for an unconditional model or ``(x, label)`` for a conditional one. For an autoencoder
-    the loss is the reconstruction term alone.
-    """
-    x, label = batch if isinstance(batch, (tuple, list)) else (batch, None)
-    terms = elbo_terms(model, x, label)
-    if not model.variational:
-        return {"loss": terms["recon"], "recon": terms["recon"]}
-    beta = coeffs.get("beta", 1.0)
-    return {"loss": terms["recon"] + beta * terms["kl"], "recon": terms["recon"], "kl": terms["kl"]}
-
-
-@torch.no_grad()
-def encode_all(
-    model: LatentVariableModel, x: Tensor, label: Tensor | None = None, chunk: int = 1024
-) -> tuple[Tensor, Tensor | None]:
-    """Posterior parameters of a whole data set, in eval mode and in chunks: ``mu``, ``logvar`` ``(N,
-    latent_dim)``."""
-    was_training = model.training
-    model.eval()
-    try:
-        parts = [
-            model.encode(x[i : i + chunk], None if label is None else label[i : i + chunk])
-            for i in range(0, x.shape[0], chunk)
-        ]
-    finally:
-        model.train(was_training)
-    mu = torch.cat([p[0] for p in parts])
-    logvar = None if parts[0][1] is None else torch.cat([p[1] for p in parts])
-    return mu, logvar
-
-
-def interpolate_codes(z0: Tensor, z1: Tensor, t: Tensor | float) -> Tensor:
-    """Straight-line interpolation ``(1 - t) z0 + t z1``: codes ``(D,)`` and ``t`` scalar or ``(K,)`` -> ``(K,
-    D)``."""
-    if z0.shape != z1.shape or z0.dim() != 1:
-        raise ValueError(
-            f"interpolate_codes: z0 and z1 must be 1-D codes of one size, got {tuple(z0.shape)} and "
-            f"{tuple(z1.shape)}"
-        )
-    t = torch.as_tensor(t, dtype=z0.dtype).reshape(-1, 1)
-    return (1 - t) * z0 + t * z1

@@ -1,0 +1,239 @@
+"""Chapter 03's experiment: its sizes per profile, its five named training runs, and training them all.
+
+Every model is an :class:`~motionlab.models.vae.model.MLPVAE` trained on
+:func:`~motionlab.models.vae.losses.elbo_loss` through :func:`motionlab.train.train_or_load` with the same
+optimiser settings: the pose models on standardised pose vectors, the clip CVAEs on standardised 2-second
+MoGlow windows (:mod:`~motionlab.models.vae.data`).
+
+The likelihood variance of the clip CVAE is ODMO's weighting in disguise: ODMO minimises, per clip, the
+squared error averaged over the D features of a frame and summed over frames, plus the KL with weight 1.
+That equals the Gaussian negative log-likelihood with sigma_x^2 = D / 2 (up to a constant), which is what
+:meth:`ExperimentConfig.clip_model` uses.
+"""
+
+from __future__ import annotations
+
+import math
+import numbers
+from dataclasses import dataclass
+
+from motionlab import config
+from motionlab.evaluation.evaluator import data_fingerprint
+from motionlab.models.vae.data import CLIP_FEATURES, POSE_FEATURES, BenchmarkClips, BenchmarkPoses
+from motionlab.models.vae.losses import elbo_loss, kl_weight
+from motionlab.models.vae.model import MLPVAE, VAEConfig
+from motionlab.train import TensorBatches, TrainConfig, TrainResult, build_seeded, is_cached, train_or_load
+from motionlab.train.many import PendingTraining, Trained, start_training, train_many
+from motionlab.validation import check_scalar
+
+
+@dataclass(frozen=True)
+class ExperimentConfig:
+    """The chapter's sizes and budgets for one profile (:meth:`quick`: every code path in seconds;
+    :meth:`full`: the reported runs).
+
+    Attributes:
+        pose_every: take every this many frames of a clip as a pose.
+        pose_latent, pose_hidden, pose_steps: the pose models' latent size, width and training steps.
+        pose_obs_var: sigma_x^2 of the pose VAEs' likelihood (standardised units).
+        small_prior_var: sigma_p^2 of the section-5 pose VAE (ODMO's prior variance).
+        clip_length, clip_stride: window length and hop in frames (30 fps).
+        clip_latent, clip_hidden, clip_steps: the clip CVAEs' latent size, width and training steps.
+        batch_size, lr, grad_clip, seed: for every run.
+        per_action, n_repeats: evaluation sample sets (clips per action) and how many of them.
+    """
+
+    pose_every: int = 10
+    pose_latent: int = 8
+    pose_hidden: int = 128
+    pose_steps: int = 800
+    pose_obs_var: float = 0.1
+    small_prior_var: float = 0.05
+    clip_length: int = 60
+    clip_stride: int = 15
+    clip_latent: int = 16
+    clip_hidden: int = 128
+    clip_steps: int = 600
+    batch_size: int = 64
+    lr: float = 2e-3
+    grad_clip: float = 1.0
+    seed: int = 0
+    per_action: int = 50
+    n_repeats: int = 10
+
+    def __post_init__(self) -> None:
+        where = "ExperimentConfig"
+        for name in (
+            "pose_every",
+            "pose_latent",
+            "pose_hidden",
+            "pose_steps",
+            "clip_length",
+            "clip_stride",
+            "clip_latent",
+            "clip_hidden",
+            "clip_steps",
+            "batch_size",
+            "per_action",
+        ):
+            check_scalar(getattr(self, name), name, where, kind=numbers.Integral, minimum=1)
+        check_scalar(self.n_repeats, "n_repeats", where, kind=numbers.Integral, minimum=2)
+        check_scalar(self.seed, "seed", where, kind=numbers.Integral, minimum=0)
+        for name in ("pose_obs_var", "small_prior_var", "lr", "grad_clip"):
+            check_scalar(getattr(self, name), name, where, minimum=0.0, include_minimum=False)
+
+    @classmethod
+    def full(cls) -> ExperimentConfig:
+        """The reported runs."""
+        return cls()
+
+    @classmethod
+    def quick(cls) -> ExperimentConfig:
+        """Every code path in seconds: small widths, few steps, few evaluation samples."""
+        return cls(
+            pose_every=20,
+            pose_hidden=32,
+            pose_steps=30,
+            clip_hidden=32,
+            clip_steps=30,
+            per_action=10,
+            n_repeats=3,
+        )
+
+    @classmethod
+    def current(cls) -> ExperimentConfig:
+        """The config of the active profile (:func:`motionlab.config.profile`)."""
+        return cls.quick() if config.is_quick() else cls.full()
+
+    def pose_model(self, variational: bool = True, prior_var: float = 1.0) -> VAEConfig:
+        """An unconditional pose (V)AE on 64-number pose vectors; ``prior_var`` is sigma_p^2."""
+        check_scalar(
+            prior_var, "prior_var", "ExperimentConfig.pose_model", minimum=0.0, include_minimum=False
+        )
+        return VAEConfig(
+            (POSE_FEATURES,),
+            latent_dim=self.pose_latent,
+            hidden=self.pose_hidden,
+            variational=variational,
+            obs_logvar=math.log(self.pose_obs_var),
+            prior_logvar=math.log(prior_var),
+        )
+
+    def clip_model(self, n_actions: int, prior_var: float = 1.0) -> VAEConfig:
+        """The action-conditioned clip VAE: windows ``(clip_length, 67)``, sigma_x^2 = 67 / 2 (ODMO's
+        weighting)."""
+        where = "ExperimentConfig.clip_model"
+        check_scalar(n_actions, "n_actions", where, kind=numbers.Integral, minimum=1)
+        check_scalar(prior_var, "prior_var", where, minimum=0.0, include_minimum=False)
+        return VAEConfig(
+            (self.clip_length, CLIP_FEATURES),
+            latent_dim=self.clip_latent,
+            hidden=self.clip_hidden,
+            n_classes=n_actions,
+            obs_logvar=math.log(CLIP_FEATURES / 2),
+            prior_logvar=math.log(prior_var),
+        )
+
+    def train_config(self, steps: int, anneal: bool) -> TrainConfig:
+        """AdamW for ``steps`` steps; the KL weight ramps up over the first half (``anneal``) or stays 1."""
+        return TrainConfig(
+            steps=steps,
+            batch_size=self.batch_size,
+            lr=self.lr,
+            grad_clip=self.grad_clip,
+            seed=self.seed,
+            schedules={"beta": kl_weight(steps, anneal)},
+        )
+
+    @property
+    def poses(self) -> BenchmarkPoses:
+        """The pose data of the benchmark at this config's ``pose_every``."""
+        return BenchmarkPoses(self.pose_every)
+
+    @property
+    def clips(self) -> BenchmarkClips:
+        """The benchmark's windows of this config's ``clip_length`` and ``clip_stride``."""
+        return BenchmarkClips(self.clip_length, self.clip_stride)
+
+
+@dataclass(frozen=True)
+class VAERun:
+    """One training run of an :class:`MLPVAE` (a :class:`~motionlab.train.many.Run`; picklable).
+
+    Attributes:
+        name: the run's checkpoint cache name, e.g. ``"vae03_cvae"``.
+        model: the model's config (part of the cache key).
+        train_config: how to train it (part of the cache key); its ``seed`` also initialises the weights.
+        data: the training data, built where the run trains (its fingerprint is part of the cache key).
+    """
+
+    name: str
+    model: VAEConfig
+    train_config: TrainConfig
+    data: BenchmarkPoses | BenchmarkClips
+
+    def _data_config(self) -> dict[str, str | None]:
+        x, label = self.data.training_inputs()
+        return {"x": data_fingerprint(x), "label": None if label is None else data_fingerprint(label.float())}
+
+    def is_cached(self) -> bool:
+        """Whether the checkpoint cache holds this run (then :meth:`train` loads it)."""
+        return is_cached(self.name, self.model, self.train_config, self._data_config())
+
+    def train(self, progress: bool | None = None) -> tuple[MLPVAE, TrainResult]:
+        """Build the model (initialised from the training seed) and train it, or load it from the cache."""
+        model = build_seeded(lambda: MLPVAE(self.model), self.train_config.seed)
+        x, label = self.data.training_inputs()
+        batches = TensorBatches((x,) if label is None else (x, label))
+        result = train_or_load(
+            self.name,
+            self.model,
+            model,
+            elbo_loss,
+            batches,
+            self.train_config,
+            data_config=self._data_config(),
+            progress=progress,
+        )
+        return model, result
+
+
+def runs(cfg: ExperimentConfig, n_actions: int) -> dict[str, VAERun]:
+    """The chapter's runs by name, the clip CVAEs (the longest) first.
+
+    ``pose_ae`` and ``pose_vae`` (section 1), ``cvae`` and ``cvae_no_anneal`` (sections 3 and 4: the KL
+    weight ramped, or 1 from the first step) and ``pose_vae_small_prior`` (section 5: sigma_p^2 =
+    ``cfg.small_prior_var``). ``n_actions`` is the number of actions the CVAEs are conditioned on.
+    """
+    clip_cvae = cfg.clip_model(n_actions)
+    clip_steps, pose_steps = cfg.clip_steps, cfg.pose_steps
+    return {
+        "cvae": VAERun("vae03_cvae", clip_cvae, cfg.train_config(clip_steps, anneal=True), cfg.clips),
+        "cvae_no_anneal": VAERun(
+            "vae03_cvae_no_anneal", clip_cvae, cfg.train_config(clip_steps, anneal=False), cfg.clips
+        ),
+        "pose_ae": VAERun(
+            "vae03_pose_ae", cfg.pose_model(variational=False), cfg.train_config(pose_steps, True), cfg.poses
+        ),
+        "pose_vae": VAERun("vae03_pose_vae", cfg.pose_model(), cfg.train_config(pose_steps, True), cfg.poses),
+        "pose_vae_small_prior": VAERun(
+            "vae03_pose_vae_small_prior",
+            cfg.pose_model(prior_var=cfg.small_prior_var),
+            cfg.train_config(pose_steps, True),
+            cfg.poses,
+        ),
+    }
+
+
+def train_all(
+    cfg: ExperimentConfig, n_actions: int, processes: int = 2, progress: bool | None = None
+) -> dict[str, Trained]:
+    """Train (or load from the cache) every run of :func:`runs` on ``processes`` worker processes;
+    ``{name: Trained}``, every model loaded here."""
+    return train_many(runs(cfg, n_actions), processes=processes, progress=progress)
+
+
+def start_all(cfg: ExperimentConfig, n_actions: int, processes: int = 2) -> PendingTraining:
+    """:func:`train_all` without waiting: hand the runs that are not cached to the workers and return at once
+    (``.result()`` waits and returns ``{name: Trained}``), so the chapter can queue more work behind them."""
+    return start_training(runs(cfg, n_actions), processes)
