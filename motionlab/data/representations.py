@@ -73,35 +73,6 @@ class RootStart(NamedTuple):
 # input checks
 
 
-# Legacy, kept until the model families move: callers use motionlab.validation.check_tensor instead.
-def check_tensor(
-    x: Tensor, name: str, func: str, trailing: tuple[int | None, ...], min_leading: int = 0
-) -> Tensor:
-    """Check that ``x`` is a finite floating tensor shaped ``(*leading, *trailing)``; return it.
-
-    ``None`` in ``trailing`` accepts any size; ``min_leading`` is the least number of leading dimensions
-    (for example 1 for a frame axis). Raises ``ValueError`` naming ``func`` and ``name`` otherwise.
-    """
-    if not isinstance(x, Tensor):
-        raise TypeError(f"{func}: {name} must be a torch.Tensor, got {type(x).__name__}")
-    if not x.is_floating_point():
-        raise ValueError(f"{func}: {name} must be a floating-point tensor, got dtype {x.dtype}")
-    layout = "(" + ", ".join(["..."] + ["*" if size is None else str(size) for size in trailing]) + ")"
-    if x.dim() < len(trailing) + min_leading:
-        raise ValueError(
-            f"{func}: {name} must have shape {layout} with at least {min_leading} leading "
-            f"dimension(s), got {tuple(x.shape)}"
-        )
-    actual = tuple(x.shape[x.dim() - len(trailing) :])
-    if any(want is not None and want != got for want, got in zip(trailing, actual)):
-        raise ValueError(f"{func}: {name} must have shape {layout}, got {tuple(x.shape)}")
-    finite = torch.isfinite(x)
-    if not bool(finite.all()):
-        where = tuple(int(i) for i in torch.nonzero(~finite)[0])
-        raise ValueError(f"{func}: {name} contains NaN or inf (first at index {where})")
-    return x
-
-
 def _check_start(start: RootStart | None, leading: torch.Size, like: Tensor, func: str) -> RootStart:
     """``start`` checked against the clip's leading shape; ``None`` becomes the origin with yaw 0."""
     if start is None:

@@ -14,16 +14,9 @@ import math
 
 import torch
 
-from motionlab.validation import check_tensor
+from motionlab.validation import check_same_shape, check_tensor
 
 _LOG_2PI = math.log(2.0 * math.pi)
-
-
-def _check_same_shape(a: torch.Tensor, b: torch.Tensor, where: str, names: str) -> None:
-    if a.shape != b.shape:
-        raise ValueError(
-            f"{where}: {names} must have the same shape, got {tuple(a.shape)} and {tuple(b.shape)}"
-        )
 
 
 def _prior_tensor(
@@ -58,7 +51,7 @@ def reparameterize(
     """
     check_tensor(mu, "mu", "reparameterize")
     check_tensor(logvar, "logvar", "reparameterize")
-    _check_same_shape(mu, logvar, "reparameterize", "mu and logvar")
+    check_same_shape(mu, logvar, ("mu", "logvar"), "reparameterize")
     eps = torch.randn(mu.shape, generator=generator, dtype=mu.dtype, device=mu.device)
     return mu + torch.exp(0.5 * logvar) * eps
 
@@ -88,7 +81,7 @@ def gaussian_kl(
     """
     check_tensor(mu, "mu", "gaussian_kl")
     check_tensor(logvar, "logvar", "gaussian_kl")
-    _check_same_shape(mu, logvar, "gaussian_kl", "mu and logvar")
+    check_same_shape(mu, logvar, ("mu", "logvar"), "gaussian_kl")
     p_mu = _prior_tensor(prior_mu, mu, "gaussian_kl", "prior_mu")
     p_logvar = _prior_tensor(prior_logvar, mu, "gaussian_kl", "prior_logvar")
     return 0.5 * (p_logvar - logvar + (torch.exp(logvar) + (mu - p_mu) ** 2) * torch.exp(-p_logvar) - 1.0)
@@ -110,6 +103,6 @@ def gaussian_nll(x: torch.Tensor, mean: torch.Tensor, logvar: torch.Tensor | flo
     """
     check_tensor(x, "x", "gaussian_nll")
     check_tensor(mean, "mean", "gaussian_nll")
-    _check_same_shape(x, mean, "gaussian_nll", "x and mean")
+    check_same_shape(x, mean, ("x", "mean"), "gaussian_nll")
     lv = _prior_tensor(logvar, x, "gaussian_nll", "logvar")
     return 0.5 * (_LOG_2PI + lv + (x - mean) ** 2 * torch.exp(-lv))
