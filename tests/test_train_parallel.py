@@ -13,11 +13,9 @@ from torch import nn
 from motionlab import config
 from motionlab.train import TensorBatches, TrainConfig, build_seeded, is_cached, train_or_load
 from motionlab.train.parallel import (
-    InBackground,
     close_shared_pools,
     run_chains,
     run_in_workers,
-    run_paired,
     shared_pool,
     worker_pool,
 )
@@ -130,14 +128,6 @@ def test_chains_run_their_calls_in_order_and_side_by_side(tmp_path: Path, proces
     assert not never.exists()
 
 
-def test_paired_calls_run_the_first_only_where_there_is_one(tmp_path: Path) -> None:
-    files = {tag: str(tmp_path / f"{tag}.txt") for tag in "ab"}
-    Path(files["b"]).write_text("already there")
-    before = {"a": (write_tag, (files["a"], "a"))}
-    first, then = run_paired(before, {tag: (read_tag, (path,)) for tag, path in files.items()}, processes=2)
-    assert first == {"a": "wrote a"} and then == {"a": "a", "b": "already there"}
-
-
 def test_idle_workers_ignore_ctrl_c() -> None:
     assert run_in_workers(interrupt_handler, [(), ()], processes=2) == [signal.SIG_IGN, signal.SIG_IGN]
 
@@ -153,17 +143,6 @@ def test_one_process_or_one_call_runs_here() -> None:
 def test_an_error_in_a_worker_is_raised_here() -> None:
     with pytest.raises(RuntimeError, match="broken run"):
         run_in_workers(fail, [("broken run",), ("another",)], processes=2)
-
-
-def test_a_background_call_runs_elsewhere_and_reports_its_result_or_error() -> None:
-    background, broken = (
-        InBackground(where_and_threads, "later"),
-        InBackground(fail, "broken in the background"),
-    )
-    tag, pid, threads = background.wait()
-    assert tag == "later" and pid != os.getpid() and threads == config.DEFAULT_THREADS and background.done()
-    with pytest.raises(RuntimeError, match="broken in the background"):
-        broken.wait()
 
 
 @pytest.mark.parametrize(

@@ -7,7 +7,7 @@ thread pools; started once per notebook and reused, each call set up as in a fre
 the results in order. Runs that go through
 :func:`~motionlab.train.train_or_load` are seeded by their own configs, so their weights do not depend on
 which process trained them; the caller then loads every model from the checkpoint cache.
-:class:`InBackground` runs one call on the second core while the notebook goes on with its own work.
+The course's chapters do not call this module: :mod:`motionlab.train.many` is their entry point.
 """
 
 from __future__ import annotations
@@ -28,7 +28,6 @@ from motionlab import config
 from motionlab.validation import check_scalar
 
 R = TypeVar("R")
-K = TypeVar("K")
 
 #: Environment variables that configure the package (profile, build directory); every call carries the
 #: caller's values to the worker, so a reused worker behaves like one started now.
@@ -198,45 +197,3 @@ def run_chains(chains: Sequence[Sequence[Step]], processes: int = 2) -> list[lis
             _drop_broken_pool(processes)
         raise failed[min(failed)]  # the first failed call in the order given, whichever failed first in time
     return results
-
-
-def run_paired(
-    before: dict[K, Step], after: dict[K, Step], processes: int = 2
-) -> tuple[dict[K, Any], dict[K, Any]]:
-    """For every key of ``after``: its ``before`` call, if it has one, then its ``after`` call, as chains of
-    :func:`run_chains` (e.g. train a model if it is not cached yet, then measure it).
-
-    Returns the results of the ``before`` calls and of the ``after`` calls, keyed like the calls.
-    """
-    keys = list(after)
-    outcomes = run_chains(
-        [[before[key], after[key]] if key in before else [after[key]] for key in keys], processes
-    )
-    return (
-        {key: outcome[0] for key, outcome in zip(keys, outcomes) if key in before},
-        {key: outcome[-1] for key, outcome in zip(keys, outcomes)},
-    )
-
-
-class InBackground:
-    """One call, ``function(*arguments)``, running in a worker process while this process goes on.
-
-    ``wait()`` returns its result (raising its exception, if any) and ends the worker. Use it for work a
-    later chapter needs, so that it costs no wall time now, e.g. training a classifier on the second core
-    while the first trains the chapter's own models.
-    """
-
-    def __init__(self, function: Callable[..., Any], *arguments: Any) -> None:
-        self._pool = worker_pool(1)
-        self._future = submit(self._pool, function, *arguments)
-
-    def done(self) -> bool:
-        """Whether the call has finished."""
-        return self._future.done()
-
-    def wait(self) -> Any:
-        """The call's result, once it has finished."""
-        try:
-            return self._future.result()
-        finally:
-            self._pool.shutdown()
