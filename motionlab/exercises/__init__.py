@@ -1,0 +1,20 @@
+"""Checkers for the chapters' "your turn" exercises: the reader writes a key function, a checker says whether
+it is right and, if not, *what* is wrong.
+
+Each checker ``check_<name>(fn)`` runs the reader's ``fn`` on random and edge inputs against the package's own
+implementation and returns a :class:`CheckResult`, which the notebook displays. It never raises for a wrong or
+unfinished function: an exercise left as ``raise NotImplementedError(...)`` shows "not done yet", and the
+chapter goes on with the package version. Solutions live outside the chapters, in
+``notebooks/solutions/NN_*.py``; ``tests/test_exercises.py`` checks that each passes its checker, that each
+skeleton in the chapters raises ``NotImplementedError`` with a message, and that each checker recognises
+several typical mistakes.
+
+Modules: :mod:`~motionlab.exercises.rotations` (chapter 01), :mod:`~motionlab.exercises.kinematics`
+(chapter 02).
+"""
+
+from motionlab.exercises.checking import CheckResult
+from motionlab.exercises.kinematics import check_chain_positions
+from motionlab.exercises.rotations import check_quat_mul, check_slerp
+
+__all__ = ["CheckResult", "check_chain_positions", "check_quat_mul", "check_slerp"]

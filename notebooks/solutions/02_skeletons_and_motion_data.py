@@ -1,0 +1,21 @@
+"""Worked solution to chapter 02's "your turn" exercise (checked by tests/test_exercises.py)."""
+
+from __future__ import annotations
+
+import torch
+
+from motionlab.geometry import quat_apply, quat_mul
+
+
+def my_chain_positions(rotations: torch.Tensor, root: torch.Tensor, offsets: torch.Tensor) -> torch.Tensor:
+    """Forward kinematics of a chain: joint k's parent is k - 1.
+
+    rotations (..., K, 4) local unit quaternions (joint 0's is its global orientation), root (..., 3) the
+    position of joint 0, offsets (K, 3) rest offsets from each joint's parent. Returns positions (..., K, 3):
+    x_0 = root, x_k = x_{k-1} + G_{k-1} o_k with G_0 = q_0 and G_k = G_{k-1} ⊗ q_k.
+    """
+    positions, frame = [root], rotations[..., 0, :]
+    for k in range(1, rotations.shape[-2]):
+        positions.append(positions[-1] + quat_apply(frame, offsets[k].expand_as(root)))
+        frame = quat_mul(frame, rotations[..., k, :])
+    return torch.stack(positions, dim=-2)

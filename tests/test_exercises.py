@@ -1,0 +1,198 @@
+"""The "your turn" exercises: every solution passes its checker, every skeleton in the chapters raises
+NotImplementedError with a message (so the chapter goes on), and every checker names typical mistakes."""
+
+from __future__ import annotations
+
+import importlib.util
+import json
+import re
+from types import ModuleType
+
+import numpy as np
+import pytest
+import torch
+
+import motionlab.exercises as exercises
+from motionlab import geometry as geo
+from motionlab.exercises.checking import CheckResult
+from motionlab.paths import REPO_ROOT
+
+NOTEBOOKS = REPO_ROOT / "notebooks"
+
+
+def solutions(chapter: str) -> ModuleType:
+    path = next((NOTEBOOKS / "solutions").glob(f"{chapter}_*.py"))
+    spec = importlib.util.spec_from_file_location(f"solutions_{chapter}", path)
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+def your_turn_cells() -> list[tuple[str, str]]:
+    """(chapter file name, cell source) of every cell tagged ``your-turn``."""
+    cells = []
+    for path in sorted(NOTEBOOKS.glob("[0-9][0-9]_*.ipynb")):
+        for cell in json.loads(path.read_text())["cells"]:
+            if "your-turn" in cell.get("metadata", {}).get("tags", []):
+                cells.append((path.name, "".join(cell["source"])))
+    return cells
+
+
+CELLS = your_turn_cells()
+
+
+def test_every_chapter_with_exercises_has_solutions_and_checkers() -> None:
+    assert CELLS, "no your-turn cells found"
+    for chapter, source in CELLS:
+        (name,) = re.findall(r"^def (my_\w+)\(", source, re.M)
+        checker = f"check_{name.removeprefix('my_')}"
+        assert hasattr(exercises, checker), f"{chapter}: no motionlab.exercises.{checker} for {name}"
+        assert f"{checker}({name})" in source, f"{chapter}: the cell does not call {checker}({name})"
+        assert hasattr(solutions(chapter[:2]), name), f"{chapter}: no solution for {name}"
+
+
+@pytest.mark.parametrize("chapter, source", CELLS, ids=[f"{c[:2]}-{i}" for i, (c, _) in enumerate(CELLS)])
+def test_skeletons_raise_not_implemented_with_a_message_and_the_checker_says_not_done(
+    chapter, source
+) -> None:
+    captured: dict[str, CheckResult] = {}
+    namespace = {"torch": torch}
+    for name in exercises.__all__:
+        if name.startswith("check_"):
+            checker = getattr(exercises, name)
+            namespace[name] = lambda fn, checker=checker, name=name: captured.setdefault(name, checker(fn))
+    exec(compile(source, chapter, "exec"), namespace)
+    (result,) = captured.values()
+    assert result.status == "not done", result
+    fn = next(value for key, value in namespace.items() if key.startswith("my_"))
+    with pytest.raises(NotImplementedError, match=r"\w+ \w+"):
+        fn(*[torch.zeros(4)] * (fn.__code__.co_argcount))
+
+
+@pytest.mark.parametrize(
+    "chapter, name",
+    [("01", "my_quat_mul"), ("01", "my_slerp"), ("02", "my_chain_positions")],
+)
+def test_solutions_pass_their_checkers(chapter: str, name: str) -> None:
+    checker = getattr(exercises, f"check_{name.removeprefix('my_')}")
+    result = checker(getattr(solutions(chapter), name))
+    assert result.passed, result
+
+
+def _unbatched_mul(q1, q2):
+    w1, x1, y1, z1 = q1[0], q1[1], q1[2], q1[3]
+    w2, x2, y2, z2 = q2[0], q2[1], q2[2], q2[3]
+    return torch.stack([w1 * w2 - x1 * x2 - y1 * y2 - z1 * z2, w1 * x2, w1 * y2, w1 * z2])
+
+
+def _w_last_mul(q1, q2):  # the scipy (x, y, z, w) convention applied to w-first data
+    roll = lambda q: torch.roll(q, -1, dims=-1)  # noqa: E731
+    return torch.roll(geo.quat_mul(roll(q1), roll(q2)), 1, dims=-1)
+
+
+def _numpy_mul(q1, q2):
+    return torch.as_tensor(
+        geo.quat_mul(torch.as_tensor(q1.detach().numpy()), torch.as_tensor(q2.detach().numpy()))
+    )
+
+
+@pytest.mark.parametrize(
+    "wrong, says",
+    [
+        (lambda q1, q2: geo.quat_mul(q2, q1), "q2 ⊗ q1"),
+        (lambda q1, q2: -geo.quat_mul(q1, q2), "wrong sign"),
+        (_unbatched_mul, "shape"),
+        (_w_last_mul, "w comes first"),
+        (lambda q1, q2: geo.quat_mul(q1.reshape(-1, 4), q2.reshape(-1, 4)).reshape(q1.shape), "broadcast"),
+        (lambda q1, q2: geo.quat_mul(q1[:1], q2[:1]).expand(q1.shape), "the first pair is right"),
+        (_numpy_mul, "gradient"),
+        (lambda q1, q2: geo.quat_mul(q1, q2).double(), "dtype"),
+        (lambda q1, q2: geo.quat_mul(q1, q2).tolist(), "torch.Tensor"),
+        (lambda q1, q2: q1.undefined_attribute, "AttributeError"),
+    ],
+)
+def test_quat_mul_checker_names_the_mistake(wrong, says) -> None:
+    result = exercises.check_quat_mul(wrong)
+    assert result.status == "wrong" and says in result.message, result
+
+
+def _naive_slerp(q0, q1, t):
+    t = torch.as_tensor(t, dtype=q0.dtype).unsqueeze(-1)
+    q1 = torch.where((q0 * q1).sum(-1, keepdim=True) < 0, -q1, q1)
+    omega = torch.acos((q0 * q1).sum(-1, keepdim=True).clamp(-1, 1))
+    return (torch.sin((1 - t) * omega) * q0 + torch.sin(t * omega) * q1) / torch.sin(omega)
+
+
+def _long_way_slerp(q0, q1, t):
+    t = torch.as_tensor(t, dtype=q0.dtype).unsqueeze(-1)
+    omega = torch.acos((q0 * q1).sum(-1, keepdim=True).clamp(-1, 1))
+    return (torch.sin((1 - t) * omega) * q0 + torch.sin(t * omega) * q1) / torch.sin(omega)
+
+
+def _lerp(q0, q1, t):
+    t = torch.as_tensor(t, dtype=q0.dtype).unsqueeze(-1)
+    return (1 - t) * q0 + t * q1
+
+
+def _scalar_t_only(q0, q1, t):
+    return geo.quat_slerp(q0, q1, float(t) if not isinstance(t, torch.Tensor) else float(t.flatten()[0]))
+
+
+def _too_fast(q0, q1, t):
+    return geo.quat_slerp(q0, q1, torch.as_tensor(t, dtype=q0.dtype) ** 2)
+
+
+@pytest.mark.parametrize(
+    "wrong, says",
+    [
+        (geo.quat_nlerp, "nlerp"),
+        (_lerp, "unit sphere"),
+        (_long_way_slerp, "shorter arc"),
+        (_naive_slerp, "NaN"),
+        (_scalar_t_only, "(9, 4)"),
+        (_too_fast, "evenly"),
+        (lambda q0, q1, t: q1, "at t = 0.0"),
+    ],
+)
+def test_slerp_checker_names_the_mistake(wrong, says) -> None:
+    result = exercises.check_slerp(wrong)
+    assert result.status == "wrong" and says in result.message, result
+
+
+def _chain(rotations, root, offsets, own=False, reverse=False, skip_root=False, batched=True):
+    positions, frame = [root], rotations[..., 0, :]
+    if skip_root:
+        positions = [torch.zeros_like(root)]
+    for k in range(1, rotations.shape[-2]):
+        if own:
+            frame = geo.quat_mul(frame, rotations[..., k, :])
+        positions.append(positions[-1] + geo.quat_apply(frame, offsets[k].expand_as(root)))
+        if not own:
+            frame = (
+                geo.quat_mul(rotations[..., k, :], frame)
+                if reverse
+                else geo.quat_mul(frame, rotations[..., k, :])
+            )
+    return torch.stack(positions, dim=-2 if batched else 1)
+
+
+@pytest.mark.parametrize(
+    "wrong, says",
+    [
+        (lambda r, x, o: _chain(r, x, o, own=True), "its own joint's global rotation"),
+        (lambda r, x, o: _chain(r, x, o, reverse=True), "wrong order"),
+        (lambda r, x, o: _chain(r, x, o, skip_root=True), "root position"),
+        (lambda r, x, o: _chain(r, x, o, batched=False), "leading dimensions"),
+        (lambda r, x, o: _chain(r, x, o)[..., :2, :], "should give positions (5, 4, 3)"),
+        (lambda r, x, o: torch.as_tensor(np.asarray(_chain(r.detach(), x, o))), "gradient"),
+    ],
+)
+def test_chain_checker_names_the_mistake(wrong, says) -> None:
+    result = exercises.check_chain_positions(wrong)
+    assert result.status == "wrong" and says in result.message, result
+
+
+def test_a_result_displays_as_one_line() -> None:
+    result = exercises.check_quat_mul(lambda q1, q2: geo.quat_mul(q2, q1))
+    assert str(result).startswith("✗ quat_mul: ") and "\n" not in str(result)
+    assert exercises.check_quat_mul(geo.quat_mul)._repr_markdown_().startswith("**✓")
