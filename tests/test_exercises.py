@@ -71,7 +71,15 @@ def test_skeletons_raise_not_implemented_with_a_message_and_the_checker_says_not
 
 @pytest.mark.parametrize(
     "chapter, name",
-    [("01", "my_quat_mul"), ("01", "my_slerp"), ("02", "my_chain_positions")],
+    [
+        ("01", "my_quat_mul"),
+        ("01", "my_slerp"),
+        ("02", "my_chain_positions"),
+        ("03", "my_reparameterize"),
+        ("03", "my_gaussian_kl"),
+        ("05", "my_affine_forward"),
+        ("05", "my_affine_inverse"),
+    ],
 )
 def test_solutions_pass_their_checkers(chapter: str, name: str) -> None:
     checker = getattr(exercises, f"check_{name.removeprefix('my_')}")
@@ -196,3 +204,94 @@ def test_a_result_displays_as_one_line() -> None:
     result = exercises.check_quat_mul(lambda q1, q2: geo.quat_mul(q2, q1))
     assert str(result).startswith("✗ quat_mul: ") and "\n" not in str(result)
     assert exercises.check_quat_mul(geo.quat_mul)._repr_markdown_().startswith("**✓")
+
+
+def _draw(scale):
+    return lambda mu, logvar, generator: (
+        mu + scale(logvar) * torch.randn(mu.shape, generator=generator, dtype=mu.dtype)
+    )
+
+
+@pytest.mark.parametrize(
+    "wrong, says",
+    [
+        (_draw(torch.exp), "exp(logvar) is the variance"),
+        (_draw(lambda logvar: logvar.abs().sqrt()), "sigma = exp(logvar / 2)"),
+        (_draw(torch.ones_like), "ignores logvar"),
+        (
+            lambda mu, logvar, generator: torch.normal(mu, torch.exp(0.5 * logvar), generator=generator),
+            "torch.normal",
+        ),
+        (lambda mu, logvar, generator: mu + torch.exp(0.5 * logvar) * torch.randn_like(mu), "generator"),
+        (lambda mu, logvar, generator: mu.detach() + 0 * logvar.detach(), "not sigma"),
+    ],
+)
+def test_reparameterize_checker_names_the_mistake(wrong, says) -> None:
+    result = exercises.check_reparameterize(wrong)
+    assert result.status == "wrong" and says in result.message, result
+
+
+@pytest.mark.parametrize(
+    "wrong, says",
+    [
+        (lambda mu, logvar: (0.5 * (mu**2 + logvar.exp() - 1 - logvar)).sum(-1), "summed over dimensions"),
+        (lambda mu, logvar: -0.5 * (mu**2 + logvar.exp() - 1 - logvar), "sign is flipped"),
+        (lambda mu, logvar: mu**2 + logvar.exp() - 1 - logvar, "factor 1/2"),
+        (lambda mu, logvar: 0.5 * (mu**2 + logvar.exp() - logvar), "the -1"),
+        (lambda mu, logvar: 0.5 * (mu**2 + logvar.exp() ** 2 - 1 - 2 * logvar), "already the variance"),
+        (lambda mu, logvar: 0.5 * (mu + logvar.exp() - 1 - logvar), "1/2 (mu^2"),
+    ],
+)
+def test_gaussian_kl_checker_names_the_mistake(wrong, says) -> None:
+    result = exercises.check_gaussian_kl(wrong)
+    assert result.status == "wrong" and says in result.message, result
+
+
+def _coupling(order="shift-first", offset=2.0, squash=torch.sigmoid, swap=False, reduce=True, stable=True):
+    def forward(x_b, params):
+        shift, raw = params.chunk(2, dim=1)
+        if swap:
+            shift, raw = raw, shift
+        scale = squash(raw + offset)
+        y_b = (x_b + shift) * scale if order == "shift-first" else x_b * scale + shift
+        log_scale = torch.nn.functional.logsigmoid(raw + offset) if stable else torch.log(scale)
+        return y_b, log_scale.sum(dim=(1, 2)) if reduce else log_scale
+
+    return forward
+
+
+@pytest.mark.parametrize(
+    "wrong, says",
+    [
+        (_coupling(order="scale-first"), "shift first"),
+        (_coupling(swap=True), "shift t first"),
+        (_coupling(offset=0.0), "Glow's offset"),
+        (_coupling(squash=torch.exp), "not exp"),
+        (_coupling(reduce=False), "one value per sequence"),
+        (_coupling(stable=False), "logsigmoid"),
+        (lambda x_b, params: (_coupling()(x_b, params)[0], -_coupling()(x_b, params)[1]), "wrong sign"),
+        (lambda x_b, params: _coupling()(x_b, params)[0], "pair"),
+    ],
+)
+def test_affine_forward_checker_names_the_mistake(wrong, says) -> None:
+    result = exercises.check_affine_forward(wrong)
+    assert result.status == "wrong" and says in result.message, result
+
+
+@pytest.mark.parametrize(
+    "wrong, says",
+    [
+        (
+            lambda y_b, params: y_b / torch.sigmoid(params.chunk(2, 1)[1] + 2) + params.chunk(2, 1)[0],
+            "subtracting t",
+        ),
+        (
+            lambda y_b, params: (y_b - params.chunk(2, 1)[0]) / torch.sigmoid(params.chunk(2, 1)[1] + 2),
+            "reverse order",
+        ),
+        (lambda y_b, params: y_b, "is not x_b"),
+    ],
+)
+def test_affine_inverse_checker_names_the_mistake(wrong, says) -> None:
+    result = exercises.check_affine_inverse(wrong)
+    assert result.status == "wrong" and says in result.message, result

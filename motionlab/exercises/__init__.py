@@ -10,11 +10,23 @@ skeleton in the chapters raises ``NotImplementedError`` with a message, and that
 several typical mistakes.
 
 Modules: :mod:`~motionlab.exercises.rotations` (chapter 01), :mod:`~motionlab.exercises.kinematics`
-(chapter 02).
+(chapter 02), :mod:`~motionlab.exercises.vae` (chapter 03), :mod:`~motionlab.exercises.flows` (chapter 05);
+:mod:`~motionlab.exercises.checking` holds what they share.
 """
 
 from motionlab.exercises.checking import CheckResult
+from motionlab.exercises.flows import check_affine_forward, check_affine_inverse
 from motionlab.exercises.kinematics import check_chain_positions
 from motionlab.exercises.rotations import check_quat_mul, check_slerp
+from motionlab.exercises.vae import check_gaussian_kl, check_reparameterize
 
-__all__ = ["CheckResult", "check_chain_positions", "check_quat_mul", "check_slerp"]
+__all__ = [
+    "CheckResult",
+    "check_affine_forward",
+    "check_affine_inverse",
+    "check_chain_positions",
+    "check_gaussian_kl",
+    "check_quat_mul",
+    "check_reparameterize",
+    "check_slerp",
+]

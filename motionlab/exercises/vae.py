@@ -1,0 +1,122 @@
+"""Chapter 03's exercises: the reparameterisation trick and the closed-form Gaussian KL, checked against
+:mod:`motionlab.models.gaussian`."""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+
+import torch
+
+from motionlab.exercises.checking import CheckResult, Diagnosis, as_result, close, run_checks
+from motionlab.models.gaussian import gaussian_kl
+
+Reparameterize = Callable[[torch.Tensor, torch.Tensor, torch.Generator], torch.Tensor]
+GaussianKL = Callable[[torch.Tensor, torch.Tensor], torch.Tensor]
+
+
+def _posterior(n: int, seed: int) -> tuple[torch.Tensor, torch.Tensor]:
+    generator = torch.Generator().manual_seed(seed)
+    mu = torch.randn(n, 3, generator=generator, dtype=torch.float64)
+    logvar = torch.tensor([-1.5, 0.0, 1.0], dtype=torch.float64).expand(n, 3).clone()
+    return mu, logvar
+
+
+def _draws_have_the_right_moments(fn: Reparameterize) -> None:
+    mu, logvar = _posterior(1, 1)
+    mu, logvar = mu.expand(200_000, 3), logvar.expand(200_000, 3)
+    z = as_result(fn(mu, logvar, torch.Generator().manual_seed(0)), "reparameterize")
+    if z.shape != mu.shape:
+        raise Diagnosis(
+            f"mu and logvar of shape (200000, 3) should give z of the same shape, got {tuple(z.shape)}"
+        )
+    mean, std = z.mean(0), z.std(0)
+    want_std = torch.exp(0.5 * logvar[0])
+    if not torch.allclose(mean, mu[0], atol=0.02 * float(want_std.max())):
+        raise Diagnosis(
+            f"the draws' mean is {mean.tolist()}, not mu = {mu[0].tolist()}: z = mu + sigma * eps"
+        )
+    if torch.allclose(std, want_std, rtol=0.02):
+        return
+    for wrong, text in (
+        (torch.exp(logvar[0]), "exp(logvar) is the variance, not the standard deviation"),
+        (logvar[0].abs().sqrt(), "logvar is the log of the variance: sigma = exp(logvar / 2)"),
+        (torch.ones(3, dtype=mu.dtype), "the spread ignores logvar: scale eps by sigma = exp(logvar / 2)"),
+    ):
+        if torch.allclose(std, wrong, rtol=0.02):
+            raise Diagnosis(f"the draws' standard deviations are {std.tolist()}: {text}")
+    raise Diagnosis(f"the draws' standard deviations are {std.tolist()}, not sigma = {want_std.tolist()}")
+
+
+def _draws_are_differentiable_and_seeded(fn: Reparameterize) -> None:
+    mu, logvar = _posterior(4, 2)
+    mu.requires_grad_(True)
+    logvar.requires_grad_(True)
+    z = as_result(fn(mu, logvar, torch.Generator().manual_seed(5)), "reparameterize")
+    if not z.requires_grad:
+        raise Diagnosis(
+            "no gradient reaches mu or logvar: draw eps ~ N(0, I) and compute z = mu + sigma * eps"
+        )
+    z.sum().backward()
+    if logvar.grad is None or not bool(logvar.grad.abs().sum() > 0):
+        raise Diagnosis(
+            "no gradient reaches logvar (torch.normal(mu, std) does not pass one): draw eps ~ N(0, I) with "
+            "torch.randn and compute z = mu + sigma * eps"
+        )
+    again = fn(mu.detach(), logvar.detach(), torch.Generator().manual_seed(5))
+    if not close(z.detach(), again):
+        raise Diagnosis("the same generator seed gave different draws: pass the generator to torch.randn")
+
+
+def check_reparameterize(fn: Reparameterize) -> CheckResult:
+    """Check ``fn(mu, logvar, generator) -> z`` drawing from N(mu, exp(logvar)) differentiably."""
+    return run_checks(
+        "reparameterize",
+        fn,
+        [_draws_have_the_right_moments, _draws_are_differentiable_and_seeded],
+        "right mean and spread over 200,000 draws, gradients reach mu and logvar, seeded by the generator",
+    )
+
+
+def _kl_values(fn: GaussianKL) -> None:
+    mu, logvar = _posterior(5, 3)
+    got = as_result(fn(mu, logvar), "gaussian_kl")
+    want = gaussian_kl(mu, logvar)
+    if got.shape != want.shape:
+        if got.shape in ((5,), (5, 1)) and close(got.reshape(5), want.sum(-1)):
+            raise Diagnosis("you summed over dimensions: return the KL per dimension, shape (..., D)")
+        raise Diagnosis(
+            f"mu and logvar of shape (5, 3) should give a KL of shape (5, 3), got {tuple(got.shape)}"
+        )
+    if close(got, want):
+        return
+    for wrong, text in (
+        (-want, "the sign is flipped: a KL is never negative"),
+        (2 * want, "you forgot the factor 1/2"),
+        (want + 0.5, "you forgot the -1 inside the bracket (the KL of a distribution with itself is 0)"),
+        (0.5 * (mu**2 + logvar.exp() ** 2 - 1 - 2 * logvar), "exp(logvar) is already the variance"),
+    ):
+        if close(got, wrong):
+            raise Diagnosis(text)
+    raise Diagnosis(
+        f"for mu = {mu[0, 0].item():.3f}, logvar = {logvar[0, 0].item():.1f} you gave "
+        f"{got[0, 0].item():.4f}, the KL is {want[0, 0].item():.4f}: 1/2 (mu^2 + sigma^2 - 1 - log sigma^2)"
+    )
+
+
+def _kl_is_zero_at_the_prior(fn: GaussianKL) -> None:
+    zero = torch.zeros(2, 4, dtype=torch.float64, requires_grad=True)
+    got = as_result(fn(zero, torch.zeros(2, 4, dtype=torch.float64)), "gaussian_kl")
+    if not close(got, torch.zeros_like(got)):
+        raise Diagnosis("KL(N(0, 1) || N(0, 1)) should be 0 in every dimension")
+    if not got.requires_grad:
+        raise Diagnosis("no gradient reaches mu: compute with torch operations only")
+
+
+def check_gaussian_kl(fn: GaussianKL) -> CheckResult:
+    """Check ``fn(mu, logvar)``, the KL of N(mu, exp(logvar)) from N(0, I) per dimension, ``(..., D)``."""
+    return run_checks(
+        "gaussian_kl",
+        fn,
+        [_kl_values, _kl_is_zero_at_the_prior],
+        "matches motionlab.models.gaussian.gaussian_kl per dimension, 0 at the prior, with gradients",
+    )
