@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import importlib.util
 import json
+import math
 import re
 from types import ModuleType
 
@@ -79,6 +80,8 @@ def test_skeletons_raise_not_implemented_with_a_message_and_the_checker_says_not
         ("03", "my_gaussian_kl"),
         ("05", "my_affine_forward"),
         ("05", "my_affine_inverse"),
+        ("07", "my_dct_matrix"),
+        ("08", "my_contrastive_loss"),
     ],
 )
 def test_solutions_pass_their_checkers(chapter: str, name: str) -> None:
@@ -294,4 +297,64 @@ def test_affine_forward_checker_names_the_mistake(wrong, says) -> None:
 )
 def test_affine_inverse_checker_names_the_mistake(wrong, says) -> None:
     result = exercises.check_affine_inverse(wrong)
+    assert result.status == "wrong" and says in result.message, result
+
+
+def _dct(scale_zero=None, scale=None, transpose=False, fixed_n=None, kind=2):
+    def matrix(n_frames):
+        n = fixed_n or n_frames
+        k = torch.arange(n, dtype=torch.float64)[:, None]
+        t = torch.arange(n, dtype=torch.float64)[None, :]
+        angle = math.pi * (2 * t + 1) * k / (2 * n) if kind == 2 else math.pi * t * k / n
+        s = torch.full((n, 1), math.sqrt(2 / n) if scale is None else scale, dtype=torch.float64)
+        s[0] = math.sqrt(1 / n) if scale_zero is None else scale_zero
+        d = s * torch.cos(angle)
+        return d.T if transpose else d
+
+    return matrix
+
+
+@pytest.mark.parametrize(
+    "wrong, says",
+    [
+        (_dct(transpose=True), "transposed"),
+        (_dct(scale_zero=math.sqrt(2 / 8)), "row 0"),
+        (_dct(scale_zero=1.0, scale=1.0), "scale"),
+        (_dct(kind=1), "cosines are wrong"),
+        (_dct(fixed_n=8), "N = n_frames"),
+    ],
+)
+def test_dct_checker_names_the_mistake(wrong, says) -> None:
+    result = exercises.check_dct_matrix(wrong)
+    assert result.status == "wrong" and says in result.message, result
+
+
+def _contrastive(same_term, apart_term, reduce=False, safe=True):
+    def loss(mu_a, mu_b, same, margin):
+        squared = (mu_a - mu_b).pow(2).sum(-1)
+        d = squared.clamp_min(1e-12).sqrt() if safe else squared.sqrt()
+        out = torch.where(same, same_term(d), apart_term(d, margin))
+        return out.mean() if reduce else out
+
+    return loss
+
+
+HALF_SQ = lambda d: 0.5 * d**2  # noqa: E731
+HINGE = lambda d, m: 0.5 * torch.relu(m - d) ** 2  # noqa: E731
+
+
+@pytest.mark.parametrize(
+    "wrong, says",
+    [
+        (_contrastive(HALF_SQ, HINGE, reduce=True), "one loss per pair"),
+        (_contrastive(lambda d: d**2, lambda d, m: torch.relu(m - d) ** 2), "factor 1/2"),
+        (_contrastive(lambda d: HINGE(d, 3.0), lambda d, m: HALF_SQ(d)), "swapped"),
+        (_contrastive(HALF_SQ, lambda d, m: 0.5 * torch.relu(m - d)), "hinge is squared"),
+        (_contrastive(HALF_SQ, lambda d, m: 0.5 * torch.relu(m - d**2) ** 2), "not d^2"),
+        (_contrastive(lambda d: 0.5 * d, HINGE), "squared distance"),
+        (_contrastive(HALF_SQ, HINGE, safe=False), "NaN"),
+    ],
+)
+def test_contrastive_checker_names_the_mistake(wrong, says) -> None:
+    result = exercises.check_contrastive_loss(wrong)
     assert result.status == "wrong" and says in result.message, result

@@ -10,7 +10,8 @@ skeleton in the chapters raises ``NotImplementedError`` with a message, and that
 several typical mistakes.
 
 Modules: :mod:`~motionlab.exercises.rotations` (chapter 01), :mod:`~motionlab.exercises.kinematics`
-(chapter 02), :mod:`~motionlab.exercises.vae` (chapter 03), :mod:`~motionlab.exercises.flows` (chapter 05);
+(chapter 02), :mod:`~motionlab.exercises.vae` (chapter 03), :mod:`~motionlab.exercises.flows` (chapter 05),
+:mod:`~motionlab.exercises.sequences` (chapters 07 and 08);
 :mod:`~motionlab.exercises.checking` holds what they share.
 """
 
@@ -18,6 +19,7 @@ from motionlab.exercises.checking import CheckResult
 from motionlab.exercises.flows import check_affine_forward, check_affine_inverse
 from motionlab.exercises.kinematics import check_chain_positions
 from motionlab.exercises.rotations import check_quat_mul, check_slerp
+from motionlab.exercises.sequences import check_contrastive_loss, check_dct_matrix
 from motionlab.exercises.vae import check_gaussian_kl, check_reparameterize
 
 __all__ = [
@@ -25,6 +27,8 @@ __all__ = [
     "check_affine_forward",
     "check_affine_inverse",
     "check_chain_positions",
+    "check_contrastive_loss",
+    "check_dct_matrix",
     "check_gaussian_kl",
     "check_quat_mul",
     "check_reparameterize",

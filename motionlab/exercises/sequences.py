@@ -1,0 +1,141 @@
+"""Chapters 07 and 08's exercises: the DCT basis of TrajeVAE and ODMO's contrastive loss, checked against
+:mod:`motionlab.models.trajevae.dct` and :mod:`motionlab.models.odmo.losses`."""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+
+import torch
+
+from motionlab.exercises.checking import CheckResult, Diagnosis, as_result, close, run_checks
+from motionlab.models.odmo.losses import contrastive_loss
+from motionlab.models.trajevae.dct import dct_matrix
+
+DCTMatrix = Callable[[int], torch.Tensor]
+ContrastiveLoss = Callable[[torch.Tensor, torch.Tensor, torch.Tensor, float], torch.Tensor]
+
+
+def _dct_values(fn: DCTMatrix) -> None:
+    n = 8
+    got = as_result(fn(n), "the DCT matrix").to(torch.float64)
+    want = dct_matrix(n, dtype=torch.float64)
+    if got.shape != (n, n):
+        raise Diagnosis(
+            f"dct_matrix({n}) should be ({n}, {n}) (frequency k, frame t), got {tuple(got.shape)}"
+        )
+    if close(got, want, 1e-6):
+        return
+    if close(got, want.T, 1e-6):
+        raise Diagnosis("the matrix is transposed: row k should be frequency k, column t frame t (X = D x)")
+    rows_right = [k for k in range(n) if close(got[k], want[k], 1e-6)]
+    if rows_right == list(range(1, n)):
+        raise Diagnosis("row 0 (the constant) is off: its scale is sqrt(1/N), the other rows' sqrt(2/N)")
+    ratio = got / want
+    if torch.allclose(ratio[1:], ratio[1, 0].expand_as(ratio[1:]), rtol=1e-6):
+        raise Diagnosis(
+            "the cosines are right but not their scale: s_0 = sqrt(1/N) and s_k = sqrt(2/N) make the rows "
+            "orthonormal"
+        )
+    gram = got @ got.T
+    orthonormal = close(gram, torch.eye(n, dtype=gram.dtype), 1e-6)
+    raise Diagnosis(
+        "the cosines are wrong: D[k, t] = s_k cos(pi (2t + 1) k / (2N))"
+        + ("" if orthonormal else "; your rows are not orthonormal either (D D^T should be I)")
+    )
+
+
+def _dct_other_sizes(fn: DCTMatrix) -> None:
+    for n in (1, 5, 31):
+        got = as_result(fn(n), "the DCT matrix").to(torch.float64)
+        if got.shape != (n, n) or not close(got, dct_matrix(n, dtype=torch.float64), 1e-6):
+            raise Diagnosis(
+                f"dct_matrix({n}) is wrong (right for 8 frames): use N = n_frames, not a constant"
+            )
+
+
+def check_dct_matrix(fn: DCTMatrix) -> CheckResult:
+    """Check ``fn(n_frames) -> (n_frames, n_frames)``, the orthonormal DCT-II matrix (rows: frequencies)."""
+    return run_checks(
+        "dct_matrix",
+        fn,
+        [_dct_values, _dct_other_sizes],
+        "matches the orthonormal DCT-II (scipy's dct(norm='ortho')) for 1, 5, 8 and 31 frames",
+    )
+
+
+def _pairs(seed: int) -> tuple[torch.Tensor, torch.Tensor, torch.Tensor]:
+    generator = torch.Generator().manual_seed(seed)
+    mu_a = torch.randn(12, 3, generator=generator, dtype=torch.float64) * 2
+    mu_b = torch.randn(12, 3, generator=generator, dtype=torch.float64) * 2
+    same = torch.arange(12) % 2 == 0
+    return mu_a, mu_b, same
+
+
+def _contrastive_values(fn: ContrastiveLoss) -> None:
+    mu_a, mu_b, same = _pairs(1)
+    margin = 3.0
+    got = as_result(fn(mu_a, mu_b, same, margin), "the contrastive loss")
+    want = contrastive_loss(mu_a, mu_b, same, margin)
+    if got.shape != want.shape:
+        if got.numel() == 1:
+            raise Diagnosis("return one loss per pair, shape (P,), not their sum or mean")
+        raise Diagnosis(f"12 pairs should give losses of shape (12,), got {tuple(got.shape)}")
+    if close(got, want):
+        return
+    d = (mu_a - mu_b).norm(dim=-1)
+    for wrong, text in (
+        (2 * want, "you forgot the factor 1/2"),
+        (
+            0.5 * torch.where(same, torch.relu(margin - d) ** 2, d**2),
+            "same- and different-class terms are swapped",
+        ),
+        (0.5 * torch.where(same, d**2, torch.relu(margin - d)), "the hinge is squared: max(0, m - d)^2"),
+        (
+            0.5 * torch.where(same, d**2, torch.relu(margin - d**2) ** 2),
+            "the hinge compares the distance d, not d^2",
+        ),
+        (
+            0.5 * torch.where(same, d, torch.relu(margin - d) ** 2),
+            "the same-class term is the squared distance",
+        ),
+    ):
+        if close(got, wrong):
+            raise Diagnosis(text)
+    wrong_same = bool((~close_each(got, want))[same].any())
+    raise Diagnosis(
+        f"the {'same' if wrong_same else 'different'}-class losses are wrong: 1/2 d^2 for the same class, "
+        "1/2 max(0, m - d)^2 for different classes"
+    )
+
+
+def close_each(a: torch.Tensor, b: torch.Tensor, tolerance: float = 1e-9) -> torch.Tensor:
+    """Element-wise agreement of two same-shaped tensors."""
+    return torch.isclose(a, b, atol=tolerance, rtol=tolerance)
+
+
+def _contrastive_gradient_at_zero(fn: ContrastiveLoss) -> None:
+    mu_a = torch.zeros(2, 3, dtype=torch.float64, requires_grad=True)
+    loss = as_result(
+        fn(mu_a, torch.zeros(2, 3, dtype=torch.float64), torch.tensor([True, False]), 1.0), "loss"
+    )
+    if not loss.requires_grad:
+        raise Diagnosis("no gradient reaches the codes: compute with torch operations only")
+    loss.sum().backward()
+    if mu_a.grad is None or not torch.isfinite(mu_a.grad).all():
+        raise Diagnosis(
+            "for two equal codes the gradient is NaN: sqrt has an infinite slope at 0; take the square root "
+            "of a clamped square, e.g. d = sq.clamp_min(1e-12).sqrt()"
+        )
+    if not math.isclose(float(loss[1].detach()), 0.5, rel_tol=1e-4):
+        raise Diagnosis("two equal codes of different classes should cost 1/2 m^2")
+
+
+def check_contrastive_loss(fn: ContrastiveLoss) -> CheckResult:
+    """Check ``fn(mu_a, mu_b, same, margin) -> (P,)``: ODMO's eq. 1 per pair of codes ``(P, D)``."""
+    return run_checks(
+        "contrastive_loss",
+        fn,
+        [_contrastive_values, _contrastive_gradient_at_zero],
+        "matches ODMO's eq. 1 per pair (without slack), with finite gradients for equal codes",
+    )

@@ -1,0 +1,17 @@
+"""Worked solution to chapter 07's "your turn" exercise (checked by tests/test_exercises.py)."""
+
+from __future__ import annotations
+
+import math
+
+import torch
+
+
+def my_dct_matrix(n_frames: int) -> torch.Tensor:
+    """The orthonormal DCT-II matrix (n_frames, n_frames): D[k, t] = s_k cos(pi (2t + 1) k / (2N)),
+    s_0 = sqrt(1/N), s_k = sqrt(2/N) for k > 0."""
+    k = torch.arange(n_frames, dtype=torch.float64)[:, None]
+    t = torch.arange(n_frames, dtype=torch.float64)[None, :]
+    scale = torch.full((n_frames, 1), math.sqrt(2.0 / n_frames), dtype=torch.float64)
+    scale[0] = math.sqrt(1.0 / n_frames)
+    return scale * torch.cos(math.pi * (2 * t + 1) * k / (2 * n_frames))
