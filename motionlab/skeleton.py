@@ -273,6 +273,20 @@ def average_skeleton() -> Skeleton:
     return Skeleton(JOINT_NAMES, PARENTS, offsets)
 
 
+def subtree_reach(parents: Sequence[int], bone_lengths: np.ndarray) -> np.ndarray:
+    """``L_k`` ``(J,)``: the longest path (sum of bone lengths) from joint ``k`` down to an end effector.
+
+    ``bone_lengths[j]`` is the length of the bone from joint ``j``'s parent to ``j``; ``parents[j] < j``.
+    Children are visited before their parents (from the last joint back), so a child's reach is known when
+    its parent takes the maximum over its children. End effectors have ``L_k = 0``.
+    """
+    reach = np.zeros(len(parents))
+    for j in range(len(parents) - 1, 0, -1):
+        parent = parents[j]
+        reach[parent] = max(reach[parent], reach[j] + bone_lengths[j])
+    return reach
+
+
 def joint_impact_weights(skeleton: Skeleton | None = None, leaf_floor: float = 0.1) -> np.ndarray:
     """Weights ``alpha_k`` ``(J,)`` of the Motion Cell paper (eq. 23): how far a joint's rotation reaches.
 
@@ -291,11 +305,7 @@ def joint_impact_weights(skeleton: Skeleton | None = None, leaf_floor: float = 0
     """
     skeleton = average_skeleton() if skeleton is None else skeleton
     check_scalar(leaf_floor, "leaf_floor", "joint_impact_weights", minimum=0, maximum=1)
-    bones = skeleton.bone_lengths()
-    reach = np.zeros(skeleton.n_joints)
-    for j in range(skeleton.n_joints - 1, 0, -1):  # children come after parents
-        parent = skeleton.parents[j]
-        reach[parent] = max(reach[parent], reach[j] + bones[j])
+    reach = subtree_reach(skeleton.parents, skeleton.bone_lengths())
     if reach.max() <= 0:
         raise ValueError("joint_impact_weights: the skeleton has no bone of positive length")
     floored = np.maximum(reach, leaf_floor * reach.max())

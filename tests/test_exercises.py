@@ -78,6 +78,7 @@ def test_skeletons_raise_not_implemented_with_a_message_and_the_checker_says_not
         ("02", "my_chain_positions"),
         ("03", "my_reparameterize"),
         ("03", "my_gaussian_kl"),
+        ("04", "my_subtree_reach"),
         ("05", "my_affine_forward"),
         ("05", "my_affine_inverse"),
         ("07", "my_dct_matrix"),
@@ -357,4 +358,30 @@ HINGE = lambda d, m: 0.5 * torch.relu(m - d) ** 2  # noqa: E731
 )
 def test_contrastive_checker_names_the_mistake(wrong, says) -> None:
     result = exercises.check_contrastive_loss(wrong)
+    assert result.status == "wrong" and says in result.message, result
+
+
+def _reach(combine="max", include_own=False, forward=False):
+    def reach(parents, bones):
+        out = np.zeros(len(parents))
+        order = range(1, len(parents)) if forward else range(len(parents) - 1, 0, -1)
+        for j in order:
+            value = out[j] + bones[j]
+            out[parents[j]] = max(out[parents[j]], value) if combine == "max" else out[parents[j]] + value
+        return out + bones if include_own else out
+
+    return reach
+
+
+@pytest.mark.parametrize(
+    "wrong, says",
+    [
+        (_reach(combine="sum"), "longest single path"),
+        (_reach(include_own=True), "own bone"),
+        (_reach(forward=True), "visit children before"),
+        (lambda parents, bones: np.zeros(len(parents) - 1), "one L_k per joint"),
+    ],
+)
+def test_subtree_reach_checker_names_the_mistake(wrong, says) -> None:
+    result = exercises.check_subtree_reach(wrong)
     assert result.status == "wrong" and says in result.message, result

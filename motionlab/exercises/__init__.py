@@ -10,13 +10,14 @@ skeleton in the chapters raises ``NotImplementedError`` with a message, and that
 several typical mistakes.
 
 Modules: :mod:`~motionlab.exercises.rotations` (chapter 01), :mod:`~motionlab.exercises.kinematics`
-(chapter 02), :mod:`~motionlab.exercises.vae` (chapter 03), :mod:`~motionlab.exercises.flows` (chapter 05),
-:mod:`~motionlab.exercises.sequences` (chapters 07 and 08);
-:mod:`~motionlab.exercises.checking` holds what they share.
+(chapter 02), :mod:`~motionlab.exercises.vae` (chapter 03), :mod:`~motionlab.exercises.hierarchy` (chapter
+04), :mod:`~motionlab.exercises.flows` (chapter 05), :mod:`~motionlab.exercises.sequences` (chapters 07 and
+08); :mod:`~motionlab.exercises.checking` holds what they share.
 """
 
 from motionlab.exercises.checking import CheckResult
 from motionlab.exercises.flows import check_affine_forward, check_affine_inverse
+from motionlab.exercises.hierarchy import check_subtree_reach
 from motionlab.exercises.kinematics import check_chain_positions
 from motionlab.exercises.rotations import check_quat_mul, check_slerp
 from motionlab.exercises.sequences import check_contrastive_loss, check_dct_matrix
@@ -33,4 +34,5 @@ __all__ = [
     "check_quat_mul",
     "check_reparameterize",
     "check_slerp",
+    "check_subtree_reach",
 ]
