@@ -5,10 +5,11 @@ Every model is an :class:`~motionlab.models.vae.model.MLPVAE` trained on
 optimiser settings: the pose models on standardised pose vectors, the clip CVAEs on standardised 2-second
 MoGlow windows (:mod:`~motionlab.models.vae.data`).
 
-The likelihood variance of the clip CVAE is ODMO's weighting in disguise: ODMO minimises, per clip, the
-squared error averaged over the D features of a frame and summed over frames, plus the KL with weight 1.
-That equals the Gaussian negative log-likelihood with sigma_x^2 = D / 2 (up to a constant), which is what
-:meth:`ExperimentConfig.clip_model` uses.
+The likelihood variance of the clip CVAE is the weighting of ODMO's released code in disguise: the
+code minimises, per clip, the squared error averaged over the D features of a frame and summed over
+frames, plus the KL with weight 1. That equals the Gaussian negative log-likelihood with
+sigma_x^2 = D / 2 (up to a constant), which is what :meth:`ExperimentConfig.clip_model` uses. (The
+paper's eq. 3 sums over the features as well, which with its eq. 1 is sigma_x^2 = 1 in its units.)
 """
 
 from __future__ import annotations
@@ -36,7 +37,8 @@ class ExperimentConfig:
         pose_every: take every this many frames of a clip as a pose.
         pose_latent, pose_hidden, pose_steps: the pose models' latent size, width and training steps.
         pose_obs_var: sigma_x^2 of the pose VAEs' likelihood (standardised units).
-        small_prior_var: sigma_p^2 of the section-5 pose VAE (ODMO's prior variance).
+        small_prior_var: sigma_p^2 of the section-5 pose VAE, the variance of its full N(0, sigma_p^2 I) prior
+            (ODMO's number, 0.05; ODMO's own term constrains only the posterior variances, towards it).
         clip_length, clip_stride: window length and hop in frames (30 fps).
         clip_latent, clip_hidden, clip_steps: the clip CVAEs' latent size, width and training steps.
         batch_size, lr, grad_clip, seed: for every run.
@@ -120,8 +122,8 @@ class ExperimentConfig:
         )
 
     def clip_model(self, n_actions: int, prior_var: float = 1.0) -> VAEConfig:
-        """The action-conditioned clip VAE: windows ``(clip_length, 67)``, sigma_x^2 = 67 / 2 (ODMO's
-        weighting)."""
+        """The action-conditioned clip VAE: windows ``(clip_length, 67)``, sigma_x^2 = 67 / 2 (the
+        weighting of ODMO's released code)."""
         where = "ExperimentConfig.clip_model"
         check_scalar(n_actions, "n_actions", where, kind=numbers.Integral, minimum=1)
         check_scalar(prior_var, "prior_var", where, minimum=0.0, include_minimum=False)

@@ -63,7 +63,7 @@ class VAEConfig:
         n_classes: number of classes of the condition c (0: unconditional).
         variational: False gives a plain autoencoder (deterministic code, no KL term).
         obs_logvar: log sigma_x^2 of the likelihood N(decoder(z), sigma_x^2 I), in standardised units.
-        prior_logvar: log sigma_p^2 of the prior N(0, sigma_p^2 I) (ODMO's knob; 0 is the standard normal).
+        prior_logvar: log sigma_p^2 of the prior N(0, sigma_p^2 I) (0 is the standard normal).
     """
 
     input_shape: tuple[int, ...]
