@@ -45,11 +45,13 @@ CELLS = your_turn_cells()
 def test_every_chapter_with_exercises_has_solutions_and_checkers() -> None:
     assert CELLS, "no your-turn cells found"
     for chapter, source in CELLS:
-        (name,) = re.findall(r"^def (my_\w+)\(", source, re.M)
-        checker = f"check_{name.removeprefix('my_')}"
-        assert hasattr(exercises, checker), f"{chapter}: no motionlab.exercises.{checker} for {name}"
-        assert f"{checker}({name})" in source, f"{chapter}: the cell does not call {checker}({name})"
-        assert hasattr(solutions(chapter[:2]), name), f"{chapter}: no solution for {name}"
+        names = re.findall(r"^def (my_\w+)\(", source, re.M)
+        assert names, f"{chapter}: a your-turn cell without a my_ function"
+        for name in names:
+            checker = f"check_{name.removeprefix('my_')}"
+            assert hasattr(exercises, checker), f"{chapter}: no motionlab.exercises.{checker} for {name}"
+            assert f"{checker}({name})" in source, f"{chapter}: the cell does not call {checker}({name})"
+            assert hasattr(solutions(chapter[:2]), name), f"{chapter}: no solution for {name}"
 
 
 @pytest.mark.parametrize("chapter, source", CELLS, ids=[f"{c[:2]}-{i}" for i, (c, _) in enumerate(CELLS)])
@@ -63,11 +65,11 @@ def test_skeletons_raise_not_implemented_with_a_message_and_the_checker_says_not
             checker = getattr(exercises, name)
             namespace[name] = lambda fn, checker=checker, name=name: captured.setdefault(name, checker(fn))
     exec(compile(source, chapter, "exec"), namespace)
-    (result,) = captured.values()
-    assert result.status == "not done", result
-    fn = next(value for key, value in namespace.items() if key.startswith("my_"))
-    with pytest.raises(NotImplementedError, match=r"\w+ \w+"):
-        fn(*[torch.zeros(4)] * (fn.__code__.co_argcount))
+    assert captured and all(result.status == "not done" for result in captured.values()), captured
+    for key, fn in namespace.items():
+        if key.startswith("my_"):
+            with pytest.raises(NotImplementedError, match=r"\w+ \w+"):
+                fn(*[torch.zeros(4)] * fn.__code__.co_argcount)
 
 
 @pytest.mark.parametrize(
