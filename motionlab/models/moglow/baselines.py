@@ -82,14 +82,14 @@ class GaussianAR(nn.Module):
 
     def forward(self, pose: Tensor, control: Tensor, generator: torch.Generator | None = None) -> Tensor:
         """Log-likelihood ``(B,)`` (nats) of frames ``tau .. T-1``, as :meth:`MoGlow.forward` (history dropout
-        flags drawn from ``generator``)."""
+        flags drawn from ``generator`` in training mode only)."""
         cfg = self.cfg
         check_pose_control(
             pose, control, cfg.pose_dim, cfg.control_dim, cfg.history + 1, "GaussianAR.forward", True
         )
         batch, frames, _ = pose.shape
         keep = None
-        if self.cfg.dropout > 0:
+        if self.training and self.cfg.dropout > 0:
             keep = history_keep_mask(
                 batch, frames - self.cfg.history, self.cfg.history, self.cfg.dropout, generator
             )
@@ -111,9 +111,7 @@ class GaussianAR(nn.Module):
         generator: torch.Generator | None = None,
     ) -> Tensor:
         """Generate poses ``(B, N, P)`` frame by frame, as :meth:`MoGlow.sample`."""
-        keep, noise = sampling_setup(
-            self.cfg, control, seed_pose, temperature, generator, "GaussianAR.sample"
-        )
+        noise = sampling_setup(self.cfg, control, seed_pose, temperature, generator, "GaussianAR.sample")
 
         def step(
             t: int, cond: Tensor, state: tuple[Tensor, Tensor] | None
@@ -122,4 +120,4 @@ class GaussianAR(nn.Module):
             mean, log_std = self._distribution(cond, hidden[:, 0])
             return mean + torch.exp(log_std) * noise[:, t], state
 
-        return autoregressive_sample(step, control, seed_pose, None, keep)
+        return autoregressive_sample(step, control, seed_pose)

@@ -10,10 +10,9 @@ so a change of control acts at once: zero latency). No future control is used: t
 **History dropout.** Each previous pose in ``c_t`` is replaced by zeros (the mean pose, in standard units)
 with probability ``p``, independently per frame and lag. Without it the easiest way to predict ``x_t`` is
 to continue ``x_{t-1}``, and the model learns to ignore the control; with it the model has to read the
-control (and its own LSTM memory) to know what comes next. The erasure is part of the model: it is
-applied when generating and when measuring likelihoods too, not only in training. A model trained with
-``p = 0.95`` has almost never seen all ``tau`` previous poses at once, and feeding it the full history
-is far outside what it learned (on our data its held-out NLL is tens of nats per frame worse that way).
+control (and its own LSTM memory) to know what comes next. As in the paper (§5.3, Fig. 3: "dropout is
+only applied at training time") the erasure is a training device: the models draw it in training mode
+only, and generate and measure held-out likelihoods with the full history.
 """
 
 from __future__ import annotations

@@ -27,14 +27,22 @@ def nll_per_frame_loss(
 
 
 @torch.no_grad()
-def held_out_nll(model: nn.Module, data: MoGlowFeatures, seed: int = 0, batch_size: int = 256) -> float:
-    """Mean NLL per frame (nats) of ``model`` on windows ``data`` (history dropout flags drawn from
-    ``seed``)."""
-    check_scalar(seed, "seed", "held_out_nll", kind=numbers.Integral, minimum=0)
+def held_out_nll(model: nn.Module, data: MoGlowFeatures, batch_size: int = 256) -> float:
+    """Mean NLL per frame (nats) of ``model`` on windows ``data``: the model's likelihood, in eval mode.
+
+    The history dropout is a training device (the paper's Fig. 3): in eval mode the model conditions on
+    the full history, so the number is ``-log p(x_t | x_{t-tau..t-1}, u_{t-tau..t}, h_t)`` averaged over
+    frames. In training mode the same forward pass would average over random masks instead, which is the
+    training objective, not the model's likelihood. The model's mode is restored afterwards.
+    """
     check_scalar(batch_size, "batch_size", "held_out_nll", kind=numbers.Integral, minimum=1)
-    generator = torch.Generator().manual_seed(seed)
-    total, frames = 0.0, 0
-    for pose, control in zip(data.pose.split(batch_size), data.control.split(batch_size)):
-        total -= float(model(pose, control, generator).sum())
-        frames += pose.shape[0] * (pose.shape[1] - model.cfg.history)
+    was_training = model.training
+    model.eval()
+    try:
+        total, frames = 0.0, 0
+        for pose, control in zip(data.pose.split(batch_size), data.control.split(batch_size)):
+            total -= float(model(pose, control).sum())
+            frames += pose.shape[0] * (pose.shape[1] - model.cfg.history)
+    finally:
+        model.train(was_training)
     return total / frames

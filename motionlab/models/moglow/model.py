@@ -63,7 +63,9 @@ class MoGlowConfig:
             (our deviation from the paper, where each coupling reads the raw conditioning: on a CPU the
             first LSTM layer's input weights dominate both training and generation time; sharing one
             projection makes them ``K`` times cheaper).
-        dropout: probability of zeroing each previous pose in the conditioning during training.
+        dropout: probability of zeroing each previous pose in the conditioning, in training only (the
+            paper's §5.3 and Fig. 3): in eval mode (held-out likelihood) and when generating, the model
+            sees the full history.
     """
 
     pose_dim: int = POSE_DIM
@@ -120,14 +122,15 @@ class MoGlow(nn.Module):
         Args:
             pose: ``(B, T, P)``; frames ``0 .. tau-1`` only serve as history.
             control: ``(B, T, C)``.
-            generator: draws the history dropout flags (probability ``cfg.dropout`` per frame and lag);
-                ``None`` uses torch's global generator, which the training loop seeds.
+            generator: draws the history dropout flags in training mode (probability ``cfg.dropout`` per
+                frame and lag); ``None`` uses torch's global generator, which the training loop seeds. In
+                eval mode nothing is dropped: the latents and log-determinant are the model's, exactly.
         """
         cfg = self.cfg
         check_pose_control(pose, control, cfg.pose_dim, cfg.control_dim, cfg.history + 1, "MoGlow", True)
         batch, frames, _ = pose.shape
         keep = None
-        if self.cfg.dropout > 0:
+        if self.training and self.cfg.dropout > 0:
             keep = history_keep_mask(
                 batch, frames - self.cfg.history, self.cfg.history, self.cfg.dropout, generator
             )
@@ -182,12 +185,14 @@ class MoGlow(nn.Module):
         Args:
             control: ``(B, tau + N, C)``: the seed frames' controls, then those of the frames to generate.
             seed_pose: ``(B, tau, P)``, the poses that start the history.
-            temperature: the prior's temperature (0 gives the model's mode-seeking path, 1 its distribution).
-            generator: draws the history dropout flags of all frames, then their latents.
+            temperature: the prior's temperature (0 gives the zero-latent path, each frame the image of the
+                latent mode ``z_t = 0``, which is not the mode of ``p(x_t | past)``; 1 the model's
+                distribution).
+            generator: draws the latents of all frames (generation never drops history inputs).
 
         Raises ``ValueError`` on bad inputs, and naming the first frame when the generated poses stop being
         finite.
         """
-        keep, latents = sampling_setup(self.cfg, control, seed_pose, temperature, generator, "MoGlow.sample")
-        generated = sample_frames(self.generation_plan(), control, seed_pose, keep, latents)
+        latents = sampling_setup(self.cfg, control, seed_pose, temperature, generator, "MoGlow.sample")
+        generated = sample_frames(self.generation_plan(), control, seed_pose, None, latents)
         return check_generated(generated, "MoGlow.sample")
