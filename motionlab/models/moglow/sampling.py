@@ -225,7 +225,8 @@ def generate_frames(
         control_part: ``(B, N, F + P)``, the controls' part of ``[features | mean]`` of every frame, bias
         included. past: ``(B, tau * P)``, the seed poses, oldest first, flattened.
         keep: ``(B, N, tau * P)``, keep flags of every frame's previous poses (all ones when generating from
-        the full history), repeated over each pose's channels. noise: ``(B, N, P)``, the latents ``z_t`` (temperature applied).
+        the full history), repeated over each pose's channels.
+        noise: ``(B, N, P)``, the latents ``z_t`` (temperature applied).
     """
     batch, frames, pose_dim = noise.shape
     features = plan.feature_weight.shape[0]
