@@ -17,8 +17,10 @@ from motionlab.models.moglow import (
     MoGlowFeatures,
     autoregressive_conditioning,
     autoregressive_sample,
+    dropout_objective_nll,
     frame_conditioning,
     held_out_nll,
+    held_out_nll_per_window,
     history_keep_mask,
     nll_per_frame_loss,
     sample_plain,
@@ -226,6 +228,9 @@ def test_history_dropout_is_applied_in_training_only(family):
         models = {cfg.dropout: GaussianAR(cfg).double() for cfg in configs}
     models[0.5].initialize(pose, control)
     perturb_parameters_(models[0.5], 0.1, torch.Generator().manual_seed(1))
+    for name, buffer in models[0.5].named_buffers():
+        if name.endswith("initialized"):
+            buffer.fill_(True)  # as after training: a training-mode pass must not re-initialise ActNorm
     models[0.0].load_state_dict(models[0.5].state_dict())  # the same weights
     for model in models.values():
         model.eval()
@@ -243,6 +248,12 @@ def test_history_dropout_is_applied_in_training_only(family):
     assert dropping.training
     drawn = dropping(pose, control, torch.Generator().manual_seed(0))
     assert not torch.allclose(drawn, clean(pose, control))
+    # the training objective averages over masks: equal to the likelihood only without dropout
+    windows = MoGlowFeatures(pose, control)
+    assert dropout_objective_nll(clean, windows) == pytest.approx(held_out_nll(clean, windows))
+    assert dropout_objective_nll(dropping, windows) != pytest.approx(held_out_nll(dropping, windows))
+    per_window = held_out_nll_per_window(dropping, windows)
+    assert per_window.shape == (2,) and float(per_window.mean()) == pytest.approx(expected)
 
 
 def _baseline_mean_and_std(model, pose, control):
