@@ -65,6 +65,30 @@ def test_history_keep_mask_rate_and_seed():
     assert torch.equal(a, b)
     assert abs(float(a.mean()) - 0.3) < 0.01
     assert set(a.unique().tolist()) <= {0.0, 1.0}
+    # inverted dropout: the kept poses scaled by 1 / (1 - p), the same flags, mean weight 1
+    scaled = history_keep_mask(200, 50, 5, 0.7, torch.Generator().manual_seed(0), rescale=True)
+    assert torch.allclose(scaled, a / 0.3)
+    assert abs(float(scaled.mean()) - 1.0) < 0.03
+
+
+def test_rescaled_dropout_keeps_the_linear_fit_on_the_full_history_scale():
+    # an AR(1) sequence: with zeroed (unscaled) history at p = 0.9 the least-squares fit sees each lag alone
+    # and sums them on the full history; the rescaled fit's prediction stays on the data's scale
+    generator = torch.Generator().manual_seed(0)
+    pose = torch.zeros(256, 30, 6, dtype=torch.float64)
+    for t in range(1, 30):
+        pose[:, t] = 0.95 * pose[:, t - 1] + 0.3 * torch.randn(
+            256, 6, generator=generator, dtype=torch.float64
+        )
+    control = torch.zeros(256, 30, 2, dtype=torch.float64)
+    gains = {}
+    for rescale in (False, True):
+        cfg = MoGlowConfig(**SMALL, steps=1, hidden=4, cond_features=3, dropout=0.9, dropout_rescale=rescale)
+        model = MoGlow(cfg).double()
+        model.initialize(pose, control)
+        past = model.linear.weight[:, : 3 * 6].reshape(6, 3, 6)  # (out, lag, in)
+        gains[rescale] = float(past.sum(dim=1).diagonal().mean())  # x_t per unit of a constant history
+    assert gains[False] > 1.5 and 0.2 < gains[True] < 1.0
 
 
 def test_lstm_coupling_logdet_roundtrip_and_frame_weights():

@@ -78,7 +78,7 @@ class GaussianAR(nn.Module):
     def initialize(self, pose: Tensor, control: Tensor, seed: int = 0) -> float:
         """Fit the linear predictor (:mod:`.linear`) to training windows; returns its RMS residual (kept as
         ``self.linear.fit_rms``)."""
-        return self.linear.fit(pose, control, self.cfg.history, self.cfg.dropout, seed)
+        return self.linear.fit(pose, control, self.cfg.history, self.cfg.dropout, seed, rescale=True)
 
     def forward(self, pose: Tensor, control: Tensor, generator: torch.Generator | None = None) -> Tensor:
         """Log-likelihood ``(B,)`` (nats) of frames ``tau .. T-1``, as :meth:`MoGlow.forward` (history dropout
@@ -91,7 +91,7 @@ class GaussianAR(nn.Module):
         keep = None
         if self.training and self.cfg.dropout > 0:
             keep = history_keep_mask(
-                batch, frames - self.cfg.history, self.cfg.history, self.cfg.dropout, generator
+                batch, frames - self.cfg.history, self.cfg.history, self.cfg.dropout, generator, rescale=True
             )
         cond = autoregressive_conditioning(pose, control, self.cfg.history, keep)
         hidden, _ = self.lstm(cond)

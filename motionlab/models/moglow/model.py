@@ -66,6 +66,9 @@ class MoGlowConfig:
         dropout: probability of zeroing each previous pose in the conditioning, in training only (the
             paper's §5.3 and Fig. 3): in eval mode (held-out likelihood) and when generating, the model
             sees the full history.
+        dropout_rescale: scale the kept previous poses by ``1 / (1 - dropout)`` in training (standard
+            "inverted" dropout, the default), so that linear maps of the history see in expectation the
+            full-history input of generation; ``False`` zeroes without rescaling (the authors' code).
     """
 
     pose_dim: int = POSE_DIM
@@ -75,10 +78,15 @@ class MoGlowConfig:
     hidden: int = 64
     cond_features: int = 64
     dropout: float = 0.95
+    dropout_rescale: bool = True
 
     def __post_init__(self) -> None:
         sizes = ("pose_dim", "control_dim", "history", "steps", "hidden", "cond_features")
         check_history_config(self, "MoGlowConfig", sizes)
+        if not isinstance(self.dropout_rescale, bool):
+            raise TypeError(
+                f"MoGlowConfig: dropout_rescale must be a bool, got {type(self.dropout_rescale).__name__}"
+            )
         check_scalar(self.pose_dim, "pose_dim (a coupling splits it)", "MoGlowConfig", minimum=2)
 
     @property
@@ -111,7 +119,9 @@ class MoGlow(nn.Module):
         The residual stays available as ``self.linear.fit_rms`` (also on a model loaded from the cache
         after this call, as :mod:`.experiment`'s runs do).
         """
-        return self.linear.fit(pose, control, self.cfg.history, self.cfg.dropout, seed)
+        return self.linear.fit(
+            pose, control, self.cfg.history, self.cfg.dropout, seed, rescale=self.cfg.dropout_rescale
+        )
 
     def latents(
         self, pose: Tensor, control: Tensor, generator: torch.Generator | None = None
@@ -132,7 +142,12 @@ class MoGlow(nn.Module):
         keep = None
         if self.training and self.cfg.dropout > 0:
             keep = history_keep_mask(
-                batch, frames - self.cfg.history, self.cfg.history, self.cfg.dropout, generator
+                batch,
+                frames - self.cfg.history,
+                self.cfg.history,
+                self.cfg.dropout,
+                generator,
+                rescale=self.cfg.dropout_rescale,
             )
         cond = autoregressive_conditioning(pose, control, self.cfg.history, keep).transpose(1, 2)
         u, linear_logdet = self.linear(pose[:, self.cfg.history :].transpose(1, 2), cond)
