@@ -17,8 +17,10 @@ from motionlab.models.moglow import (
     MoGlowFeatures,
     autoregressive_conditioning,
     autoregressive_sample,
+    dropout_objective_nll,
     frame_conditioning,
     held_out_nll,
+    held_out_nll_per_window,
     history_keep_mask,
     nll_per_frame_loss,
     sample_plain,
@@ -63,6 +65,30 @@ def test_history_keep_mask_rate_and_seed():
     assert torch.equal(a, b)
     assert abs(float(a.mean()) - 0.3) < 0.01
     assert set(a.unique().tolist()) <= {0.0, 1.0}
+    # inverted dropout: the kept poses scaled by 1 / (1 - p), the same flags, mean weight 1
+    scaled = history_keep_mask(200, 50, 5, 0.7, torch.Generator().manual_seed(0), rescale=True)
+    assert torch.allclose(scaled, a / 0.3)
+    assert abs(float(scaled.mean()) - 1.0) < 0.03
+
+
+def test_rescaled_dropout_keeps_the_linear_fit_on_the_full_history_scale():
+    # an AR(1) sequence: with zeroed (unscaled) history at p = 0.9 the least-squares fit sees each lag alone
+    # and sums them on the full history; the rescaled fit's prediction stays on the data's scale
+    generator = torch.Generator().manual_seed(0)
+    pose = torch.zeros(256, 30, 6, dtype=torch.float64)
+    for t in range(1, 30):
+        pose[:, t] = 0.95 * pose[:, t - 1] + 0.3 * torch.randn(
+            256, 6, generator=generator, dtype=torch.float64
+        )
+    control = torch.zeros(256, 30, 2, dtype=torch.float64)
+    gains = {}
+    for rescale in (False, True):
+        cfg = MoGlowConfig(**SMALL, steps=1, hidden=4, cond_features=3, dropout=0.9, dropout_rescale=rescale)
+        model = MoGlow(cfg).double()
+        model.initialize(pose, control)
+        past = model.linear.weight[:, : 3 * 6].reshape(6, 3, 6)  # (out, lag, in)
+        gains[rescale] = float(past.sum(dim=1).diagonal().mean())  # x_t per unit of a constant history
+    assert gains[False] > 1.5 and 0.2 < gains[True] < 1.0
 
 
 def test_lstm_coupling_logdet_roundtrip_and_frame_weights():
@@ -119,17 +145,15 @@ def test_sampling_inverts_the_training_pass_exactly(pose_dim):
     control = torch.randn(2, 3 + 7, 2, generator=generator, dtype=torch.float64)
     sample = model.sample(control, seed_pose, temperature=1.0, generator=torch.Generator().manual_seed(4))
     assert sample.shape == (2, 7, pose_dim)
-    # replay the generator: the history masks of all frames are drawn first, then the latents
-    replay = torch.Generator().manual_seed(4)
-    keep = history_keep_mask(2, 7, 3, 0.5, replay)
-    latents = torch.randn(2, 7, pose_dim, generator=replay, dtype=torch.float64)
+    # replay the generator: it draws the latents only (no history dropout when generating)
+    latents = torch.randn(2, 7, pose_dim, generator=torch.Generator().manual_seed(4), dtype=torch.float64)
     for generated in (
         sample,
-        sample_frames(model.generation_plan(), control, seed_pose, keep, latents, scripted=False),
+        sample_frames(model.generation_plan(), control, seed_pose, None, latents, scripted=False),
         sample_plain(model, control, seed_pose, temperature=1.0, generator=torch.Generator().manual_seed(4)),
     ):
         full = torch.cat([seed_pose, generated], dim=1)
-        cond = autoregressive_conditioning(full, control, 3, keep)
+        cond = autoregressive_conditioning(full, control, 3)  # the full history
         u, _ = model.linear(generated.transpose(1, 2), cond.transpose(1, 2))
         z, _ = model.flow(u, model.cond_encoder(cond).transpose(1, 2))
         assert torch.allclose(z.transpose(1, 2), latents, atol=1e-9)
@@ -211,6 +235,51 @@ def test_likelihood_sums_frame_terms_and_loss_is_per_frame():
     assert held_out_nll(model, MoGlowFeatures(pose, control)) == pytest.approx(expected)
 
 
+@pytest.mark.parametrize("family", ["moglow", "gaussian"])
+def test_history_dropout_is_applied_in_training_only(family):
+    # the paper's Fig. 3: "dropout is only applied at training time". The same weights with p = 0.5 and
+    # with p = 0 are the same model in eval mode (likelihood and generation); in training mode p = 0.5
+    # zeroes previous poses, so its log-likelihood differs (a draw over masks, the training objective).
+    pose, control = _data()
+    torch.manual_seed(0)
+    if family == "moglow":
+        configs = [
+            MoGlowConfig(**SMALL, steps=2, hidden=8, cond_features=5, dropout=rate) for rate in (0.5, 0.0)
+        ]
+        models = {cfg.dropout: MoGlow(cfg).double() for cfg in configs}
+    else:
+        configs = [GaussianARConfig(**SMALL, hidden=8, dropout=rate) for rate in (0.5, 0.0)]
+        models = {cfg.dropout: GaussianAR(cfg).double() for cfg in configs}
+    models[0.5].initialize(pose, control)
+    perturb_parameters_(models[0.5], 0.1, torch.Generator().manual_seed(1))
+    for name, buffer in models[0.5].named_buffers():
+        if name.endswith("initialized"):
+            buffer.fill_(True)  # as after training: a training-mode pass must not re-initialise ActNorm
+    models[0.0].load_state_dict(models[0.5].state_dict())  # the same weights
+    for model in models.values():
+        model.eval()
+    dropping, clean = models[0.5], models[0.0]
+    assert torch.equal(dropping(pose, control), clean(pose, control))
+    seed_pose, more_control = pose[:, :3], _data(frames=9, seed=3)[1]
+    for temperature in (0.0, 1.0):
+        a = dropping.sample(more_control, seed_pose, temperature, torch.Generator().manual_seed(5))
+        b = clean.sample(more_control, seed_pose, temperature, torch.Generator().manual_seed(5))
+        assert torch.equal(a, b)
+    expected = -float(clean(pose, control).detach().sum()) / (2 * 9)
+    dropping.train()
+    # held_out_nll measures the model's likelihood (eval mode) and restores the training mode
+    assert held_out_nll(dropping, MoGlowFeatures(pose, control)) == pytest.approx(expected)
+    assert dropping.training
+    drawn = dropping(pose, control, torch.Generator().manual_seed(0))
+    assert not torch.allclose(drawn, clean(pose, control))
+    # the training objective averages over masks: equal to the likelihood only without dropout
+    windows = MoGlowFeatures(pose, control)
+    assert dropout_objective_nll(clean, windows) == pytest.approx(held_out_nll(clean, windows))
+    assert dropout_objective_nll(dropping, windows) != pytest.approx(held_out_nll(dropping, windows))
+    per_window = held_out_nll_per_window(dropping, windows)
+    assert per_window.shape == (2,) and float(per_window.mean()) == pytest.approx(expected)
+
+
 def _baseline_mean_and_std(model, pose, control):
     cond = autoregressive_conditioning(pose, control, 3)
     hidden, _ = model.lstm(cond)
@@ -229,10 +298,10 @@ def test_gaussian_baseline_against_torch_distributions_and_temperature_zero():
     expected = torch.distributions.Normal(mean, std).log_prob(pose[:, 3:]).sum(dim=(1, 2))
     assert torch.allclose(model(pose, control), expected)
     seed_pose, more_control = pose[:, :3], _data(batch=16, frames=8, seed=2)[1]
-    mode_path = model.sample(more_control, seed_pose, temperature=0.0)
+    zero_latent_path = model.sample(more_control, seed_pose, temperature=0.0)
     # at temperature 0 each frame is the predicted mean given the frames generated before it
-    full = torch.cat([seed_pose, mode_path], dim=1)
-    assert torch.allclose(mode_path, _baseline_mean_and_std(model, full, more_control)[0], atol=1e-12)
+    full = torch.cat([seed_pose, zero_latent_path], dim=1)
+    assert torch.allclose(zero_latent_path, _baseline_mean_and_std(model, full, more_control)[0], atol=1e-12)
 
 
 def test_linear_predictor_recovers_a_linear_system_and_is_a_flow_layer():

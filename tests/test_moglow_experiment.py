@@ -15,8 +15,15 @@ def test_experiment_config_profiles_and_runs():
     assert experiment.ExperimentConfig.current() in (quick, full)
     assert full.moglow(0.5) == MoGlowConfig(steps=4, hidden=64, cond_features=64, dropout=0.5)
     named = experiment.runs(quick, data=None)
-    assert list(named) == ["MoGlow p=0.0", "MoGlow p=0.5", "MoGlow p=0.95", experiment.BASELINE]
-    assert named["MoGlow p=0.5"].model_cfg.dropout == 0.5
+    assert list(named) == [
+        "MoGlow p=0.0",
+        "MoGlow p=0.5",
+        "MoGlow p=0.95",
+        "MoGlow p=0.95 unscaled",
+        experiment.BASELINE,
+    ]
+    assert named["MoGlow p=0.5"].model_cfg.dropout == 0.5 and named["MoGlow p=0.5"].model_cfg.dropout_rescale
+    assert not named["MoGlow p=0.95 unscaled"].model_cfg.dropout_rescale
     assert named[experiment.BASELINE].cache_name == "moglow_gaussian_ar"
     with pytest.raises(ValueError, match="ExperimentConfig: window"):
         experiment.ExperimentConfig(window=0)
@@ -29,6 +36,7 @@ def test_train_all_trains_then_loads_every_run(tmp_path, monkeypatch):
     cfg = dataclasses.replace(
         experiment.ExperimentConfig.quick(),
         dropout_rates=(0.0, 0.5),
+        unscaled_rates=(),
         moglow_train_steps=2,
         batch_size=4,
         baseline_train_steps=2,

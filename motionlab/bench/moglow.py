@@ -1,9 +1,9 @@
 """MoGlow's generation speed: frame-by-frame sampling of a 4-second clip and decoding to joint positions.
 
 The model has the chapter's size in the active profile (``make bench`` runs the default, full profile:
-:meth:`motionlab.models.moglow.experiment.ExperimentConfig.moglow`, history dropout 0.5, which draws a
-dropout mask every frame); weights are untrained, which does not change the speed. Each clip starts
-from ``tau`` seed frames and generates 120 frames (4 s at 30 fps).
+:meth:`motionlab.models.moglow.experiment.ExperimentConfig.moglow`; its history dropout acts in training
+only, so generation reads the full history); weights are untrained, which does not change the speed. Each
+clip starts from ``tau`` seed frames and generates 120 frames (4 s at 30 fps).
 """
 
 from __future__ import annotations

@@ -39,7 +39,12 @@ from motionlab.models.moglow.evaluate import (
     speed_ratio,
     support_foot_slide,
 )
-from motionlab.models.moglow.losses import held_out_nll, nll_per_frame_loss
+from motionlab.models.moglow.losses import (
+    dropout_objective_nll,
+    held_out_nll,
+    held_out_nll_per_window,
+    nll_per_frame_loss,
+)
 from motionlab.models.moglow.model import MoGlow, MoGlowConfig
 from motionlab.models.moglow.sampling import (
     GeneratedMotion,
@@ -72,11 +77,13 @@ __all__ = [
     "control_mismatch",
     "control_programme",
     "data_identity",
+    "dropout_objective_nll",
     "fit_scalers",
     "frame_conditioning",
     "gait_speed",
     "generate_motion",
     "held_out_nll",
+    "held_out_nll_per_window",
     "history_keep_mask",
     "joint_speed",
     "moglow_features",

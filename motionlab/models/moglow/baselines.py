@@ -78,20 +78,20 @@ class GaussianAR(nn.Module):
     def initialize(self, pose: Tensor, control: Tensor, seed: int = 0) -> float:
         """Fit the linear predictor (:mod:`.linear`) to training windows; returns its RMS residual (kept as
         ``self.linear.fit_rms``)."""
-        return self.linear.fit(pose, control, self.cfg.history, self.cfg.dropout, seed)
+        return self.linear.fit(pose, control, self.cfg.history, self.cfg.dropout, seed, rescale=True)
 
     def forward(self, pose: Tensor, control: Tensor, generator: torch.Generator | None = None) -> Tensor:
         """Log-likelihood ``(B,)`` (nats) of frames ``tau .. T-1``, as :meth:`MoGlow.forward` (history dropout
-        flags drawn from ``generator``)."""
+        flags drawn from ``generator`` in training mode only)."""
         cfg = self.cfg
         check_pose_control(
             pose, control, cfg.pose_dim, cfg.control_dim, cfg.history + 1, "GaussianAR.forward", True
         )
         batch, frames, _ = pose.shape
         keep = None
-        if self.cfg.dropout > 0:
+        if self.training and self.cfg.dropout > 0:
             keep = history_keep_mask(
-                batch, frames - self.cfg.history, self.cfg.history, self.cfg.dropout, generator
+                batch, frames - self.cfg.history, self.cfg.history, self.cfg.dropout, generator, rescale=True
             )
         cond = autoregressive_conditioning(pose, control, self.cfg.history, keep)
         hidden, _ = self.lstm(cond)
@@ -111,9 +111,7 @@ class GaussianAR(nn.Module):
         generator: torch.Generator | None = None,
     ) -> Tensor:
         """Generate poses ``(B, N, P)`` frame by frame, as :meth:`MoGlow.sample`."""
-        keep, noise = sampling_setup(
-            self.cfg, control, seed_pose, temperature, generator, "GaussianAR.sample"
-        )
+        noise = sampling_setup(self.cfg, control, seed_pose, temperature, generator, "GaussianAR.sample")
 
         def step(
             t: int, cond: Tensor, state: tuple[Tensor, Tensor] | None
@@ -122,4 +120,4 @@ class GaussianAR(nn.Module):
             mean, log_std = self._distribution(cond, hidden[:, 0])
             return mean + torch.exp(log_std) * noise[:, t], state
 
-        return autoregressive_sample(step, control, seed_pose, None, keep)
+        return autoregressive_sample(step, control, seed_pose)

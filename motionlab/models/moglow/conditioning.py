@@ -10,10 +10,14 @@ so a change of control acts at once: zero latency). No future control is used: t
 **History dropout.** Each previous pose in ``c_t`` is replaced by zeros (the mean pose, in standard units)
 with probability ``p``, independently per frame and lag. Without it the easiest way to predict ``x_t`` is
 to continue ``x_{t-1}``, and the model learns to ignore the control; with it the model has to read the
-control (and its own LSTM memory) to know what comes next. The erasure is part of the model: it is
-applied when generating and when measuring likelihoods too, not only in training. A model trained with
-``p = 0.95`` has almost never seen all ``tau`` previous poses at once, and feeding it the full history
-is far outside what it learned (on our data its held-out NLL is tens of nats per frame worse that way).
+control (and its own LSTM memory) to know what comes next. As in the paper (§5.3, Fig. 3: "dropout is
+only applied at training time") the erasure is a training device: the models draw it in training mode
+only, and generate and measure held-out likelihoods with the full history. For that switch to be
+harmless, the kept poses are scaled by ``1 / (1 - p)`` in training (standard "inverted" dropout, the
+default, ``MoGlowConfig.dropout_rescale``), so that a linear map of the history (our least-squares first
+layer, the conditioning projection) sees in expectation the input it gets at generation. Without the
+rescaling (the authors' released code zeroes the poses and does not rescale), a linear map fitted to
+inputs where one previous pose in twenty is visible adds up all ``tau`` of them at generation.
 """
 
 from __future__ import annotations
@@ -65,14 +69,24 @@ def check_history_config(cfg: Any, where: str, sizes: tuple[str, ...]) -> None:
 
 
 def history_keep_mask(
-    batch: int, frames: int, history: int, dropout: float, generator: torch.Generator | None = None
+    batch: int,
+    frames: int,
+    history: int,
+    dropout: float,
+    generator: torch.Generator | None = None,
+    rescale: bool = False,
 ) -> Tensor:
-    """Bernoulli keep flags ``(batch, frames, history)`` (1 keep, 0 drop), each dropped with prob.
-    ``dropout``."""
+    """Bernoulli keep flags ``(batch, frames, history)``, each dropped (0) with probability ``dropout``.
+
+    A kept previous pose is multiplied by 1 or, with ``rescale``, by ``1 / (1 - dropout)`` (standard
+    "inverted" dropout): then any linear map of the history has the same expectation in training as
+    on the full history that the model sees when generating.
+    """
     for name, value in (("batch", batch), ("frames", frames), ("history", history)):
         check_scalar(value, name, "history_keep_mask", kind=numbers.Integral, minimum=0)
     check_scalar(dropout, "dropout", "history_keep_mask", minimum=0.0, maximum=1.0)
-    return (torch.rand(batch, frames, history, generator=generator) >= dropout).float()
+    keep = (torch.rand(batch, frames, history, generator=generator) >= dropout).float()
+    return keep / (1.0 - dropout) if rescale and dropout < 1.0 else keep
 
 
 def autoregressive_conditioning(

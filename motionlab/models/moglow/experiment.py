@@ -36,9 +36,10 @@ from motionlab.validation import check_scalar
 BASELINE = "Gaussian AR"
 
 
-def moglow_name(dropout: float) -> str:
-    """The run name of MoGlow with history dropout ``dropout`` in :func:`runs`, e.g. ``"MoGlow p=0.5"``."""
-    return f"MoGlow p={dropout}"
+def moglow_name(dropout: float, rescale: bool = True) -> str:
+    """The run name of MoGlow with history dropout ``dropout`` in :func:`runs`, e.g. ``"MoGlow p=0.5"``, or
+    ``"MoGlow p=0.95 unscaled"`` for the variant that does not rescale the kept poses."""
+    return f"MoGlow p={dropout}" if rescale else f"MoGlow p={dropout} unscaled"
 
 
 @dataclass(frozen=True)
@@ -50,7 +51,10 @@ class ExperimentConfig:
             of our data set that stands in place, so that "stand still" is a command the models have seen.
         window, stride: frames per training window (``tau`` history frames, then the frames whose
             likelihood is trained) and the step between windows.
-        dropout_rates: MoGlow's history dropout rates compared (the paper used 0.95).
+        dropout_rates: MoGlow's history dropout rates compared (the paper used 0.95), with the kept poses
+            rescaled by ``1 / (1 - p)`` in training (standard inverted dropout).
+        unscaled_rates: rates also trained without that rescaling (the authors' released code), to show
+            what it does once the dropout is switched off for generation.
         moglow_steps, moglow_hidden, cond_features: MoGlow's Glow steps ``K``, LSTM units per coupling and
             shared conditioning features (:class:`~.model.MoGlowConfig`).
         baseline_hidden: the Gaussian baseline's LSTM units.
@@ -72,6 +76,7 @@ class ExperimentConfig:
     window: int = 45
     stride: int = 10
     dropout_rates: tuple[float, ...] = (0.0, 0.5, 0.95)
+    unscaled_rates: tuple[float, ...] = (0.95,)
     moglow_steps: int = 4
     moglow_hidden: int = 64
     cond_features: int = 64
@@ -123,7 +128,9 @@ class ExperimentConfig:
         check_scalar(self.final_lr_factor, "final_lr_factor", where, minimum=0.0)
         if not isinstance(self.dropout_rates, tuple) or not self.dropout_rates:
             raise TypeError(f"{where}: dropout_rates must be a non-empty tuple, got {self.dropout_rates!r}")
-        for rate in self.dropout_rates:
+        if not isinstance(self.unscaled_rates, tuple):
+            raise TypeError(f"{where}: unscaled_rates must be a tuple, got {self.unscaled_rates!r}")
+        for rate in self.dropout_rates + self.unscaled_rates:
             check_scalar(rate, "dropout_rates[i]", where, minimum=0.0, maximum=1.0, include_maximum=False)
 
     @classmethod
@@ -156,13 +163,15 @@ class ExperimentConfig:
         """The config of the active profile (:func:`motionlab.config.profile`)."""
         return cls.quick() if config.is_quick() else cls.full()
 
-    def moglow(self, dropout: float) -> MoGlowConfig:
-        """The chapter's MoGlow with history dropout ``dropout``."""
+    def moglow(self, dropout: float, rescale: bool = True) -> MoGlowConfig:
+        """The chapter's MoGlow with history dropout ``dropout`` (kept poses rescaled unless ``rescale`` is
+        false)."""
         return MoGlowConfig(
             steps=self.moglow_steps,
             hidden=self.moglow_hidden,
             cond_features=self.cond_features,
             dropout=dropout,
+            dropout_rescale=rescale,
         )
 
     def baseline(self) -> GaussianARConfig:
@@ -233,14 +242,16 @@ class AutoregressiveRun:
 
 
 def runs(cfg: ExperimentConfig, data: PreparedData) -> dict[str, AutoregressiveRun]:
-    """MoGlow at every rate of ``cfg.dropout_rates`` (:func:`moglow_name`), then the Gaussian baseline
-    (:data:`BASELINE`): the chapter's runs in the order to start them (MoGlow trains longest)."""
+    """MoGlow at every rate of ``cfg.dropout_rates`` and, unscaled, of ``cfg.unscaled_rates``
+    (:func:`moglow_name`), then the Gaussian baseline (:data:`BASELINE`): the chapter's runs in the order to
+    start them (MoGlow trains longest)."""
     identity = cfg.data_identity()
+    variants = [(rate, True) for rate in cfg.dropout_rates] + [(rate, False) for rate in cfg.unscaled_rates]
     named = {
-        moglow_name(rate): AutoregressiveRun(
-            "moglow", MoGlow, cfg.moglow(rate), cfg.moglow_train(), data, identity
+        moglow_name(rate, rescale): AutoregressiveRun(
+            "moglow", MoGlow, cfg.moglow(rate, rescale), cfg.moglow_train(), data, identity
         )
-        for rate in cfg.dropout_rates
+        for rate, rescale in variants
     }
     named[BASELINE] = AutoregressiveRun(
         "moglow_gaussian_ar", GaussianAR, cfg.baseline(), cfg.baseline_train(), data, identity

@@ -10,8 +10,9 @@ start from this fit and learn what it misses:
   ``-sum(log_scale)`` per frame; the Glow steps then model the residual ``u_t``.
 * The Gaussian baseline's mean is ``A c_t + b`` plus its LSTM's (zero-initialised) correction.
 
-The fit uses the same history dropout as training (masks drawn from a seeded generator), so with heavy
-dropout it mostly reads the control and leaves the rest to the LSTMs. ``A`` and ``b`` are buffers, fixed
+The fit uses the same history dropout as training (masks drawn from a seeded generator, kept poses
+rescaled as in training), so with heavy dropout it mostly reads the control and leaves the rest to the
+LSTMs. ``A`` and ``b`` are buffers, fixed
 after the fit: Adam's first steps move every weight by about the learning rate, which would wreck a
 prediction that is accurate to 0.02. ``log_scale`` stays trainable.
 """
@@ -73,12 +74,15 @@ class LinearPredictor(FlowLayer):
         dropout: float,
         seed: int = 0,
         max_windows: int = 2048,
+        rescale: bool = False,
     ) -> float:
         """Least-squares ``A``, ``b`` and the residual log-std per channel from windows ``(N, T, P)``, ``(N,
         T, C)``.
 
         Uses at most ``max_windows`` windows, evenly spaced. History dropout flags (probability ``dropout``)
-        come from a generator seeded with ``seed``. Returns the root-mean-square residual (standard units).
+        come from a generator seeded with ``seed``; with ``rescale`` the kept poses are scaled by
+        ``1 / (1 - dropout)``, as in the model's training (:func:`~.conditioning.history_keep_mask`).
+        Returns the root-mean-square residual (standard units).
         """
         where = "LinearPredictor.fit"
         check_tensor(pose, "pose", where, trailing=(self.pose_dim,), ndim=3)
@@ -93,7 +97,9 @@ class LinearPredictor(FlowLayer):
         keep = None
         if dropout > 0:
             generator = torch.Generator().manual_seed(seed)
-            keep = history_keep_mask(pose.shape[0], pose.shape[1] - history, history, dropout, generator)
+            keep = history_keep_mask(
+                pose.shape[0], pose.shape[1] - history, history, dropout, generator, rescale=rescale
+            )
         cond = autoregressive_conditioning(pose, control, history, keep).reshape(-1, self.cond_dim).double()
         target = pose[:, history:].reshape(-1, self.pose_dim).double()
         design = torch.cat([cond, torch.ones(cond.shape[0], 1, dtype=torch.float64)], dim=1)

@@ -63,7 +63,12 @@ class MoGlowConfig:
             (our deviation from the paper, where each coupling reads the raw conditioning: on a CPU the
             first LSTM layer's input weights dominate both training and generation time; sharing one
             projection makes them ``K`` times cheaper).
-        dropout: probability of zeroing each previous pose in the conditioning during training.
+        dropout: probability of zeroing each previous pose in the conditioning, in training only (the
+            paper's §5.3 and Fig. 3): in eval mode (held-out likelihood) and when generating, the model
+            sees the full history.
+        dropout_rescale: scale the kept previous poses by ``1 / (1 - dropout)`` in training (standard
+            "inverted" dropout, the default), so that linear maps of the history see in expectation the
+            full-history input of generation; ``False`` zeroes without rescaling (the authors' code).
     """
 
     pose_dim: int = POSE_DIM
@@ -73,10 +78,15 @@ class MoGlowConfig:
     hidden: int = 64
     cond_features: int = 64
     dropout: float = 0.95
+    dropout_rescale: bool = True
 
     def __post_init__(self) -> None:
         sizes = ("pose_dim", "control_dim", "history", "steps", "hidden", "cond_features")
         check_history_config(self, "MoGlowConfig", sizes)
+        if not isinstance(self.dropout_rescale, bool):
+            raise TypeError(
+                f"MoGlowConfig: dropout_rescale must be a bool, got {type(self.dropout_rescale).__name__}"
+            )
         check_scalar(self.pose_dim, "pose_dim (a coupling splits it)", "MoGlowConfig", minimum=2)
 
     @property
@@ -109,7 +119,9 @@ class MoGlow(nn.Module):
         The residual stays available as ``self.linear.fit_rms`` (also on a model loaded from the cache
         after this call, as :mod:`.experiment`'s runs do).
         """
-        return self.linear.fit(pose, control, self.cfg.history, self.cfg.dropout, seed)
+        return self.linear.fit(
+            pose, control, self.cfg.history, self.cfg.dropout, seed, rescale=self.cfg.dropout_rescale
+        )
 
     def latents(
         self, pose: Tensor, control: Tensor, generator: torch.Generator | None = None
@@ -120,16 +132,22 @@ class MoGlow(nn.Module):
         Args:
             pose: ``(B, T, P)``; frames ``0 .. tau-1`` only serve as history.
             control: ``(B, T, C)``.
-            generator: draws the history dropout flags (probability ``cfg.dropout`` per frame and lag);
-                ``None`` uses torch's global generator, which the training loop seeds.
+            generator: draws the history dropout flags in training mode (probability ``cfg.dropout`` per
+                frame and lag); ``None`` uses torch's global generator, which the training loop seeds. In
+                eval mode nothing is dropped: the latents and log-determinant are the model's, exactly.
         """
         cfg = self.cfg
         check_pose_control(pose, control, cfg.pose_dim, cfg.control_dim, cfg.history + 1, "MoGlow", True)
         batch, frames, _ = pose.shape
         keep = None
-        if self.cfg.dropout > 0:
+        if self.training and self.cfg.dropout > 0:
             keep = history_keep_mask(
-                batch, frames - self.cfg.history, self.cfg.history, self.cfg.dropout, generator
+                batch,
+                frames - self.cfg.history,
+                self.cfg.history,
+                self.cfg.dropout,
+                generator,
+                rescale=self.cfg.dropout_rescale,
             )
         cond = autoregressive_conditioning(pose, control, self.cfg.history, keep).transpose(1, 2)
         u, linear_logdet = self.linear(pose[:, self.cfg.history :].transpose(1, 2), cond)
@@ -182,12 +200,14 @@ class MoGlow(nn.Module):
         Args:
             control: ``(B, tau + N, C)``: the seed frames' controls, then those of the frames to generate.
             seed_pose: ``(B, tau, P)``, the poses that start the history.
-            temperature: the prior's temperature (0 gives the model's mode-seeking path, 1 its distribution).
-            generator: draws the history dropout flags of all frames, then their latents.
+            temperature: the prior's temperature (0 gives the zero-latent path, each frame the image of the
+                latent mode ``z_t = 0``, which is not the mode of ``p(x_t | past)``; 1 the model's
+                distribution).
+            generator: draws the latents of all frames (generation never drops history inputs).
 
         Raises ``ValueError`` on bad inputs, and naming the first frame when the generated poses stop being
         finite.
         """
-        keep, latents = sampling_setup(self.cfg, control, seed_pose, temperature, generator, "MoGlow.sample")
-        generated = sample_frames(self.generation_plan(), control, seed_pose, keep, latents)
+        latents = sampling_setup(self.cfg, control, seed_pose, temperature, generator, "MoGlow.sample")
+        generated = sample_frames(self.generation_plan(), control, seed_pose, None, latents)
         return check_generated(generated, "MoGlow.sample")

@@ -50,7 +50,7 @@ from torch import Tensor
 
 from motionlab.data.representations import from_moglow
 from motionlab.models.flows.prior import check_temperature
-from motionlab.models.moglow.conditioning import check_pose_control, frame_conditioning, history_keep_mask
+from motionlab.models.moglow.conditioning import check_pose_control, frame_conditioning
 from motionlab.models.moglow.coupling import FrameCoupling
 from motionlab.models.moglow.data import CONTROL_DIM, MoGlowFeatures, Scalers
 from motionlab.validation import check_scalar, check_tensor
@@ -69,12 +69,12 @@ def sampling_setup(
     temperature: float,
     generator: torch.Generator | None,
     where: str,
-) -> tuple[Tensor | None, Tensor]:
-    """Checks and first draws shared by the models' ``sample``: ``(keep, noise)``.
+) -> Tensor:
+    """Checks and the draw shared by the models' ``sample``: the latents ``(B, N, P)``.
 
-    ``cfg`` has ``pose_dim``, ``control_dim``, ``history`` and ``dropout``. ``keep`` are the history dropout
-    flags of every generated frame (``None`` without dropout), then ``noise`` ``(B, N, P)`` is the
-    standard-normal draw scaled by the temperature, in that order from ``generator``.
+    ``cfg`` has ``pose_dim``, ``control_dim`` and ``history``. The latents are the standard-normal draw from
+    ``generator`` scaled by the temperature. No history dropout is drawn: it is applied in training only
+    (the paper's Fig. 3), and generation always sees the full history.
     """
     temperature = check_temperature(temperature, where)
     history = cfg.history
@@ -85,11 +85,7 @@ def sampling_setup(
             f"got {tuple(seed_pose.shape)} and {tuple(control.shape)}"
         )
     batch, frames = control.shape[0], control.shape[1] - history
-    keep = None
-    if cfg.dropout > 0:
-        keep = history_keep_mask(batch, frames, history, cfg.dropout, generator).to(control.dtype)
-    noise = temperature * torch.randn(batch, frames, cfg.pose_dim, generator=generator, dtype=control.dtype)
-    return keep, noise
+    return temperature * torch.randn(batch, frames, cfg.pose_dim, generator=generator, dtype=control.dtype)
 
 
 @torch.no_grad()
@@ -107,20 +103,19 @@ def sample_plain(
         control: ``(B, tau + N, C)``: the seed frames' controls, then those of the frames to generate.
         seed_pose: ``(B, tau, P)``, the poses that start the history.
         temperature, generator: as for :meth:`MoGlow.sample <motionlab.models.moglow.model.MoGlow.sample>`,
-            which draws the same numbers (history dropout flags of all frames, then all latents) and gives
-            the same frames up to float rounding, faster (:func:`sample_frames`).
+            which draws the same latents and gives the same frames up to float rounding, faster
+            (:func:`sample_frames`).
     """
     cfg = model.cfg
-    # the random draws, in MoGlow.sample's order: the history dropout flags of every frame (if the model
-    # drops), then every frame's latent z_t ~ N(0, temperature**2 I), shape (B, N, P)
-    keep, z = sampling_setup(cfg, control, seed_pose, temperature, generator, "sample_plain")
+    # every frame's latent z_t ~ N(0, temperature**2 I), shape (B, N, P), drawn as MoGlow.sample draws them
+    z = sampling_setup(cfg, control, seed_pose, temperature, generator, "sample_plain")
     layers = list(model.flow.layers)  # K steps of (ActNorm, 1x1 convolution, LSTM coupling)
     states = [None] * cfg.steps  # each coupling's LSTM state, carried from frame to frame
     past, poses = seed_pose, []
     for t in range(z.shape[1]):
-        # condition on the last tau poses (each dropped as in training) and the controls up to frame t
-        visible = past if keep is None else past * keep[:, t, :, None]
-        cond = frame_conditioning(visible, control[:, t : t + cfg.history + 1])  # c_t (B, cond_dim)
+        # condition on the last tau poses (all of them: the history dropout is for training only) and the
+        # controls up to frame t
+        cond = frame_conditioning(past, control[:, t : t + cfg.history + 1])  # c_t (B, cond_dim)
         features = model.cond_encoder(cond)
         # invert the flow: z_t -> the Glow steps in reverse order -> the linear predictor's residual
         x = z[:, t]
@@ -157,7 +152,8 @@ def autoregressive_sample(
         control: controls of the seed frames then of the ``N`` frames to generate (standard units).
         seed_pose: the ``tau`` poses ``(B, tau, P)`` that start the history (standard units).
         state: the initial state handed to ``step`` (``None``: the model's zero state).
-        keep: history dropout flags ``(B, N, tau)`` for the generated frames (as in training), or ``None``.
+        keep: optional keep flags ``(B, N, tau)`` that zero previous poses in the conditioning (``None``,
+            the default and what the models' ``sample`` uses: the full history, as in the paper).
 
     Raises ``ValueError`` naming the first frame when the generated poses stop being finite (a model can
     diverge on inputs far from its training data).
@@ -228,8 +224,9 @@ def generate_frames(
         plan: the model's weights (:meth:`motionlab.models.moglow.model.MoGlow.generation_plan`).
         control_part: ``(B, N, F + P)``, the controls' part of ``[features | mean]`` of every frame, bias
         included. past: ``(B, tau * P)``, the seed poses, oldest first, flattened.
-        keep: ``(B, N, tau * P)``, the history dropout flags of every frame, repeated over each pose's
-        channels. noise: ``(B, N, P)``, the latents ``z_t`` (temperature applied).
+        keep: ``(B, N, tau * P)``, keep flags of every frame's previous poses (all ones when generating from
+        the full history), repeated over each pose's channels.
+        noise: ``(B, N, P)``, the latents ``z_t`` (temperature applied).
     """
     batch, frames, pose_dim = noise.shape
     features = plan.feature_weight.shape[0]
@@ -330,7 +327,8 @@ def sample_frames(
         plan: the model's weights (:meth:`motionlab.models.moglow.model.MoGlow.generation_plan`).
         control: ``(B, tau + N, C)``, the seed frames' controls then those of the frames to generate.
         seed_pose: ``(B, tau, P)``.
-        keep: history dropout flags ``(B, N, tau)`` (1 keep, 0 drop), or ``None`` for no dropout.
+        keep: optional keep flags ``(B, N, tau)`` (1 keep, 0 zero the previous pose), or ``None``: the full
+            history, as the models' ``sample`` generates (the paper's history dropout is for training only).
         noise: the latents ``(B, N, P)``.
         scripted: run the TorchScript-compiled loop (``False``: the same function as plain Python).
 
