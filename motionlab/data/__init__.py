@@ -9,6 +9,8 @@ module                            what it holds
 :mod:`.bvh`, :mod:`.motion`       :class:`Motion`, :func:`load_bvh`, :func:`save_bvh`
 :mod:`.representations`,          feature encodings, windowed torch data sets, augmentations
 :mod:`.datasets`, :mod:`.augment`
+:mod:`.cmu_mocap`                 :class:`MocapClips`, :func:`load_cmu_mocap`: real CMU motion capture
+                                  (Action2Motion's clips, ODMO's "MoCap"), conversions, ODMO's protocol
 ================================  =====================================================================
 
 The names above are imported on first use. That keeps ``import motionlab.data`` light, and it lets
@@ -31,6 +33,8 @@ _EXPORTS = {
     "Motion": "motionlab.data.bvh",
     "load_bvh": "motionlab.data.bvh",
     "save_bvh": "motionlab.data.bvh",
+    "MocapClips": "motionlab.data.cmu_mocap",
+    "load_cmu_mocap": "motionlab.data.cmu_mocap",
 }
 
 __all__ = sorted(_EXPORTS)
