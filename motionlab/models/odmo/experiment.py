@@ -131,8 +131,8 @@ class ExperimentConfig:
 
     @classmethod
     def full(cls) -> ExperimentConfig:
-        """The chapter's sizes: the paper's encoder LSTM (64) and code size (20), generators of one 64-unit LSTM
-        layer (the paper: two of 128), 300 steps, 10 sample sets per row."""
+        """The chapter's sizes: the paper's encoder LSTM (64) and code size (20), generators of one 64-unit
+        LSTM layer (the paper: two of 128), 300 steps, 10 sample sets per row."""
         return cls()
 
     @classmethod
