@@ -32,6 +32,7 @@ CASES = [
     ("mmade", lambda x: metrics.mmade(SAMPLES, x), SAMPLES, "gt_futures"),
     ("mmfde", lambda x: metrics.mmfde(x, SAMPLES), SAMPLES, "samples"),
     ("end_point_error", lambda x: metrics.end_point_error(x, SAMPLES[:, -1]), SAMPLES, "trajectories"),
+    ("end_point_mse", lambda x: metrics.end_point_mse(x, SAMPLES[:, -1]), SAMPLES, "trajectories"),
     ("foot_skating", lambda x: metrics.foot_skating(x, np.ones((4, 4))), POSES, "positions"),
     ("bone_length_error", lambda x: metrics.bone_length_error(x, PARENTS, np.ones(22)), POSES, "positions"),
     ("mean_ci", metrics.mean_ci, FEATURES[:, 0], "values"),

@@ -7,7 +7,15 @@ import numpy as np
 import pytest
 import torch
 
-from motionlab.metrics import end_point_error, min_ade, min_fde, mmade, mmfde, multimodal_ground_truth
+from motionlab.metrics import (
+    end_point_error,
+    end_point_mse,
+    min_ade,
+    min_fde,
+    mmade,
+    mmfde,
+    multimodal_ground_truth,
+)
 
 
 def loop_ade(samples: np.ndarray, target: np.ndarray) -> float:
@@ -97,6 +105,7 @@ def test_end_point_error_hand_value():
     trajectories[1, -1] = [1.0, 1.0]  # exactly at its target
     targets = np.array([[0.0, 0.0], [1.0, 1.0]])
     assert end_point_error(trajectories, targets) == pytest.approx(2.5)
+    assert end_point_mse(trajectories, targets) == pytest.approx((25.0 + 0.0) / 2)  # ODMO's dist_e
 
 
 @pytest.mark.parametrize(

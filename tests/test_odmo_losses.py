@@ -35,33 +35,50 @@ def test_contrastive_gradient_is_finite_for_identical_codes():
     assert torch.isfinite(mu.grad).all()
 
 
-@pytest.mark.parametrize("target", ["code", "noise", "standard"])
-def test_prior_term_matches_torch_distributions(target):
+@pytest.mark.parametrize("kind", ["covariance", "covariance_and_mean", "standard"])
+def test_prior_term_matches_torch_distributions(kind):
     gen = torch.Generator().manual_seed(0)
     mu, logvar = torch.randn(5, 3, generator=gen), torch.randn(5, 3, generator=gen)
     variance = 0.05
     scale = torch.exp(0.5 * logvar)
-    if target == "code":
-        expected = kl_divergence(Normal(mu, scale), Normal(0.0, math.sqrt(variance)))
-    elif target == "noise":
-        expected = kl_divergence(Normal(torch.zeros_like(mu), scale), Normal(0.0, math.sqrt(variance)))
+    prior = Normal(0.0, math.sqrt(variance))  # sigma^2 is a variance: the Normal's scale is its root
+    if kind == "covariance":
+        expected = 2 * kl_divergence(Normal(torch.zeros_like(mu), scale), prior)
+    elif kind == "covariance_and_mean":
+        expected = 2 * kl_divergence(Normal(mu, scale), prior)
     else:
         expected = kl_divergence(Normal(mu, scale), Normal(0.0, 1.0))
-    assert torch.allclose(prior_term(mu, logvar, variance, target), expected.sum(-1), atol=1e-5)
+    assert torch.allclose(prior_term(mu, logvar, variance, kind), expected.sum(-1), atol=1e-5)
 
 
-def test_noise_prior_ignores_the_mean_and_is_zero_at_the_prior_variance():
+def test_covariance_prior_is_eq_1_up_to_a_constant():
+    # eq. 1: -ln det Sigma + Tr(Sigma) / sigma^2, per clip; ours subtracts its minimum D (1 - ln sigma^2)
+    gen = torch.Generator().manual_seed(1)
+    mu, logvar = torch.randn(4, 3, generator=gen) * 5, torch.randn(4, 3, generator=gen)
+    variance = 0.05
+    eq1 = -logvar.sum(-1) + logvar.exp().sum(-1) / variance
+    expected = eq1 - 3 * (1 - math.log(variance))
+    assert torch.allclose(prior_term(mu, logvar, variance, "covariance"), expected, atol=1e-4)
+    # the extension adds |mu|^2 / sigma^2: a spring of stiffness 2 / sigma^2 on every code mean
+    assert torch.allclose(
+        prior_term(mu, logvar, variance, "covariance_and_mean"),
+        expected + mu.pow(2).sum(-1) / variance,
+        rtol=1e-5,
+    )
+
+
+def test_covariance_prior_ignores_the_mean_and_is_zero_at_the_prior_variance():
     logvar = torch.full((2, 4), math.log(0.05))
     assert torch.allclose(
-        prior_term(torch.randn(2, 4) * 10, logvar, 0.05, "noise"), torch.zeros(2), atol=1e-6
+        prior_term(torch.randn(2, 4) * 10, logvar, 0.05, "covariance"), torch.zeros(2), atol=1e-6
     )
 
 
 def test_prior_term_rejects_bad_arguments():
-    with pytest.raises(ValueError, match="target"):
+    with pytest.raises(ValueError, match="kind"):
         prior_term(torch.zeros(1, 2), torch.zeros(1, 2), 0.05, "other")
     with pytest.raises(ValueError, match="prior_variance"):
-        prior_term(torch.zeros(1, 2), torch.zeros(1, 2), 0.0, "noise")
+        prior_term(torch.zeros(1, 2), torch.zeros(1, 2), 0.0, "covariance")
 
 
 def test_balanced_pairs_give_one_partner_of_each_kind():

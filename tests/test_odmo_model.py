@@ -41,8 +41,8 @@ def test_config_sizes_and_validation():
     assert (cfg.lmp_dim, cfg.feature_dim, cfg.condition_dim) == (63, 66, 120)
     with pytest.raises(ValueError, match="code_dim"):
         ODMOConfig(code_dim=0)
-    with pytest.raises(ValueError, match="prior_target"):
-        ODMOConfig(prior_target="other")
+    with pytest.raises(ValueError, match="prior"):
+        ODMOConfig(prior="other")
     with pytest.raises(ValueError, match="consistency"):
         ODMOConfig(use_trajectory_loss=False)
     with pytest.raises(ValueError, match="margin"):

@@ -16,7 +16,7 @@ from matplotlib.figure import Figure
 from sklearn.metrics import adjusted_rand_score
 
 from motionlab.data.synthetic import generate
-from motionlab.metrics import end_point_error
+from motionlab.metrics import end_point_mse, mode_homogeneity
 from motionlab.models.odmo import evaluate, sampling
 from motionlab.models.odmo.data import ODMOData
 from motionlab.models.odmo.experiment import VARIANTS, ExperimentConfig, measure_variant, runs, train_all
@@ -151,10 +151,10 @@ def test_end_point_control_measures_the_generated_root(sampler):
     )
     clips = sampling.to_end_point(sampler, 0, np.repeat(sampler.modes.codes[source[:1]], 4, axis=0), targets)
     assert table["dist_e"].values[0] == pytest.approx(
-        end_point_error(clips.features[..., -3:].numpy(), targets)
+        end_point_mse(clips.features[..., -3:].numpy(), targets)
     )
     assert table["dist_e_trajectory"].values[0] == pytest.approx(
-        end_point_error(clips.trajectory.numpy(), targets)
+        end_point_mse(clips.trajectory.numpy(), targets)
     )
 
 
@@ -169,8 +169,22 @@ def test_metric_and_homogeneity_tables(sampler):
     assert row == evaluate.metric_row(
         reference, sampler, n_per_class=4, n_sets=2, seed=1
     )  # seeded by its arguments
-    homogeneity = evaluate.mode_homogeneity_interval(reference, sampler, n_per_mode=2, n_sets=2)
-    assert all(0.0 <= v <= 1.0 for v in homogeneity.values)
+    purity = evaluate.style_purity_interval(reference, sampler, n_per_mode=2, n_sets=2)
+    assert all(0.0 <= v <= 1.0 for v in purity.values)
+
+
+def test_mode_homogeneity_table_uses_the_real_clips_grouped_by_their_modes(sampler):
+    modes = sampler.modes
+    real = torch.randn(len(modes.labels), 4, 3, 3)
+    whole = evaluate.mode_homogeneity_interval(modes, real, n_sets=2, share=1.0)
+    # with every clip kept, each repeat is the metric on all real clips
+    expected = mode_homogeneity(real.numpy(), modes.action, modes.labels)
+    assert whole.values == pytest.approx((expected, expected))
+    half = evaluate.mode_homogeneity_interval(modes, real, n_sets=3, share=0.5, seed=1)
+    assert half == evaluate.mode_homogeneity_interval(modes, real, n_sets=3, share=0.5, seed=1)
+    assert len(set(half.values)) > 1  # the repeats keep different clips
+    with pytest.raises(ValueError, match="mode_homogeneity_interval: 3 clips"):
+        evaluate.mode_homogeneity_interval(modes, real[:3], n_sets=2)
 
 
 def test_measure_variant_follows_the_config(data, sampler):
@@ -188,7 +202,9 @@ def test_measure_variant_follows_the_config(data, sampler):
     assert odmo.rows["ODMO"] == evaluate.metric_row(reference, modes, 4, 2)
     conventional = ODMOSampler.from_data(sampler.model, data, kind="conventional")
     assert odmo.rows["ODMO_conv"] == evaluate.metric_row(reference, conventional, 4, 2)
-    assert odmo.homogeneity == evaluate.mode_homogeneity_interval(reference, modes, 2, 2)
+    real_clips = evaluate.to_positions(data.features, data.frame_stride, data.floor_clearance)
+    assert odmo.homogeneity == evaluate.mode_homogeneity_interval(modes.modes, real_clips, 2, 0.5)
+    assert odmo.purity == evaluate.style_purity_interval(reference, modes, 2, 2)
     assert odmo.end_point == evaluate.end_point_control(reference, modes, 2, 2)
     vae = measure_variant("standard VAE", sampler.model, data, reference, EXPERIMENT)
     assert list(vae.rows) == ["standard VAE"] and vae.end_point is None
@@ -196,8 +212,10 @@ def test_measure_variant_follows_the_config(data, sampler):
         reference, ODMOSampler.from_data(sampler.model, data, kind="prior"), 4, 2
     )
     assert vae.homogeneity == odmo.homogeneity  # the same model's discovered modes
+    assert vae.purity == odmo.purity
     ablation = measure_variant("-L_es", sampler.model, data, reference, EXPERIMENT)
-    assert list(ablation.rows) == ["-L_es"] and ablation.homogeneity is None and ablation.end_point is None
+    assert list(ablation.rows) == ["-L_es"] and ablation.end_point is None
+    assert ablation.homogeneity is None and ablation.purity is None
     with pytest.raises(ValueError, match="measure_variant: variant must be one of"):
         measure_variant("odmo", sampler.model, data, reference, EXPERIMENT)
 
@@ -213,7 +231,11 @@ def test_experiment_config_profiles_and_runs(data, monkeypatch):
     assert full.train_config().schedules["teacher_forcing"](150) == pytest.approx(0.65)
     chapter = runs(EXPERIMENT, data)
     assert list(chapter) == [name for name in VARIANTS if name != "-L_es"] + ["-L_es"]
-    assert [run.name for run in chapter.values()][:3] == ["odmo", "odmo_odmo_paper_s_prior_term", "odmo_r_e"]
+    assert [run.name for run in chapter.values()][:3] == [
+        "odmo",
+        "odmo_odmo_prior_on_mu_extension",
+        "odmo_r_e",
+    ]
     assert chapter["-L_traj"].cfg.use_trajectory_loss is False
     with pytest.raises(ValueError, match="frame_stride"):
         runs(ExperimentConfig(model=CFG), data)

@@ -7,10 +7,12 @@ module                 metrics
 :mod:`.inception`      :func:`inception_score`, :func:`recognition_accuracy`
 :mod:`.diversity`      :func:`apd`, :func:`diversity`, :func:`multimodality`, :func:`class_apd`, :func:`n_apd`
 :mod:`.trajectory`     :func:`min_ade`, :func:`min_fde`, :func:`multimodal_ground_truth`, :func:`mmade`,
-                       :func:`mmfde`, :func:`end_point_error`
+                       :func:`mmfde`, :func:`end_point_error`,
+                       :func:`end_point_mse`
 :mod:`.physical`       :func:`foot_skating`, :func:`infer_foot_contacts`, :func:`bone_lengths`,
                        :func:`bone_length_error`
-:mod:`.modes`          :func:`mode_homogeneity`, :func:`adjusted_rand_index`, :func:`contingency_table`
+:mod:`.modes`          :func:`mode_homogeneity`, :func:`mode_purity`, :func:`adjusted_rand_index`,
+                       :func:`contingency_table`
 :mod:`.intervals`      :func:`mean_ci`, :func:`repeat_metric`, :class:`Interval`
 =====================  =====================================================================================
 
@@ -31,7 +33,7 @@ from motionlab.metrics.diversity import (
 from motionlab.metrics.fid import feature_statistics, fid, frechet_distance
 from motionlab.metrics.inception import inception_score, recognition_accuracy
 from motionlab.metrics.intervals import Interval, mean_ci, repeat_metric, repeat_seed
-from motionlab.metrics.modes import adjusted_rand_index, contingency_table, mode_homogeneity
+from motionlab.metrics.modes import adjusted_rand_index, contingency_table, mode_homogeneity, mode_purity
 from motionlab.metrics.physical import (
     FOOT_JOINTS,
     bone_length_error,
@@ -41,6 +43,7 @@ from motionlab.metrics.physical import (
 )
 from motionlab.metrics.trajectory import (
     end_point_error,
+    end_point_mse,
     min_ade,
     min_fde,
     mmade,
@@ -61,6 +64,7 @@ __all__ = [
     "contingency_table",
     "diversity",
     "end_point_error",
+    "end_point_mse",
     "feature_statistics",
     "fid",
     "foot_skating",
@@ -73,6 +77,7 @@ __all__ = [
     "mmade",
     "mmfde",
     "mode_homogeneity",
+    "mode_purity",
     "multimodal_ground_truth",
     "multimodality",
     "n_apd",

@@ -3,11 +3,15 @@
 * Tables 1–2 (:func:`metric_row`): accuracy, FID, Diversity, Multimodality (the frozen GRU evaluator's
   features, FID against the training clips) and n-APD (APD of each class's generated clips over that of
   the held-out real clips, in joint positions with every clip starting at the origin facing +x).
-* Table 3 (:func:`mode_homogeneity_interval`): clips drawn from each discovered mode, their true style
-  recognised by the evaluator's mode head, :func:`~motionlab.metrics.mode_homogeneity` over all modes.
+* Table 3 (:func:`mode_homogeneity_interval`): the paper's mode homogeneity
+  (:func:`~motionlab.metrics.mode_homogeneity`) of the *real* training clips grouped by the modes discovered
+  in a model's code space; each repeat keeps a random share of every class's clips.
+* Ours beside Table 3 (:func:`style_purity_interval`): clips *generated* from each discovered mode, their
+  true style recognised by the evaluator's style head, :func:`~motionlab.metrics.mode_purity` over all
+  modes.
 * Table 4 (:func:`end_point_control`): for each class, training codes sent to end points on the segment
-  from their own end point to that of another clip of the class; accuracy and ``dist_e``, the distance
-  between the requested end point and where the generated motion's root ends.
+  from their own end point to that of another clip of the class; accuracy and ``dist_e``, the mean squared
+  distance (m²) between the requested end point and where the generated motion's root ends.
 * New (:func:`mode_recovery`): the adjusted Rand index between the discovered modes of the training
   codes and the synthetic data's true style modes, per action. The evaluator is not involved: this is
   the latent space against the ground truth.
@@ -28,9 +32,10 @@ from motionlab.evaluation.evaluator import Evaluator
 from motionlab.metrics import (
     Interval,
     adjusted_rand_index,
-    end_point_error,
+    end_point_mse,
     mean_ci,
     mode_homogeneity,
+    mode_purity,
     n_apd,
     repeat_metric,
 )
@@ -139,25 +144,54 @@ def real_row(
 
 
 def mode_homogeneity_interval(
+    modes: ModeSet, positions: Tensor | np.ndarray, n_sets: int = 10, share: float = 0.5, seed: int = 0
+) -> Interval:
+    """Table 3: ODMO's mode homogeneity (per cent) of the real training clips ``positions`` ``(N, T, J, 3)``,
+    grouped by the modes ``modes`` discovered for their codes (``modes.labels``, in the same order).
+
+    Each of the ``n_sets`` repeats keeps a random ``share`` of every class's clips (without replacement).
+    """
+    _check_counts("mode_homogeneity_interval", n_sets=n_sets)
+    check_scalar(share, "share", "mode_homogeneity_interval", minimum=0, maximum=1, include_minimum=False)
+    flat = torch.as_tensor(positions).flatten(1).numpy()
+    if flat.shape[0] != modes.labels.shape[0]:
+        raise ValueError(
+            f"mode_homogeneity_interval: {flat.shape[0]} clips for {modes.labels.shape[0]} mode labels"
+        )
+
+    def draw(generator: torch.Generator) -> np.ndarray:
+        rng = np.random.default_rng(generator.initial_seed())
+        keep = [
+            rng.choice(members, size=max(2, round(share * len(members))), replace=False)
+            for members in (np.flatnonzero(modes.action == c) for c in range(len(modes.classes)))
+        ]
+        return np.sort(np.concatenate(keep))
+
+    return repeat_metric(
+        lambda kept: mode_homogeneity(flat[kept], modes.action[kept], modes.labels[kept]), draw, n_sets, seed
+    )
+
+
+def style_purity_interval(
     reference: Reference, sampler: ODMOSampler, n_per_mode: int, n_sets: int = 10, seed: int = 0
 ) -> Interval:
-    """Table 3: homogeneity of the true styles (recognised by the evaluator) among clips of each discovered
-    mode."""
-    _check_counts("mode_homogeneity_interval", n_per_mode=n_per_mode, n_sets=n_sets)
+    """Ours, beside Table 3: purity of the true styles (recognised by the evaluator) among clips generated
+    from each discovered mode."""
+    _check_counts("style_purity_interval", n_per_mode=n_per_mode, n_sets=n_sets)
 
     def draw(generator: torch.Generator) -> tuple[np.ndarray, np.ndarray]:
         clips = sampler.sample_modes(n_per_mode, np.random.default_rng(generator.initial_seed()))
         found = sampler.modes.global_ids(clips.action, clips.mode)
         return found, reference.evaluator.predict(clips.positions, "mode").numpy()
 
-    return repeat_metric(lambda drawn: mode_homogeneity(*drawn), draw, n_sets, seed)
+    return repeat_metric(lambda drawn: mode_purity(*drawn), draw, n_sets, seed)
 
 
 def end_point_control(
     reference: Reference, sampler: ODMOSampler, n_codes: int = 40, n_end_points: int = 10, seed: int = 0
 ) -> dict[str, Interval]:
-    """Table 4: ``accuracy`` and ``dist_e`` (metres) of end-point customisation, intervals over the code
-    groups.
+    """Table 4: ``accuracy`` and ``dist_e`` (mean squared distance, m²) of end-point customisation, intervals
+    over the code groups.
 
     For each class, ``n_codes`` training codes are picked at random; each is sent to ``n_end_points`` end
     points from its own clip's end point to that of another random clip of the class. ``dist_e`` is measured
@@ -186,7 +220,7 @@ def end_point_control(
         grouped_targets = targets.reshape(n_codes, n_end_points, 3)
         for paths, found in ((clips.features[..., -3:], distance), (clips.trajectory, trajectory_distance)):
             grouped = paths.numpy().reshape(n_codes, n_end_points, -1, 3)
-            found.extend(end_point_error(p, t) for p, t in zip(grouped, grouped_targets))
+            found.extend(end_point_mse(p, t) for p, t in zip(grouped, grouped_targets))
     return {
         "accuracy": _interval(accuracy),
         "dist_e": _interval(distance),

@@ -5,9 +5,9 @@ the sizes of the sample sets and which variant takes part in which table); :data
 models as changes to the base model's config; :func:`runs` gives one :class:`ODMORun` per variant, and
 :func:`train_all` trains them on both cores, measuring each in a worker as soon as it is trained
 (:func:`measure_variant`: its samplers, its rows of Tables 1-2 and, for the variants that take part,
-Table 3 (mode homogeneity) and Table 4 (end-point control)). A measurement loads its model from the
-checkpoint cache and every table is seeded by the config alone, so the numbers equal in-process calls of
-:mod:`~motionlab.models.odmo.evaluate`, wherever and whenever they ran.
+Table 3 (mode homogeneity, with our style purity beside it) and Table 4 (end-point control)). A
+measurement loads its model from the checkpoint cache and every table is seeded by the config alone, so
+the numbers equal in-process calls of :mod:`~motionlab.models.odmo.evaluate`, wherever and whenever they ran.
 """
 
 from __future__ import annotations
@@ -22,8 +22,14 @@ import torch
 from motionlab import config
 from motionlab.evaluation.evaluator import data_fingerprint
 from motionlab.metrics import Interval
-from motionlab.models.odmo.data import BalancedBatches, ODMOData
-from motionlab.models.odmo.evaluate import Reference, end_point_control, metric_row, mode_homogeneity_interval
+from motionlab.models.odmo.data import BalancedBatches, ODMOData, to_positions
+from motionlab.models.odmo.evaluate import (
+    Reference,
+    end_point_control,
+    metric_row,
+    mode_homogeneity_interval,
+    style_purity_interval,
+)
 from motionlab.models.odmo.losses import joint_objective
 from motionlab.models.odmo.model import ODMO, ODMOConfig
 from motionlab.models.odmo.sampling import ODMOSampler, encode_clips
@@ -35,12 +41,12 @@ from motionlab.validation import check_choice, check_scalar
 #: are the models' cache names (through :func:`cache_name`) and the keys of the chapter's claims.
 VARIANTS: dict[str, dict[str, object]] = {
     "ODMO": {},
-    "ODMO (paper's prior term)": {"prior_target": "code"},
+    "ODMO + prior on mu (extension)": {"prior": "covariance_and_mean"},
     "-L_es": {"use_contrastive": False},
     "-r_e": {"use_end_point": False},
     "-L_cons": {"use_consistency": False},
     "-L_traj": {"use_consistency": False, "use_trajectory_loss": False},
-    "standard VAE": {"use_contrastive": False, "prior_target": "standard"},
+    "standard VAE": {"use_contrastive": False, "prior": "standard", "prior_weight": 1.0},
 }
 
 
@@ -69,12 +75,14 @@ class ExperimentConfig:
             the run, as in the reference implementation (``tf_min = 0.3``).
         seed: seeds every variant's initialisation and batches.
         n_sets: sample sets per row of every table (each number is a mean with its 95 % interval);
-        n_per_class: clips per class in a sample set of Tables 1-2; n_per_mode: clips per discovered mode in
-            a sample set of Table 3; n_codes, n_end_points: Table 4's codes per class and end points per code.
+        n_per_class: clips per class in a sample set of Tables 1-2; homogeneity_share: share of every
+            class's real training clips in a set of Table 3; n_per_mode: generated clips per discovered mode
+            in a set of the style purity; n_codes, n_end_points: Table 4's codes per class and end points per
+            code.
         prior_sampled: variants whose table sampler draws codes from the prior (the standard VAE); the others
             sample their discovered modes.
         conventional: variants that also get a row with the single-Gaussian sampler, named ``<variant>_conv``.
-        homogeneity, end_point: the variants of Table 3 and of Table 4.
+        homogeneity, end_point: the variants of Table 3 (and the style purity) and of Table 4.
     """
 
     model: ODMOConfig = field(default_factory=ODMOConfig)
@@ -86,12 +94,13 @@ class ExperimentConfig:
     seed: int = 0
     n_sets: int = 10
     n_per_class: int = 20
+    homogeneity_share: float = 0.5
     n_per_mode: int = 10
     n_codes: int = 40
     n_end_points: int = 10
     prior_sampled: tuple[str, ...] = ("standard VAE",)
     conventional: tuple[str, ...] = ("ODMO",)
-    homogeneity: tuple[str, ...] = ("ODMO", "ODMO (paper's prior term)", "standard VAE")
+    homogeneity: tuple[str, ...] = ("ODMO", "ODMO + prior on mu (extension)", "standard VAE")
     end_point: tuple[str, ...] = ("ODMO", "-r_e", "-L_cons", "-L_traj")
 
     def __post_init__(self) -> None:
@@ -113,13 +122,17 @@ class ExperimentConfig:
         check_scalar(self.seed, "seed", where, kind=numbers.Integral, minimum=0)
         check_scalar(self.lr, "lr", where, minimum=0, include_minimum=False)
         check_scalar(self.teacher_forcing_end, "teacher_forcing_end", where, minimum=0, maximum=1)
+        check_scalar(
+            self.homogeneity_share, "homogeneity_share", where, minimum=0, maximum=1, include_minimum=False
+        )
         for name in ("prior_sampled", "conventional", "homogeneity", "end_point"):
             for variant in getattr(self, name):
                 check_choice(variant, name, where, VARIANTS)
 
     @classmethod
     def full(cls) -> ExperimentConfig:
-        """The chapter's sizes: the paper-sized networks, 300 steps, 10 sample sets per row."""
+        """The chapter's sizes: the paper's encoder LSTM (64) and code size (20), generators of one 64-unit
+        LSTM layer (the paper: two of 128), 300 steps, 10 sample sets per row."""
         return cls()
 
     @classmethod
@@ -229,12 +242,14 @@ class Measured:
         samplers: ``{"table": ..., "modes": ...}`` (the same sampler for variants that sample their modes),
             plus ``"conventional"`` for the variants in :attr:`ExperimentConfig.conventional`.
         rows: Tables 1-2 rows ``{row name: {metric: Interval}}`` (the variant, and ``<variant>_conv``).
-        homogeneity: Table 3's interval, or ``None``; end_point: Table 4's row, or ``None``.
+        homogeneity: Table 3's interval (per cent), or ``None``; purity: our style purity of the modes'
+            samples, or ``None``; end_point: Table 4's row, or ``None``.
     """
 
     samplers: dict[str, ODMOSampler]
     rows: dict[str, dict[str, Interval]]
     homogeneity: Interval | None
+    purity: Interval | None
     end_point: dict[str, Interval] | None
 
 
@@ -255,17 +270,17 @@ def measure_variant(
     if variant in cfg.conventional:
         samplers["conventional"] = ODMOSampler.from_codes(model, codes, data, kind="conventional")
         rows[f"{variant}_conv"] = metric_row(reference, samplers["conventional"], cfg.n_per_class, cfg.n_sets)
-    homogeneity = (
-        mode_homogeneity_interval(reference, modes, cfg.n_per_mode, cfg.n_sets)
-        if variant in cfg.homogeneity
-        else None
-    )
+    homogeneity = purity = None
+    if variant in cfg.homogeneity:
+        real = to_positions(data.features, data.frame_stride, data.floor_clearance)
+        homogeneity = mode_homogeneity_interval(modes.modes, real, cfg.n_sets, cfg.homogeneity_share)
+        purity = style_purity_interval(reference, modes, cfg.n_per_mode, cfg.n_sets)
     end_point = (
         end_point_control(reference, modes, cfg.n_codes, cfg.n_end_points)
         if variant in cfg.end_point
         else None
     )
-    return Measured(samplers, rows, homogeneity, end_point)
+    return Measured(samplers, rows, homogeneity, purity, end_point)
 
 
 def train_all(

@@ -14,23 +14,41 @@ channels of the generated motion; ``L_c + L_prior`` is the embedding loss ``L_es
 terms off through the config (:data:`~motionlab.models.odmo.experiment.VARIANTS`); every term is still
 logged.
 
-**Contrastive term** (eq. 1). For a pair of clips with code means :math:`\mu_i, \mu_j` at distance
-:math:`d = \lVert\mu_i - \mu_j\rVert_2` and :math:`y = 1` when both clips show the same action:
+**Contrastive term** (eq. 1's first two lines, halved: see *Weights*). For a pair of clips with code means
+:math:`\mu_i, \mu_j` at distance :math:`d = \lVert\mu_i - \mu_j\rVert_2` and :math:`y = 1` when both clips
+show the same action:
 
 .. math:: L_c = \tfrac12\Big[\,y\,d^2 + (1 - y)\,\max(0,\ \alpha - d)^2\Big]
 
 Same-class codes are tied by a spring of rest length 0; codes of different classes push each other
-apart until they are ``α`` apart (the margin, 5 in the paper), and then stop interacting.
+apart until they are ``α`` apart (the margin, 5 in the paper), and then stop interacting. With a
+``slack`` (``ODMOConfig.same_class_slack``, not in the paper) the same-class term becomes
+:math:`\max(0, d^2 - \text{slack}^2)`.
 
-**Prior term**, with the encoder's :math:`q(z \mid x) = \mathcal N(\mu, \mathrm{diag}\, s^2)` and the
-prior variance :math:`\sigma^2` (0.05):
+**Prior term** (eq. 1's last two lines). The encoder gives :math:`q(z \mid x) = \mathcal N(\mu,
+\Sigma)` with :math:`\Sigma = \mathrm{diag}\, s^2`; the paper regularises only the covariance, per clip,
 
-* the paper's equation, ``"code"``: :math:`\mathrm{KL}(\mathcal N(\mu, s^2)\,\Vert\,\mathcal N(0, \sigma^2
-  I))`, which also pulls every :math:`\mu` towards the origin with stiffness :math:`1/\sigma^2 = 20`;
-* the reference implementation, ``"noise"``: :math:`\mathrm{KL}(\mathcal N(0, s^2)\,\Vert\,\mathcal N(0,
-  \sigma^2 I))`, the noise alone, so that :math:`\mu` is shaped only by the contrastive term (and the
-  reconstruction);
-* a standard VAE, ``"standard"``: :math:`\mathrm{KL}(\mathcal N(\mu, s^2)\,\Vert\,\mathcal N(0, I))`.
+.. math:: L_{prior} = -\ln\det\Sigma + \frac{1}{\sigma^2}\operatorname{Tr}\Sigma
+          = \sum_k \Big(\frac{s_k^2}{\sigma^2} - \ln s_k^2\Big),
+
+the negative log of a Gamma prior on each :math:`s_k^2` whose mode is :math:`\sigma^2` (supplement §3.1);
+we subtract its minimum, :math:`D(1 - \ln\sigma^2)`, so that it is 0 at :math:`s^2 = \sigma^2` (a constant,
+no change to any gradient). :math:`\sigma^2` is a variance, 0.05 in the paper. There is no term on
+:math:`\mu`: the supplement replaces the standard VAE's Gaussian prior on :math:`\mu` by the contrastive
+springs. The three choices of ``ODMOConfig.prior`` (:data:`~motionlab.models.odmo.model.PRIOR_TERMS`):
+
+* ``"covariance"``, the paper's term above (equal to :math:`2\,\mathrm{KL}(\mathcal N(0, s^2)\,\Vert\,\mathcal
+  N(0, \sigma^2 I))`; the reference implementation adds that KL once, i.e. half of it);
+* ``"covariance_and_mean"``, an extension: the same plus :math:`\lVert\mu\rVert^2/\sigma^2`, i.e.
+  :math:`2\,\mathrm{KL}(\mathcal N(\mu, s^2)\,\Vert\,\mathcal N(0, \sigma^2 I))`, a spring of stiffness
+  :math:`2/\sigma^2 = 40` pulling every code mean to the origin;
+* ``"standard"``, a standard VAE: :math:`\mathrm{KL}(\mathcal N(\mu, s^2)\,\Vert\,\mathcal N(0, I))`.
+
+**Weights.** Eq. 1 is written for one pair: the contrastive term of the pair plus both clips' covariance
+terms, and eq. 5 adds each clip's reconstruction terms. Per clip that is :math:`\tfrac12 L_c(\text{pair})
++ L_{prior}(\text{clip})` beside the clip's reconstruction (``L_c`` above carries the :math:`\tfrac12`).
+:func:`joint_objective` weighs the prior term with ``prior_weight`` (0.5 by default: the reference
+implementation's balance, see :class:`~motionlab.models.odmo.model.ODMOConfig`).
 
 **Class-balanced pairs.** Batches hold the same number of clips of every class
 (:class:`~motionlab.models.odmo.data.BalancedBatches`), and :func:`balanced_pairs` gives every clip of the
@@ -45,7 +63,7 @@ import torch
 from torch import Tensor
 
 from motionlab.models.gaussian import gaussian_kl
-from motionlab.models.odmo.model import ODMO, PRIOR_TARGETS
+from motionlab.models.odmo.model import ODMO, PRIOR_TERMS
 from motionlab.validation import check_choice, check_scalar, check_tensor
 
 
@@ -87,16 +105,16 @@ def contrastive_loss(mu_a: Tensor, mu_b: Tensor, same: Tensor, margin: float, sl
     return 0.5 * torch.where(same, together, apart)
 
 
-def prior_term(mu: Tensor, logvar: Tensor, prior_variance: float, target: str) -> Tensor:
-    """The prior term of each clip ``(B,)`` from ``mu``, ``logvar`` ``(B, D)`` (KL summed over the ``D``
-    code dimensions; ``target`` is one of :data:`~motionlab.models.odmo.model.PRIOR_TARGETS`, see the module
-    notes)."""
-    check_choice(target, "target", "prior_term", PRIOR_TARGETS)
+def prior_term(mu: Tensor, logvar: Tensor, prior_variance: float, kind: str) -> Tensor:
+    """The prior term of each clip ``(B,)`` from ``mu``, ``logvar`` ``(B, D)``, summed over the ``D`` code
+    dimensions; ``kind`` is one of :data:`~motionlab.models.odmo.model.PRIOR_TERMS`, ``prior_variance`` the
+    variance ``σ²`` (see the module notes)."""
+    check_choice(kind, "kind", "prior_term", PRIOR_TERMS)
     check_scalar(prior_variance, "prior_variance", "prior_term", minimum=0, include_minimum=False)
-    if target == "standard":
+    if kind == "standard":
         return gaussian_kl(mu, logvar).sum(dim=-1)
-    mean = mu if target == "code" else torch.zeros_like(mu)
-    return gaussian_kl(mean, logvar, prior_logvar=math.log(prior_variance)).sum(dim=-1)
+    mean = mu if kind == "covariance_and_mean" else torch.zeros_like(mu)
+    return 2.0 * gaussian_kl(mean, logvar, prior_logvar=math.log(prior_variance)).sum(dim=-1)
 
 
 def balanced_pairs(labels: Tensor, generator: torch.Generator | None = None) -> tuple[Tensor, Tensor, Tensor]:
@@ -158,7 +176,7 @@ def joint_objective(
         "contrastive": contrastive_loss(
             out.mu[first], out.mu[second], same, cfg.margin, cfg.same_class_slack
         ).mean(),
-        "prior": prior_term(out.mu, out.logvar, cfg.prior_variance, cfg.prior_target).mean(),
+        "prior": prior_term(out.mu, out.logvar, cfg.prior_variance, cfg.prior).mean(),
     }
     total = terms["motion"] + cfg.prior_weight * terms["prior"]
     if cfg.use_trajectory_loss:

@@ -46,22 +46,24 @@ from motionlab.data.datasets import Standardizer
 from motionlab.models.gaussian import reparameterize
 from motionlab.validation import check_choice, check_scalar, check_tensor
 
-#: Which Gaussian the prior term of the embedding loss compares with what (see :mod:`.losses`):
-#: ``"noise"`` KL(N(0, s²) || N(0, σ²)) on the noise alone (reference implementation),
-#: ``"code"`` KL(N(μ, s²) || N(0, σ²)) on the whole code (the paper's equation),
+#: The prior term of the embedding loss (see :mod:`.losses`), with the code's ``q(z | x) = N(μ, diag s²)``:
+#: ``"covariance"`` eq. 1's covariance terms, ``-ln det Σ + Tr(Σ) / σ²`` per clip (the paper; the reference
+#: implementation's KL on the noise is half of it): no term on ``μ``, which only the contrastive springs
+#: shape;
+#: ``"covariance_and_mean"`` those terms plus ``|μ|² / σ²`` (an extension: a Gaussian prior N(0, σ²) on ``μ``
+#: as well, which the paper's supplement §3.1 replaces by the springs);
 #: ``"standard"`` KL(N(μ, s²) || N(0, I)) (a standard VAE).
-PriorTarget = Literal["noise", "code", "standard"]
-PRIOR_TARGETS: tuple[str, ...] = ("noise", "code", "standard")
+PriorTerm = Literal["covariance", "covariance_and_mean", "standard"]
+PRIOR_TERMS: tuple[str, ...] = ("covariance", "covariance_and_mean", "standard")
 
 
 @dataclass(frozen=True)
 class ODMOConfig:
-    """Sizes and objective of one ODMO model. The defaults are the chapter's ODMO: the reference
-    implementation's prior term (on the noise) and same-class slack, at the sizes the full profile trains.
+    """Sizes and objective of one ODMO model. The defaults are the chapter's ODMO: the paper's eq. 1 with
+    the reference implementation's same-class slack, at the sizes the full profile trains.
 
-    The paper's model, the reference implementation's variant, the ablations of Table 2 and the
-    standard-VAE baseline differ only in fields of this config (:data:`~.experiment.VARIANTS`), never in
-    code.
+    The chapter's ODMO, the extension with a prior on ``μ``, the ablations of Table 2 and the standard-VAE
+    baseline differ only in fields of this config (:data:`~.experiment.VARIANTS`), never in code.
 
     Attributes:
         n_classes: action classes ``C`` (the one-hot condition).
@@ -76,13 +78,19 @@ class ODMOConfig:
         margin: contrastive margin ``α`` between codes of different classes (the paper: 5).
         same_class_slack: same-class codes closer than this do not attract each other (0 is the paper's
             eq. 1; the reference implementation, and the chapter, use 0.5, which leaves room for styles).
-        prior_variance: ``σ²`` of the prior term (the paper: 0.05).
-        prior_target: see :data:`PriorTarget`.
+        prior_variance: ``σ²`` of the prior term, a variance: the posterior variance ``s²`` the term pulls
+            every code coordinate to (the paper: 0.05, supplement §2.1 and Table S1; the reference code's
+            ``sigma = 0.05`` is the scale of a ``torch.distributions.Normal``, a standard deviation, so its
+            posterior variance is 0.05² = 0.0025).
+        prior: which prior term, see :data:`PriorTerm`.
         use_contrastive: the contrastive term ``L_c`` (off: ``-L_es`` and the standard VAE).
         use_end_point: feed the end point ``r_e`` to the trajectory generator (off: ``-r_e``).
         use_consistency: the consistency loss between the two trajectories (off: ``-L_cons``).
         use_trajectory_loss: the trajectory loss (off together with the consistency loss: ``-L_traj``).
-        contrastive_weight, prior_weight: weights of the two embedding terms in the joint objective.
+        contrastive_weight, prior_weight: weights of the two embedding terms in the joint objective. The
+            prior's 0.5 is the reference implementation's balance (it adds KL(N(0, s²) || N(0, σ²)), half of
+            eq. 1's covariance terms), which fits our reconstruction terms, averaged over channels like the
+            reference's; the standard VAE weighs its KL with 1.
     """
 
     n_classes: int = 6
@@ -96,13 +104,13 @@ class ODMOConfig:
     margin: float = 5.0
     same_class_slack: float = 0.5
     prior_variance: float = 0.05
-    prior_target: PriorTarget = "noise"
+    prior: PriorTerm = "covariance"
     use_contrastive: bool = True
     use_end_point: bool = True
     use_consistency: bool = True
     use_trajectory_loss: bool = True
     contrastive_weight: float = 1.0
-    prior_weight: float = 1.0
+    prior_weight: float = 0.5
 
     def __post_init__(self) -> None:
         where = "ODMOConfig"
@@ -122,7 +130,7 @@ class ODMOConfig:
             check_scalar(getattr(self, name), name, where, minimum=0, include_minimum=False)
         for name in ("same_class_slack", "contrastive_weight", "prior_weight"):
             check_scalar(getattr(self, name), name, where, minimum=0)
-        check_choice(self.prior_target, "prior_target", where, PRIOR_TARGETS)
+        check_choice(self.prior, "prior", where, PRIOR_TERMS)
         for name in ("use_contrastive", "use_end_point", "use_consistency", "use_trajectory_loss"):
             if not isinstance(getattr(self, name), bool):
                 raise TypeError(f"{where}: {name} must be True or False, got {getattr(self, name)!r}")
