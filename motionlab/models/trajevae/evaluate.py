@@ -153,13 +153,29 @@ def sweep_given_joints(
     """
     check_tensor(windows, "windows", "sweep_given_joints", ndim=3)
     multimodal = multimodal_futures(windows) if multimodal is None else multimodal
-    table = {}
-    for k in ks:
-        initial_pose, trajectories = completion_task(windows, first_joints(k, order))
-        generator = torch.Generator().manual_seed(int(np.random.SeedSequence([seed, k]).generate_state(1)[0]))
-        samples = complete(model, initial_pose, trajectories, n_samples, generator)
-        table[k] = summarise(dlow_metrics(samples, windows, multimodal))
-    return table
+    return {
+        k: summarise(given_joints_metrics(model, windows, k, n_samples, seed, multimodal, order)) for k in ks
+    }
+
+
+def given_joints_metrics(
+    model: Completer,
+    windows: Tensor,
+    k: int,
+    n_samples: int = N_SAMPLES,
+    seed: int = 0,
+    multimodal: Sequence[np.ndarray] | None = None,
+    order: Sequence[str] = FULL_ORDER,
+) -> dict[str, np.ndarray]:
+    """Per-window DLow metrics ``{metric: (N,)}`` with the first ``k`` joints of ``order`` given: the values
+    that :func:`sweep_given_joints` (same ``seed``) summarises in its row ``k``, e.g. for a paired comparison
+    of two ``k`` on the same windows."""
+    check_tensor(windows, "windows", "given_joints_metrics", ndim=3)
+    multimodal = multimodal_futures(windows) if multimodal is None else multimodal
+    initial_pose, trajectories = completion_task(windows, first_joints(k, order))
+    generator = torch.Generator().manual_seed(int(np.random.SeedSequence([seed, k]).generate_state(1)[0]))
+    samples = complete(model, initial_pose, trajectories, n_samples, generator)
+    return dlow_metrics(samples, windows, multimodal)
 
 
 def ratio_and_worst_step(values: Sequence[float]) -> tuple[float, float]:
