@@ -34,7 +34,14 @@ from torch import Tensor
 
 from motionlab.metrics import apd, mean_ci, min_ade, min_fde, mmade, mmfde, multimodal_ground_truth
 from motionlab.models.trajevae.data import completion_task
-from motionlab.models.trajevae.masks import FULL_ORDER, channel_mask, check_mask, first_joints
+from motionlab.models.trajevae.masks import (
+    FULL_ORDER,
+    channel_mask,
+    check_mask,
+    first_joints,
+    given_trajectories,
+    hidden_poses,
+)
 from motionlab.validation import check_scalar, check_tensor
 
 #: Samples per input window, as in DLow and the paper.
@@ -233,6 +240,33 @@ def follow_error(samples: Tensor, trajectories: Tensor, mask: Tensor) -> np.ndar
     generated = samples[:, :, 1:].unflatten(-1, (-1, 3))[..., joints, :]
     requested = trajectories.unflatten(-1, (-1, 3))[:, None, :, joints, :]
     return (generated - requested).norm(dim=-1).mean(dim=(1, 2, 3)).numpy()
+
+
+def decoded_means_error(model: torch.nn.Module, windows: Tensor, k: int) -> dict[str, float]:
+    """How far TrajeVAE's learned prior is from its posterior, seen through the decoder, with the first ``k``
+    joints given.
+
+    Returns:
+        ``posterior mean`` and ``prior mean``: the mean squared error (m², per number) of decoding the
+        posterior's mean (what training sees) and the prior's mean (what generation sees) on ``windows``
+        ``(N, T, J * 3)``; ``sigma_p`` and ``sigma_q``: the two distributions' mean standard deviations.
+    """
+    check_tensor(windows, "windows", "decoded_means_error", ndim=3)
+    mask = first_joints(k).expand(windows.shape[0], -1)
+    start, future = windows[:, 0], windows[:, 1:]
+    with torch.no_grad():
+        embedding = model.initial_pose_encoder(start)
+        prior = model.prior(given_trajectories(future, mask), embedding)
+        posterior = model.posterior(hidden_poses(future, mask), embedding)
+        errors = {
+            name: ((model.decoder(mu, start, embedding) - future) ** 2).mean().item()
+            for name, mu in (("posterior mean", posterior.mu), ("prior mean", prior.mu))
+        }
+        return {
+            **errors,
+            "sigma_p": prior.logvar.mul(0.5).exp().mean().item(),
+            "sigma_q": posterior.logvar.mul(0.5).exp().mean().item(),
+        }
 
 
 def upsample_frames(windows: Tensor, factor: int) -> Tensor:
