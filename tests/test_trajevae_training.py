@@ -146,7 +146,10 @@ def test_train_all_trains_each_run_once_and_sweeps_it_as_in_process(clips):
 def test_schedule_check_trains_longer_and_measures_both_gaps(clips):
     cfg, data = _tiny_experiment(clips)
     measured = schedule_check(cfg, data, 16, reconstruction="mean")
-    assert set(measured) == {"follow", "follow_ci95", "train_seconds"} | {
+    assert set(measured) == {"follow", "follow_ci95", "train_seconds", "apd_k0", "apd_k0_ci95"} | {
+        "apd_k4",
+        "apd_k4_ci95",
+    } | {
         f"{name}_k{k}"
         for k in SCHEDULE_CHECK_KS
         for name in ("decode_prior", "decode_posterior", "sigma_p", "sigma_q")

@@ -46,6 +46,7 @@ from motionlab.models.trajevae.evaluate import (
     Sweep,
     complete,
     decoded_means_error,
+    dlow_metrics,
     follow_error,
     multimodal_futures,
     sweep_given_joints,
@@ -323,6 +324,7 @@ def schedule_check(
         completions and the four trajectories of Table 1 (seed 5, as in the chapter's Table 5);
         ``decode_prior_k{k}``, ``decode_posterior_k{k}``, ``sigma_p_k{k}``, ``sigma_q_k{k}`` for ``k`` in
         :data:`SCHEDULE_CHECK_KS` (:func:`~motionlab.models.trajevae.evaluate.decoded_means_error`);
+        ``apd_k0``, ``apd_k4`` and their ``_ci95``: APD with no trajectory and with four (seed ``k``);
         ``train_seconds``: the training time (as recorded in the checkpoint when loaded from the cache).
     """
     if not isinstance(cfg, ExperimentConfig):
@@ -338,6 +340,11 @@ def schedule_check(
     samples = complete(model, start, trajectories, N_SAMPLES, torch.Generator().manual_seed(5))
     follow, half = mean_ci(follow_error(samples, trajectories, four))
     out = {"follow": follow, "follow_ci95": half, "train_seconds": float(result.metrics["train_seconds"])}
+    for k in (0, 4):  # diversity with no trajectory and with Table 1's four (seed k)
+        start, trajectories = completion_task(data.test_windows, first_joints(k))
+        samples = complete(model, start, trajectories, N_SAMPLES, torch.Generator().manual_seed(k))
+        apd, apd_half = mean_ci(dlow_metrics(samples, data.test_windows, data.multimodal)["apd"])
+        out[f"apd_k{k}"], out[f"apd_k{k}_ci95"] = apd, apd_half
     for k in SCHEDULE_CHECK_KS:
         measured = decoded_means_error(model, data.test_windows, k)
         out[f"decode_prior_k{k}"] = measured["prior mean"]
