@@ -10,6 +10,7 @@ from motionlab.models.trajevae.evaluate import (
     complete,
     dlow_metrics,
     follow_error,
+    given_joints_metrics,
     multimodal_futures,
     ratio_and_worst_step,
     summarise,
@@ -97,6 +98,9 @@ def test_sweep_runs_for_every_model_and_is_seeded():
     table = sweep_given_joints(model, windows, ks=(0, 2), n_samples=3, seed=0)
     assert set(table) == {0, 2} and set(table[0]) == {"apd", "ade", "fde", "mmade", "mmfde"}
     assert table == sweep_given_joints(model, windows, ks=(0, 2), n_samples=3, seed=0)
+    per_window = given_joints_metrics(model, windows, 2, n_samples=3, seed=0)
+    assert per_window["apd"].shape == (4,)
+    assert table[2]["apd"][0] == pytest.approx(float(per_window["apd"].mean()))
     gru = GRUCompletion(RecurrentConfig(n_frames=9, hidden=8)).eval()
     assert sweep_given_joints(gru, windows, ks=(4,), n_samples=3)[4]["apd"][0] == 0.0
     start, given = windows[:, 0], windows[:, 1:] * first_joints(4).repeat_interleave(3)

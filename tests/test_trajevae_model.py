@@ -44,7 +44,7 @@ def test_forward_shapes_and_loss_terms():
     assert out.poses.shape == (3, 8, 66)
     assert out.prior.mu.shape == out.posterior.mu.shape == (3, 4, 3)
     terms = trajevae_loss(model, (windows, mask), 0, {})
-    assert set(terms) == {"loss", "recon", "recon_given", "recon_hidden", "kl"}
+    assert set(terms) == {"loss", "recon", "recon_given", "recon_hidden", "recon_sum", "kl"}
     torch.testing.assert_close(terms["recon"], terms["recon_given"] + terms["recon_hidden"])
 
 
@@ -65,6 +65,34 @@ def test_squared_error_terms_by_hand():
     # sequence 0: 66 errors of 1; sequence 1: 66 errors of 4; mean over all 132 elements
     assert terms["recon"].item() == pytest.approx((66 + 264) / 132)
     assert terms["recon_given"].item() == pytest.approx((3 + 12) / 132)
+    # eq. 2: summed over frames and coordinates, averaged over the 2 sequences
+    assert terms["recon_sum"].item() == pytest.approx((66 + 264) / 2)
+
+
+def test_trajevae_loss_sums_the_squared_errors_as_eq_2():
+    """The paper's reconstruction term is the sum over frames and coordinates; "mean" is the variant that
+    divides it by F * 3J, which is the paper's objective with beta multiplied by F * 3J."""
+    model = _randomise(TrajeVAE(TINY)).train()
+    windows, mask = _batch()
+    torch.manual_seed(0)
+    terms = trajevae_loss(model, (windows, mask), 0, {})
+    torch.manual_seed(0)  # the same posterior sample
+    poses = model(windows, mask).poses
+    by_hand = ((poses - windows[:, 1:]) ** 2).sum(dim=(1, 2)).mean()  # 8 frames x 66 coordinates
+    assert terms["recon_sum"].item() == pytest.approx(by_hand.item(), rel=1e-5)
+    assert terms["recon_sum"].item() == pytest.approx(terms["recon"].item() * 8 * 66, rel=1e-5)
+    assert terms["loss"].item() == pytest.approx(
+        terms["recon_sum"].item() + TINY.beta * terms["kl"].item(), rel=1e-5
+    )
+    mean_model = _randomise(TrajeVAE(dataclasses.replace(TINY, reconstruction="mean"))).train()
+    mean_terms = trajevae_loss(mean_model, (windows, mask), 0, {})
+    assert mean_terms["loss"].item() == pytest.approx(
+        mean_terms["recon"].item() + TINY.beta * mean_terms["kl"].item(), rel=1e-5
+    )
+    with pytest.raises(ValueError, match="reconstruction"):
+        TrajeVAEConfig(reconstruction="median")
+    with pytest.raises(ValueError, match="reconstruction"):
+        RecurrentConfig(reconstruction="max")
 
 
 def test_kl_matches_torch_distributions():
@@ -189,7 +217,8 @@ def test_gru_baseline_is_deterministic():
     assert torch.equal(samples[:, 0], samples[:, 3])
     torch.testing.assert_close(samples[:, 0], model(windows, mask))
     terms = gru_loss(model, (windows, mask), 0, {})
-    assert set(terms) == {"loss", "recon", "recon_given", "recon_hidden"}
+    assert set(terms) == {"loss", "recon", "recon_given", "recon_hidden", "recon_sum"}
+    assert terms["loss"].item() == pytest.approx(terms["recon_sum"].item())
     with pytest.raises(ValueError, match="latent_dim"):
         GRUCompletion(dataclasses.replace(TINY_RNN, latent_dim=2))
 
@@ -208,7 +237,7 @@ def test_cvae_rnn_one_latent_per_sequence():
     )
     terms = cvae_rnn_loss(model.train(), (windows, mask), 0, {})
     assert terms["loss"].item() == pytest.approx(
-        terms["recon"].item() + cfg.beta * terms["kl"].item(), rel=1e-5
+        terms["recon_sum"].item() + cfg.beta * terms["kl"].item(), rel=1e-5
     )
     with pytest.raises(ValueError, match="latent_dim"):
         CVAERNN(TINY_RNN)

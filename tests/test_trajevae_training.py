@@ -27,10 +27,12 @@ from motionlab.models.trajevae.evaluate import (
 from motionlab.models.trajevae.experiment import (
     CACHE_NAMES,
     RUNGS,
+    SCHEDULE_CHECK_KS,
     START_ORDER,
     CompletionRun,
     ExperimentConfig,
     runs,
+    schedule_check,
     train_all,
 )
 from motionlab.models.trajevae.masks import first_joints
@@ -139,6 +141,23 @@ def test_train_all_trains_each_run_once_and_sweeps_it_as_in_process(clips):
         item = trained[name]
         in_process = sweep_given_joints(item.model, data.test_windows, sorted(item.measured), N_SAMPLES, 0)
         assert item.measured == in_process
+
+
+def test_schedule_check_trains_longer_and_measures_both_gaps(clips):
+    cfg, data = _tiny_experiment(clips)
+    measured = schedule_check(cfg, data, 16, reconstruction="mean")
+    assert set(measured) == {"follow", "follow_ci95", "train_seconds", "apd_k0", "apd_k0_ci95"} | {
+        "apd_k4",
+        "apd_k4_ci95",
+    } | {
+        f"{name}_k{k}"
+        for k in SCHEDULE_CHECK_KS
+        for name in ("decode_prior", "decode_posterior", "sigma_p", "sigma_q")
+    }
+    assert all(math.isfinite(v) and v >= 0 for v in measured.values())
+    assert schedule_check(cfg, data, 16, reconstruction="mean") == measured  # loaded from the cache
+    with pytest.raises(ValueError, match="steps"):
+        schedule_check(cfg, data, 2)
 
 
 def test_experiment_config_profiles_and_model_dispatch(monkeypatch):

@@ -24,7 +24,7 @@ from torch import Tensor, nn
 from motionlab.models.gaussian import reparameterize
 from motionlab.models.trajevae.data import check_batch, check_task
 from motionlab.models.trajevae.masks import KEEP_PROBABILITY, given_trajectories
-from motionlab.models.trajevae.model import Gaussian, WindowShape, check_flags
+from motionlab.models.trajevae.model import Gaussian, WindowShape, check_flags, check_reconstruction
 from motionlab.validation import check_scalar
 
 
@@ -37,6 +37,8 @@ class RecurrentConfig(WindowShape):
         hidden: GRU width (the bidirectional context GRU has ``hidden`` per direction).
         latent_dim: numbers in the sequence's latent vector; 0 makes the deterministic GRU model.
         beta: KL weight of the CVAE (unused when ``latent_dim == 0``).
+        reconstruction: ``"sum"`` or ``"mean"`` over frames and coordinates, as for TrajeVAE (the GRU's loss
+            is the reconstruction alone, so for it the two differ only by a constant factor).
         keep_probability, augment: the training data, as for TrajeVAE.
         seed: seeds the weight initialisation.
     """
@@ -46,6 +48,7 @@ class RecurrentConfig(WindowShape):
     hidden: int = 64
     latent_dim: int = 0
     beta: float = 0.01
+    reconstruction: str = "sum"
     keep_probability: float = KEEP_PROBABILITY
     augment: bool = True
     seed: int = 0
@@ -57,6 +60,7 @@ class RecurrentConfig(WindowShape):
         check_scalar(self.n_frames, "n_frames", where, kind=numbers.Integral, minimum=2)
         check_scalar(self.latent_dim, "latent_dim", where, kind=numbers.Integral, minimum=0)
         check_scalar(self.beta, "beta", where, minimum=0)
+        check_reconstruction(self.reconstruction, where)
         check_scalar(self.keep_probability, "keep_probability", where, minimum=0, maximum=1)
         check_flags(self, ("augment",), where)
         check_scalar(self.seed, "seed", where, kind=numbers.Integral, minimum=0)

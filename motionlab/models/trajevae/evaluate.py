@@ -34,7 +34,14 @@ from torch import Tensor
 
 from motionlab.metrics import apd, mean_ci, min_ade, min_fde, mmade, mmfde, multimodal_ground_truth
 from motionlab.models.trajevae.data import completion_task
-from motionlab.models.trajevae.masks import FULL_ORDER, channel_mask, check_mask, first_joints
+from motionlab.models.trajevae.masks import (
+    FULL_ORDER,
+    channel_mask,
+    check_mask,
+    first_joints,
+    given_trajectories,
+    hidden_poses,
+)
 from motionlab.validation import check_scalar, check_tensor
 
 #: Samples per input window, as in DLow and the paper.
@@ -153,13 +160,29 @@ def sweep_given_joints(
     """
     check_tensor(windows, "windows", "sweep_given_joints", ndim=3)
     multimodal = multimodal_futures(windows) if multimodal is None else multimodal
-    table = {}
-    for k in ks:
-        initial_pose, trajectories = completion_task(windows, first_joints(k, order))
-        generator = torch.Generator().manual_seed(int(np.random.SeedSequence([seed, k]).generate_state(1)[0]))
-        samples = complete(model, initial_pose, trajectories, n_samples, generator)
-        table[k] = summarise(dlow_metrics(samples, windows, multimodal))
-    return table
+    return {
+        k: summarise(given_joints_metrics(model, windows, k, n_samples, seed, multimodal, order)) for k in ks
+    }
+
+
+def given_joints_metrics(
+    model: Completer,
+    windows: Tensor,
+    k: int,
+    n_samples: int = N_SAMPLES,
+    seed: int = 0,
+    multimodal: Sequence[np.ndarray] | None = None,
+    order: Sequence[str] = FULL_ORDER,
+) -> dict[str, np.ndarray]:
+    """Per-window DLow metrics ``{metric: (N,)}`` with the first ``k`` joints of ``order`` given: the values
+    that :func:`sweep_given_joints` (same ``seed``) summarises in its row ``k``, e.g. for a paired comparison
+    of two ``k`` on the same windows."""
+    check_tensor(windows, "windows", "given_joints_metrics", ndim=3)
+    multimodal = multimodal_futures(windows) if multimodal is None else multimodal
+    initial_pose, trajectories = completion_task(windows, first_joints(k, order))
+    generator = torch.Generator().manual_seed(int(np.random.SeedSequence([seed, k]).generate_state(1)[0]))
+    samples = complete(model, initial_pose, trajectories, n_samples, generator)
+    return dlow_metrics(samples, windows, multimodal)
 
 
 def ratio_and_worst_step(values: Sequence[float]) -> tuple[float, float]:
@@ -217,6 +240,33 @@ def follow_error(samples: Tensor, trajectories: Tensor, mask: Tensor) -> np.ndar
     generated = samples[:, :, 1:].unflatten(-1, (-1, 3))[..., joints, :]
     requested = trajectories.unflatten(-1, (-1, 3))[:, None, :, joints, :]
     return (generated - requested).norm(dim=-1).mean(dim=(1, 2, 3)).numpy()
+
+
+def decoded_means_error(model: torch.nn.Module, windows: Tensor, k: int) -> dict[str, float]:
+    """How far TrajeVAE's learned prior is from its posterior, seen through the decoder, with the first ``k``
+    joints given.
+
+    Returns:
+        ``posterior mean`` and ``prior mean``: the mean squared error (m², per number) of decoding the
+        posterior's mean (what training sees) and the prior's mean (what generation sees) on ``windows``
+        ``(N, T, J * 3)``; ``sigma_p`` and ``sigma_q``: the two distributions' mean standard deviations.
+    """
+    check_tensor(windows, "windows", "decoded_means_error", ndim=3)
+    mask = first_joints(k).expand(windows.shape[0], -1)
+    start, future = windows[:, 0], windows[:, 1:]
+    with torch.no_grad():
+        embedding = model.initial_pose_encoder(start)
+        prior = model.prior(given_trajectories(future, mask), embedding)
+        posterior = model.posterior(hidden_poses(future, mask), embedding)
+        errors = {
+            name: ((model.decoder(mu, start, embedding) - future) ** 2).mean().item()
+            for name, mu in (("posterior mean", posterior.mu), ("prior mean", prior.mu))
+        }
+        return {
+            **errors,
+            "sigma_p": prior.logvar.mul(0.5).exp().mean().item(),
+            "sigma_q": posterior.logvar.mul(0.5).exp().mean().item(),
+        }
 
 
 def upsample_frames(windows: Tensor, factor: int) -> Tensor:

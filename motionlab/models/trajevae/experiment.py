@@ -29,11 +29,13 @@ from torch import Tensor, nn
 from motionlab import config
 from motionlab.evaluation.benchmark import load_benchmark
 from motionlab.evaluation.evaluator import data_fingerprint
+from motionlab.metrics import mean_ci
 from motionlab.models.trajevae.baselines import CVAERNN, GRUCompletion, RecurrentConfig
 from motionlab.models.trajevae.data import (
     FRAME_STEP,
     CompletionBatches,
     CompletionData,
+    completion_task,
     completion_windows,
     decimate,
 )
@@ -42,10 +44,15 @@ from motionlab.models.trajevae.evaluate import (
     N_SAMPLES,
     PAPER_KS,
     Sweep,
+    complete,
+    decoded_means_error,
+    dlow_metrics,
+    follow_error,
     multimodal_futures,
     sweep_given_joints,
 )
 from motionlab.models.trajevae.losses import cvae_rnn_loss, gru_loss, trajevae_loss
+from motionlab.models.trajevae.masks import first_joints
 from motionlab.models.trajevae.model import TrajeVAE, TrajeVAEConfig
 from motionlab.train import PiecewiseLinear, TrainConfig, TrainResult, is_cached, train_or_load
 from motionlab.train.loop import LossFn
@@ -299,3 +306,49 @@ def train_all(cfg: ExperimentConfig, data: CompletionData, processes: int = 2) -
     """
     then = partial(sweep, windows=data.test_windows, multimodal=data.multimodal)
     return train_many(runs(cfg, data), then=then, processes=processes)
+
+
+#: Given trajectories of :func:`schedule_check`'s decoding errors.
+SCHEDULE_CHECK_KS: tuple[int, ...] = (0, 2, 4)
+
+
+def schedule_check(
+    cfg: ExperimentConfig, data: CompletionData, steps: int, reconstruction: str = "sum"
+) -> dict[str, float]:
+    """Train the full TrajeVAE of ``cfg`` for ``steps`` steps (the chapter's schedule stretched to them) with
+    the given ``reconstruction`` term and measure the two gaps the chapter reports: how far the given joints
+    of its completions stay from their trajectories, and how far the prior is from the posterior.
+
+    Returns:
+        ``follow``, ``follow_ci95``: the mean distance (m) between the given joints of ``N_SAMPLES``
+        completions and the four trajectories of Table 1 (seed 5, as in the chapter's Table 5);
+        ``decode_prior_k{k}``, ``decode_posterior_k{k}``, ``sigma_p_k{k}``, ``sigma_q_k{k}`` for ``k`` in
+        :data:`SCHEDULE_CHECK_KS` (:func:`~motionlab.models.trajevae.evaluate.decoded_means_error`);
+        ``apd_k0``, ``apd_k4`` and their ``_ci95``: APD with no trajectory and with four (seed ``k``);
+        ``train_seconds``: the training time (as recorded in the checkpoint when loaded from the cache).
+    """
+    if not isinstance(cfg, ExperimentConfig):
+        raise TypeError(f"schedule_check: cfg must be an ExperimentConfig, got {type(cfg).__name__}")
+    check_scalar(steps, "steps", "schedule_check", kind=numbers.Integral, minimum=8)
+    train = _train_config(steps, cfg.train.batch_size, cfg.train.checkpoint_every)
+    model_cfg = replace(cfg.trajevae, reconstruction=reconstruction)
+    name = f"trajevae_schedule_{reconstruction}_{steps}"
+    run = CompletionRun(name, model_cfg, train, data.train_positions, data.train_rotations)
+    model, result = run.train(progress=False)
+    four = first_joints(4)
+    start, trajectories = completion_task(data.test_windows, four)
+    samples = complete(model, start, trajectories, N_SAMPLES, torch.Generator().manual_seed(5))
+    follow, half = mean_ci(follow_error(samples, trajectories, four))
+    out = {"follow": follow, "follow_ci95": half, "train_seconds": float(result.metrics["train_seconds"])}
+    for k in (0, 4):  # diversity with no trajectory and with Table 1's four (seed k)
+        start, trajectories = completion_task(data.test_windows, first_joints(k))
+        samples = complete(model, start, trajectories, N_SAMPLES, torch.Generator().manual_seed(k))
+        apd, apd_half = mean_ci(dlow_metrics(samples, data.test_windows, data.multimodal)["apd"])
+        out[f"apd_k{k}"], out[f"apd_k{k}_ci95"] = apd, apd_half
+    for k in SCHEDULE_CHECK_KS:
+        measured = decoded_means_error(model, data.test_windows, k)
+        out[f"decode_prior_k{k}"] = measured["prior mean"]
+        out[f"decode_posterior_k{k}"] = measured["posterior mean"]
+        out[f"sigma_p_k{k}"] = measured["sigma_p"]
+        out[f"sigma_q_k{k}"] = measured["sigma_q"]
+    return out

@@ -17,7 +17,8 @@ per component: the learnable prior :math:`p_\text{traj}(z \mid Y, x_0)` from the
 embedding, mixed by an MLP and self-attention, it gives per-frame offsets that are accumulated from the
 initial pose: :math:`\hat x_t = x_0 + \sum_{s=1}^{t} \Delta_s`.
 
-**Training** decodes a posterior sample; the loss is MSE + β KL(q_pose ‖ p_traj) (:mod:`.losses`).
+**Training** decodes a posterior sample; the loss is the squared error summed over frames and coordinates (eq.
+2) + β KL(q_pose ‖ p_traj) (:mod:`.losses`).
 **Sampling** decodes prior samples :math:`z = \mu + \tau \sigma \epsilon` at temperature τ; a single sample
 decodes the prior means (the deterministic prediction).
 
@@ -55,6 +56,16 @@ def check_flags(config: object, names: tuple[str, ...], where: str) -> None:
             raise TypeError(f"{where}: {name} must be a bool, got {value!r} ({type(value).__name__})")
 
 
+#: How the reconstruction term reduces the squared errors of a sequence (see :mod:`.losses`).
+RECONSTRUCTIONS: tuple[str, ...] = ("sum", "mean")
+
+
+def check_reconstruction(value: object, where: str) -> None:
+    """Raise ``ValueError`` unless ``value`` is one of :data:`RECONSTRUCTIONS`."""
+    if value not in RECONSTRUCTIONS:
+        raise ValueError(f"{where}: reconstruction must be one of {RECONSTRUCTIONS}, got {value!r}")
+
+
 class WindowShape:
     """The window geometry every completion model's config shares (needs ``n_joints`` and ``n_frames``)."""
 
@@ -86,7 +97,10 @@ class TrajeVAEConfig(WindowShape):
         latent_dim: latent numbers per DCT component (per frame without the DCT).
         dct_components: the ``C`` lowest frequencies kept (at most ``n_frames - 1``); ignored without the DCT.
         heads: attention heads; layers: transformer layers in each attention block.
-        beta: weight of ``KL(q_pose || p_traj)`` (the paper: 0.01).
+        beta: weight of ``KL(q_pose || p_traj)`` (the paper: 0.01, against the summed squared error).
+        reconstruction: ``"sum"`` (the paper's eq. 2: squared errors summed over frames and coordinates) or
+            ``"mean"`` (averaged over them, which weights the KL ``F * 3J`` times more for the same ``beta``;
+            see :mod:`.losses`).
         keep_probability: chance that a joint's trajectory is given in a training sequence (0.15).
         use_dct: attend over DCT components (``False``: over frames).
         learnable_prior: a posterior ``q_pose(z | X)`` and a learned prior ``p_traj(z | Y)`` (``False``: one
@@ -104,6 +118,7 @@ class TrajeVAEConfig(WindowShape):
     heads: int = 4
     layers: int = 1
     beta: float = 0.01
+    reconstruction: str = "sum"
     keep_probability: float = KEEP_PROBABILITY
     use_dct: bool = True
     learnable_prior: bool = True
@@ -130,6 +145,7 @@ class TrajeVAEConfig(WindowShape):
                 f"heads={self.heads}"
             )
         check_scalar(self.beta, "beta", where, minimum=0)
+        check_reconstruction(self.reconstruction, where)
         check_scalar(self.keep_probability, "keep_probability", where, minimum=0, maximum=1)
         check_flags(self, ("use_dct", "learnable_prior", "augment", "mask_future_poses"), where)
         if self.mask_future_poses and not self.learnable_prior:
