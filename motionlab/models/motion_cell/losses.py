@@ -9,10 +9,14 @@ Per frame, for predicted pose vectors against the data (all terms are means over
   of the 6 standardised root channels;
 * KL of the posterior from the learned prior, summed over latent dimensions, per word divided by the
   word length (nats per frame, so SL and the word models are on one scale);
-* classifier loss (eq. 24): feature matching of mean activations on every intermediate layer of the
-  frozen conv classifier plus cross-entropy of its action and body heads, on clips *sampled* from the
-  model (prior and free-running recurrence) with the attributes of real clips of the batch;
-* quaternion-norm constraint (eq. 26): :math:`(\lVert q\rVert - 1)^2` of the raw quaternion outputs.
+* classifier loss (eq. 24): for each training clip ``X`` and its reconstruction ``X~``, the squared l2
+  distance between the frozen conv classifier's activations of the two on every intermediate layer
+  (each layer with a fixed weight ``beta_l``), plus the cross-entropy of its action and body heads on
+  ``X~`` against the clip's attribute labels (:class:`ClassifierLoss`). An extension of ours, not the
+  paper's, matches per-attribute *mean* activations of clips sampled from the prior instead
+  (:class:`DistributionMatchingLoss`, ``LossConfig(classifier_target="samples")``);
+* quaternion-norm constraint (eq. 26 as printed, :math:`\sum_k (\lVert q_k\rVert^2 - 1)`, can be negative
+  and is unbounded below; we penalise :math:`(\lVert q\rVert - 1)^2` of the raw quaternion outputs).
 """
 
 from __future__ import annotations
@@ -35,6 +39,9 @@ from motionlab.validation import check_choice, check_scalar
 
 #: Joint weights of the reconstruction loss: eq. 23's impact weights, or all ones (the NL ablation).
 JOINT_WEIGHTINGS = ("impact", "uniform")
+#: What the classifier loss compares: each clip with its reconstruction (eq. 24, the paper) or the mean
+#: activations of prior samples with real clips' (our distribution-matching extension).
+CLASSIFIER_TARGETS = ("reconstruction", "samples")
 
 LossFn = Callable[[nn.Module, WindowBatch, int, dict[str, float]], dict[str, Tensor]]
 
@@ -43,37 +50,40 @@ LossFn = Callable[[nn.Module, WindowBatch, int, dict[str, float]], dict[str, Ten
 class LossConfig:
     """Fixed weights of the Motion Cell objective (eq. 14); the scheduled ones live in the ``TrainConfig``.
 
-    The schedules the loss reads (``coeffs``): ``"beta"`` (KL weight, :class:`~motionlab.train.KLAnneal`),
+    The schedules the loss reads (``coeffs``): ``"beta"`` (lambda_KL, :class:`~motionlab.train.KLAnneal`),
     ``"classifier"`` (lambda_CL, a :class:`~motionlab.train.LinearRamp` that starts after a while) and
-    ``"word_drop"`` (probability of dropping a motion word from the recurrence input).
+    ``"word_drop"`` (probability of feeding the model's own output word instead of the real one).
 
     Attributes:
         joint_weights: ``"impact"`` (eq. 23 alpha_k) or ``"uniform"`` (all alpha_k = 1, the NL ablation).
         root_weight: weight of the squared error on the 6 standardised root channels, per frame.
         norm_weight: lambda of the quaternion-norm constraint (eq. 26).
-        feature_weight, entropy_weight: weights of the feature-matching and cross-entropy parts of the
-            classifier loss (eq. 24).
-        classifier_clips: clips sampled per step for the classifier loss, with the attributes of the first
-            ``classifier_clips`` clips of the batch (each costs a free-running rollout, forward kinematics and
-            the conv net; a small number keeps a step cheap).
+        classifier_target: ``"reconstruction"`` (eq. 24: each clip against its reconstruction) or
+            ``"samples"`` (our distribution-matching extension on prior samples).
+        feature_weight, entropy_weight: weights of the layer-distance and cross-entropy parts of the
+            classifier loss (eq. 24's beta_(c,l) are ``feature_weight`` over each layer's mean squared
+            activation on the real clips, and ``entropy_weight`` for each attribute head).
+        classifier_clips: clips of the batch the classifier loss sees (its first ``classifier_clips``; for
+            ``"samples"``, as many clips are sampled with their attributes).
         classifier_every: the classifier loss is computed every this many steps, with this factor on its
             weight (the same weight on average, at a fraction of the cost).
-        classifier_truncate: the classifier's gradient stops at the recurrent state between words (it
-            shapes each word's prior and decoder, not the earlier words; through a rollout of tens of words
-            the full gradient explodes and swamps the reconstruction).
+        classifier_truncate: (``"samples"`` only) the gradient stops at the recurrent state between words
+            (through a rollout of tens of words the full gradient explodes).
     """
 
     joint_weights: str = "impact"
     root_weight: float = 1.0
     norm_weight: float = 0.1
+    classifier_target: str = "reconstruction"
     feature_weight: float = 1.0
     entropy_weight: float = 1.0
-    classifier_clips: int = 8
-    classifier_every: int = 3
+    classifier_clips: int = 32
+    classifier_every: int = 1
     classifier_truncate: bool = True
 
     def __post_init__(self) -> None:
         check_choice(self.joint_weights, "joint_weights", "LossConfig", JOINT_WEIGHTINGS)
+        check_choice(self.classifier_target, "classifier_target", "LossConfig", CLASSIFIER_TARGETS)
         for name in ("root_weight", "norm_weight", "feature_weight", "entropy_weight"):
             check_scalar(getattr(self, name), name, "LossConfig", minimum=0.0)
         for name in ("classifier_clips", "classifier_every"):
@@ -139,15 +149,79 @@ def pose_loss(
 
 
 class ClassifierLoss(nn.Module):
-    """Eq. 24 with a frozen evaluation classifier: feature matching on its layers plus attribute
-    cross-entropy.
+    r"""Eq. 24 with a frozen classifier ``l`` (the benchmark's conv evaluator, with action and body heads):
+
+    .. math:: \mathcal L_{CL} = \sum_{l} \beta_l\, \lVert l(X) - l(\tilde X)\rVert^2
+        + \beta_{ce} \big[\mathrm{CE}(\mathrm{action}(\tilde X), a) + \mathrm{CE}(\mathrm{body}(\tilde X), b)\big]
+
+    for each ground-truth clip ``X`` and its reconstruction ``X~``: the squared l2 distance of every
+    intermediate layer's activations (mean over channels and frames, then over clips) and the cross-entropy
+    of the attribute heads on the reconstruction against the clip's labels. The layer weights ``beta_l`` are
+    fixed when the loss is built: one over the layer's mean squared activation on the real clips
+    ``positions`` (so every layer counts alike, whatever its scale; :class:`LossConfig` scales the two parts
+    by ``feature_weight`` and ``entropy_weight``).
+
+    ``forward(reconstructed, real, action, body)`` takes joint positions ``(B, T, 22, 3)`` of the
+    reconstructions (differentiable) and of the clips, with attributes ``(B,)``, and returns
+    ``(layer_distance, cross_entropy)`` (``layer_distance`` already weighted by ``beta_l``).
+    """
+
+    def __init__(self, evaluator: Evaluator, positions: Tensor, chunk: int = 128) -> None:
+        super().__init__()
+        missing = {"action", "body"} - set(evaluator.classifier.heads)
+        if missing:
+            raise ValueError(f"ClassifierLoss: the evaluator has no {sorted(missing)} head(s)")
+        self.evaluator = evaluator.eval().requires_grad_(False)
+        squares: list[Tensor] | None = None
+        with torch.no_grad():
+            for begin in range(0, positions.shape[0], chunk):
+                batch = self.activations(positions[begin : begin + chunk])
+                parts = [(a.double() ** 2).mean(dim=tuple(range(1, a.dim()))).sum() for a in batch]
+                squares = parts if squares is None else [s + p for s, p in zip(squares, parts)]
+        n_clips = positions.shape[0]
+        self.layer_weights = [float(1.0 / max(float(s) / n_clips, 1e-8)) for s in squares]
+
+    def activations(self, positions: Tensor) -> list[Tensor]:
+        """The classifier's intermediate activations for positions ``(B, T, 22, 3)``."""
+        return self.evaluator.classifier.layer_activations(self.evaluator.inputs(positions))
+
+    def forward(
+        self, reconstructed: Tensor, real: Tensor, action: Tensor, body: Tensor
+    ) -> tuple[Tensor, Tensor]:
+        if (
+            reconstructed.dim() != 4
+            or reconstructed.shape != real.shape
+            or reconstructed.shape[0] != action.shape[0]
+            or action.shape != body.shape
+        ):
+            raise ValueError(
+                f"ClassifierLoss: expected reconstructed and real (B, T, 22, 3) and attributes (B,), got "
+                f"{tuple(reconstructed.shape)}, {tuple(real.shape)}, {tuple(action.shape)} and "
+                f"{tuple(body.shape)}"
+            )
+        with torch.no_grad():
+            targets = self.activations(real)
+        outputs = self.activations(reconstructed)
+        distance = reconstructed.new_zeros(())
+        for weight, out, target in zip(self.layer_weights, outputs, targets):
+            distance = distance + weight * ((out - target) ** 2).mean()
+        heads = self.evaluator.classifier.heads
+        entropy = F.cross_entropy(heads["action"](outputs[-1]), action) + F.cross_entropy(
+            heads["body"](outputs[-1]), body
+        )
+        return distance, entropy
+
+
+class DistributionMatchingLoss(nn.Module):
+    """Our extension, *not* the paper's eq. 24: distribution matching of prior samples on the frozen
+    classifier's layers plus attribute cross-entropy.
 
     Built with the real training clips, whose mean activations per (action, body) combination it keeps:
     for every intermediate layer of the classifier, the per-channel mean over clips and frames.
     ``forward(generated, action, body)`` takes joint positions ``(B, T, 22, 3)`` of clips sampled from the
     model (differentiable) with attributes ``(B,)`` and returns ``(feature_matching, cross_entropy)``:
 
-    * feature matching (as in CVAE-GAN, which the paper follows): for every layer, the squared distance
+    * feature matching: for every layer, the squared distance
       between the mean activation of the generated clips and the mean of the real means of their
       attribute combinations, divided by the squared norm of the latter, summed over layers. It matches
       statistics, not individual clips, so samples stay free to differ;
@@ -168,7 +242,7 @@ class ClassifierLoss(nn.Module):
         super().__init__()
         missing = {"action", "body"} - set(evaluator.classifier.heads)
         if missing:
-            raise ValueError(f"ClassifierLoss: the evaluator has no {sorted(missing)} head(s)")
+            raise ValueError(f"DistributionMatchingLoss: the evaluator has no {sorted(missing)} head(s)")
         self.evaluator = evaluator.eval().requires_grad_(False)
         self.n_bodies = n_bodies
         combination = torch.as_tensor(action) * n_bodies + torch.as_tensor(body)
@@ -176,7 +250,7 @@ class ClassifierLoss(nn.Module):
         counts = torch.bincount(combination, minlength=n_combinations).double()
         if bool((counts == 0).any()):
             raise ValueError(
-                f"ClassifierLoss: the real clips miss attribute combinations "
+                f"DistributionMatchingLoss: the real clips miss attribute combinations "
                 f"{torch.nonzero(counts == 0).flatten().tolist()} (action * {n_bodies} + body)"
             )
         sums: list[Tensor] | None = None
@@ -205,7 +279,7 @@ class ClassifierLoss(nn.Module):
     def forward(self, generated: Tensor, action: Tensor, body: Tensor) -> tuple[Tensor, Tensor]:
         if generated.dim() != 4 or generated.shape[0] != action.shape[0] or action.shape != body.shape:
             raise ValueError(
-                f"ClassifierLoss: expected generated (B, T, 22, 3) and attributes (B,), got "
+                f"DistributionMatchingLoss: expected generated (B, T, 22, 3) and attributes (B,), got "
                 f"{tuple(generated.shape)}, {tuple(action.shape)} and {tuple(body.shape)}"
             )
         outputs = self.activations(generated)
@@ -221,15 +295,24 @@ class ClassifierLoss(nn.Module):
         return matching, entropy
 
 
-def motion_cell_loss(cfg: LossConfig, classifier: ClassifierLoss | None = None) -> LossFn:
+def motion_cell_loss(
+    cfg: LossConfig, classifier: ClassifierLoss | DistributionMatchingLoss | None = None
+) -> LossFn:
     """The Motion Cell objective (eq. 14) for :func:`motionlab.train.train_or_load`.
 
     Reads the schedules ``beta``, ``classifier`` (lambda_CL; the classifier runs only while it is positive,
-    and needs ``classifier``) and ``word_drop`` from ``coeffs``. The classifier term is computed every
+    and needs ``classifier``: a :class:`ClassifierLoss` for ``cfg.classifier_target == "reconstruction"``,
+    a :class:`DistributionMatchingLoss` for ``"samples"``) and ``word_drop`` from ``coeffs``. The classifier term is computed every
     ``cfg.classifier_every`` steps and weighted by that number (the same weight on average at a fraction of
     the cost; in between its terms are logged as 0). Returns the total and every term.
     """
     weights = joint_weights(cfg.joint_weights)
+    wanted = ClassifierLoss if cfg.classifier_target == "reconstruction" else DistributionMatchingLoss
+    if classifier is not None and not isinstance(classifier, wanted):
+        raise TypeError(
+            f"motion_cell_loss: classifier_target {cfg.classifier_target!r} needs a {wanted.__name__}, "
+            f"got {type(classifier).__name__}"
+        )
 
     def loss_fn(
         model: nn.Module, batch: WindowBatch, step: int, coeffs: dict[str, float]
@@ -253,10 +336,15 @@ def motion_cell_loss(cfg: LossConfig, classifier: ClassifierLoss | None = None) 
                 )
             k = min(cfg.classifier_clips, batch.poses.shape[0])
             action, body = batch.action[:k], batch.body[:k]
-            generated = codec.positions(
-                model.rollout(action, body, batch.poses.shape[1], truncate=cfg.classifier_truncate), body
-            )
-            matching, entropy = classifier(generated, action, body)
+            if isinstance(classifier, ClassifierLoss):  # eq. 24: each clip against its reconstruction
+                with torch.no_grad():
+                    real = codec.positions(batch.poses[:k], body)
+                matching, entropy = classifier(codec.positions(out.poses[:k], body), real, action, body)
+            else:
+                generated = codec.positions(
+                    model.rollout(action, body, batch.poses.shape[1], truncate=cfg.classifier_truncate), body
+                )
+                matching, entropy = classifier(generated, action, body)
         classifier_term = cfg.classifier_every * (
             cfg.feature_weight * matching + cfg.entropy_weight * entropy
         )
@@ -272,7 +360,7 @@ def motion_cell_loss(cfg: LossConfig, classifier: ClassifierLoss | None = None) 
             "rotation": rotation,
             "root": root,
             "kl": kl,
-            "feature_matching": matching,
+            "layer_distance": matching,
             "cross_entropy": entropy,
             "norm": norm,
         }
