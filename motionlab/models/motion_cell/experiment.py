@@ -67,8 +67,8 @@ class ExperimentConfig:
         denoiser_steps, denoiser_batch, denoiser_lr: the denoiser's training (windows of ``window`` frames);
             denoiser_copies: noisy copies of the validation split it sees.
         beta: lambda_KL after annealing (the paper: 1); classifier: lambda_CL after its ramp; word_drop:
-            final rate of scheduled motion-word dropping; input_noise: ERD's final input noise (std, in pose-vector units); sampling: QuaterNet's
-            final scheduled-sampling probability.
+            final rate of scheduled motion-word dropping; input_noise: ERD's final input noise (std, in
+            pose-vector units); sampling: QuaterNet's final scheduled-sampling probability.
         n_per_combination, n_repeats: evaluation sample sets (per action x body) and their number.
     """
 

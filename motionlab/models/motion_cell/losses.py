@@ -152,7 +152,8 @@ class ClassifierLoss(nn.Module):
     r"""Eq. 24 with a frozen classifier ``l`` (the benchmark's conv evaluator, with action and body heads):
 
     .. math:: \mathcal L_{CL} = \sum_{l} \beta_l\, \lVert l(X) - l(\tilde X)\rVert^2
-        + \beta_{ce} \big[\mathrm{CE}(\mathrm{action}(\tilde X), a) + \mathrm{CE}(\mathrm{body}(\tilde X), b)\big]
+        + \beta_{ce} \big[\mathrm{CE}(\mathrm{action}(\tilde X), a)
+        + \mathrm{CE}(\mathrm{body}(\tilde X), b)\big]
 
     for each ground-truth clip ``X`` and its reconstruction ``X~``: the squared l2 distance of every
     intermediate layer's activations (mean over channels and frames, then over clips) and the cross-entropy
@@ -302,9 +303,9 @@ def motion_cell_loss(
 
     Reads the schedules ``beta``, ``classifier`` (lambda_CL; the classifier runs only while it is positive,
     and needs ``classifier``: a :class:`ClassifierLoss` for ``cfg.classifier_target == "reconstruction"``,
-    a :class:`DistributionMatchingLoss` for ``"samples"``) and ``word_drop`` from ``coeffs``. The classifier term is computed every
-    ``cfg.classifier_every`` steps and weighted by that number (the same weight on average at a fraction of
-    the cost; in between its terms are logged as 0). Returns the total and every term.
+    a :class:`DistributionMatchingLoss` for ``"samples"``) and ``word_drop`` from ``coeffs``. The classifier
+    term is computed every ``cfg.classifier_every`` steps and weighted by that number (the same weight on
+    average at a fraction of the cost; in between its terms are logged as 0). Returns the total and every term.
     """
     weights = joint_weights(cfg.joint_weights)
     wanted = ClassifierLoss if cfg.classifier_target == "reconstruction" else DistributionMatchingLoss
