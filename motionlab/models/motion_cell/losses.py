@@ -305,7 +305,8 @@ def motion_cell_loss(
     and needs ``classifier``: a :class:`ClassifierLoss` for ``cfg.classifier_target == "reconstruction"``,
     a :class:`DistributionMatchingLoss` for ``"samples"``) and ``word_drop`` from ``coeffs``. The classifier
     term is computed every ``cfg.classifier_every`` steps and weighted by that number (the same weight on
-    average at a fraction of the cost; in between its terms are logged as 0). Returns the total and every term.
+    average at a fraction of the cost; in between its terms are logged as 0).
+    Returns the total and every term.
     """
     weights = joint_weights(cfg.joint_weights)
     wanted = ClassifierLoss if cfg.classifier_target == "reconstruction" else DistributionMatchingLoss
