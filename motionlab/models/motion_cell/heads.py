@@ -5,7 +5,8 @@ matrices comparable, both better than axis-angle): quaternions divided by their 
 (9 numbers, made orthonormal by Gram–Schmidt) and axis-angle vectors (3 numbers, not normalised). Each
 head reads ``params_per_joint`` raw numbers per joint and returns unit quaternions ``(..., 4)``, so every
 loss and every downstream step stays the same. Raw outputs are offsets from the identity rotation (a raw
-output of zero means "no rotation"), so a freshly initialised decoder starts near the rest pose for every head.
+output of zero means "no rotation"), so a freshly initialised decoder starts near the rest pose
+for every head.
 """
 
 from __future__ import annotations
