@@ -10,7 +10,6 @@ from motionlab.evaluation import EVAL_FEATURES, body_frame_features
 from motionlab.models.motion_cell.heads import OutputHead
 from motionlab.models.motion_cell.losses import (
     ClassifierLoss,
-    DistributionMatchingLoss,
     LossConfig,
     joint_weights,
     kl_loss,
@@ -118,10 +117,6 @@ def _real_set():
     return _clip_positions(5, n=24), action, body
 
 
-def _mean_activations(loss, positions):
-    return [a.mean(dim=2) if a.dim() == 3 else a for a in loss.activations(positions)]
-
-
 def test_classifier_loss_is_eq24_layer_distances_plus_cross_entropy_by_hand():
     positions, action, body = _real_set()
     evaluator = _TinyEvaluator()
@@ -162,57 +157,6 @@ def test_classifier_loss_gradient_reaches_the_reconstruction_but_not_the_classif
     assert all(p.grad is None for p in evaluator.parameters())
 
 
-def test_distribution_matching_loss_targets_are_the_real_means_per_attribute_combination():
-    positions, action, body = _real_set()
-    loss = DistributionMatchingLoss(_TinyEvaluator(), positions, action, body, chunk=7)
-    per_clip = _mean_activations(loss, positions)
-    for layer, target in zip(per_clip, loss.targets):
-        assert target.shape == (12, layer.shape[-1])
-        for combination in range(12):
-            members = (action * 2 + body) == combination
-            torch.testing.assert_close(target[combination], layer[members].mean(0), atol=1e-5, rtol=1e-5)
-    with pytest.raises(ValueError, match="miss attribute combinations"):
-        DistributionMatchingLoss(_TinyEvaluator(), positions[:4], action[:4], body[:4])
-
-
-def test_distribution_matching_loss_feature_matching_and_cross_entropy_by_hand():
-    positions, action, body = _real_set()
-    evaluator = _TinyEvaluator()
-    loss = DistributionMatchingLoss(evaluator, positions, action, body)
-    same = positions[::4]  # one clip per action (body 0): the real means of their combinations are not theirs
-    gen_action, gen_body = action[::4], body[::4]
-    matching, entropy = loss(same, gen_action, gen_body)
-    by_hand = 0.0
-    for generated, target in zip(_mean_activations(loss, same), loss.targets):
-        wanted = target[gen_action * 2 + gen_body].mean(0)
-        by_hand += float(((generated.mean(0) - wanted) ** 2).sum() / (wanted**2).sum())
-    assert float(matching) == pytest.approx(by_hand, rel=1e-5)
-    # statistics, not pairs: shuffling the generated clips together with their attributes changes nothing
-    order = torch.tensor([3, 0, 5, 1, 4, 2])
-    assert float(loss(same[order], gen_action[order], gen_body[order])[0]) == pytest.approx(by_hand, rel=1e-5)
-    features = evaluator.classifier.features(evaluator.inputs(same))
-    heads = evaluator.classifier.heads
-    expected = F.cross_entropy(heads["action"](features), gen_action) + F.cross_entropy(
-        heads["body"](features), gen_body
-    )
-    assert float(entropy) == pytest.approx(float(expected), rel=1e-6)
-    # generating exactly the real set (every combination equally often) matches the targets' mean
-    assert float(loss(positions, action, body)[0]) == pytest.approx(0.0, abs=1e-8)
-
-
-def test_distribution_matching_loss_gradient_reaches_the_positions_but_not_the_classifier():
-    positions, action, body = _real_set()
-    evaluator = _TinyEvaluator()
-    loss = DistributionMatchingLoss(evaluator, positions, action, body)
-    generated = _clip_positions(1).requires_grad_(True)
-    matching, entropy = loss(generated, torch.tensor([1, 4]), torch.tensor([0, 1]))
-    (matching + entropy).backward()
-    assert (
-        generated.grad is not None and torch.isfinite(generated.grad).all() and generated.grad.abs().sum() > 0
-    )
-    assert all(p.grad is None for p in evaluator.parameters())
-
-
 def test_motion_cell_loss_needs_a_classifier_when_its_weight_is_positive(tiny_model, tiny_batch):
     loss_fn = motion_cell_loss(LossConfig())
     terms = loss_fn(tiny_model, tiny_batch, 0, {"beta": 0.5, "word_drop": 0.2})
@@ -243,15 +187,3 @@ def test_motion_cell_loss_with_the_classifier_adds_its_terms_every_second_step(t
     assert float(terms["loss"].detach()) == pytest.approx(float(expected.detach()), rel=1e-6)
     terms["loss"].backward()
     assert all(torch.isfinite(p.grad).all() for p in tiny_model.parameters() if p.grad is not None)
-
-
-def test_motion_cell_loss_distribution_matching_extension_and_type_check(tiny_model, tiny_batch):
-    positions, action, body = _real_set()
-    matching = DistributionMatchingLoss(_TinyEvaluator(), positions, action, body)
-    loss_fn = motion_cell_loss(LossConfig(classifier_target="samples", classifier_clips=2), matching)
-    terms = loss_fn(tiny_model, tiny_batch, 0, {"beta": 1.0, "classifier": 1.0})
-    assert float(terms["layer_distance"].detach()) > 0 and float(terms["cross_entropy"].detach()) > 0
-    with pytest.raises(TypeError, match="ClassifierLoss"):
-        motion_cell_loss(LossConfig(), matching)
-    with pytest.raises(TypeError, match="DistributionMatchingLoss"):
-        motion_cell_loss(LossConfig(classifier_target="samples"), ClassifierLoss(_TinyEvaluator(), positions))

@@ -16,12 +16,7 @@ from motionlab.models.motion_cell.baselines import BaselineConfig, FrameBaseline
 from motionlab.models.motion_cell.data import PoseCodec, WindowBatches, motion_cell_features
 from motionlab.models.motion_cell.denoise import DenoiserConfig, DenoisingAutoencoder, noisy_features
 from motionlab.models.motion_cell.experiment import ExperimentConfig, MotionCellRun, runs, train_all
-from motionlab.models.motion_cell.losses import (
-    ClassifierLoss,
-    DistributionMatchingLoss,
-    LossConfig,
-    motion_cell_loss,
-)
+from motionlab.models.motion_cell.losses import ClassifierLoss, LossConfig, motion_cell_loss
 from motionlab.models.motion_cell.model import MotionCellConfig, MotionCellModel
 
 __all__ = [
@@ -29,7 +24,6 @@ __all__ = [
     "ClassifierLoss",
     "DenoiserConfig",
     "DenoisingAutoencoder",
-    "DistributionMatchingLoss",
     "ExperimentConfig",
     "FrameBaseline",
     "LossConfig",

@@ -30,12 +30,7 @@ from motionlab.models.motion_cell.data import PoseCodec
 from motionlab.models.motion_cell.denoise import DenoiserConfig, PreparedData
 from motionlab.models.motion_cell.evaluate import ModelEvaluation, evaluate_model
 from motionlab.models.motion_cell.heads import OUTPUT_KINDS
-from motionlab.models.motion_cell.losses import (
-    ClassifierLoss,
-    DistributionMatchingLoss,
-    LossConfig,
-    motion_cell_loss,
-)
+from motionlab.models.motion_cell.losses import ClassifierLoss, LossConfig, motion_cell_loss
 from motionlab.models.motion_cell.model import MotionCellConfig, MotionCellModel
 from motionlab.train import KLAnneal, LinearRamp, TrainConfig, TrainResult, build_seeded, train_or_load
 from motionlab.train import is_cached as cache_entry_exists
@@ -224,21 +219,13 @@ class MotionCellRun:
         model_config, train_config, data_config = self._cache_key()
         return cache_entry_exists(self.name, model_config, train_config, data_config)
 
-    def _classifier_loss(self) -> ClassifierLoss | DistributionMatchingLoss:
-        """Eq. 24's loss (or the distribution-matching extension) with the benchmark's frozen conv evaluator,
-        its layer weights (or targets) taken from the (denoised) training clips."""
+    def _classifier_loss(self) -> ClassifierLoss:
+        """Eq. 24's loss with the benchmark's frozen conv evaluator, its layer weights taken from the
+        (denoised) training clips."""
         batches, codec = self.data.batches, self.data.codec
         with torch.no_grad():
             positions = codec.positions(batches.poses, batches.body)
-        if self.loss.classifier_target == "reconstruction":
-            return ClassifierLoss(benchmark_evaluator("conv", progress=False), positions)
-        return DistributionMatchingLoss(
-            benchmark_evaluator("conv", progress=False),
-            positions,
-            batches.action,
-            batches.body,
-            int(codec.offsets.shape[0]),
-        )
+        return ClassifierLoss(benchmark_evaluator("conv", progress=False), positions)
 
     def train(self, progress: bool | None = None) -> tuple[nn.Module, TrainResult]:
         """Train the model (or load it from the checkpoint cache).

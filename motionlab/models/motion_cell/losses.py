@@ -12,9 +12,7 @@ Per frame, for predicted pose vectors against the data (all terms are means over
 * classifier loss (eq. 24): for each training clip ``X`` and its reconstruction ``X~``, the squared l2
   distance between the frozen conv classifier's activations of the two on every intermediate layer
   (each layer with a fixed weight ``beta_l``), plus the cross-entropy of its action and body heads on
-  ``X~`` against the clip's attribute labels (:class:`ClassifierLoss`). An extension of ours, not the
-  paper's, matches per-attribute *mean* activations of clips sampled from the prior instead
-  (:class:`DistributionMatchingLoss`, ``LossConfig(classifier_target="samples")``);
+  ``X~`` against the clip's attribute labels (:class:`ClassifierLoss`);
 * quaternion-norm constraint (eq. 26 as printed, :math:`\sum_k (\lVert q_k\rVert^2 - 1)`, can be negative
   and is unbounded below; we penalise :math:`(\lVert q\rVert - 1)^2` of the raw quaternion outputs).
 """
@@ -39,9 +37,6 @@ from motionlab.validation import check_choice, check_scalar
 
 #: Joint weights of the reconstruction loss: eq. 23's impact weights, or all ones (the NL ablation).
 JOINT_WEIGHTINGS = ("impact", "uniform")
-#: What the classifier loss compares: each clip with its reconstruction (eq. 24, the paper) or the mean
-#: activations of prior samples with real clips' (our distribution-matching extension).
-CLASSIFIER_TARGETS = ("reconstruction", "samples")
 
 LossFn = Callable[[nn.Module, WindowBatch, int, dict[str, float]], dict[str, Tensor]]
 
@@ -58,33 +53,25 @@ class LossConfig:
         joint_weights: ``"impact"`` (eq. 23 alpha_k) or ``"uniform"`` (all alpha_k = 1, the NL ablation).
         root_weight: weight of the squared error on the 6 standardised root channels, per frame.
         norm_weight: lambda of the quaternion-norm constraint (eq. 26).
-        classifier_target: ``"reconstruction"`` (eq. 24: each clip against its reconstruction) or
-            ``"samples"`` (our distribution-matching extension on prior samples).
         feature_weight, entropy_weight: weights of the layer-distance and cross-entropy parts of the
             classifier loss (eq. 24's beta_(c,l) are ``feature_weight`` over each layer's mean squared
             activation on the real clips, and ``entropy_weight`` for each attribute head).
-        classifier_clips: clips of the batch the classifier loss sees (its first ``classifier_clips``; for
-            ``"samples"``, as many clips are sampled with their attributes).
+        classifier_clips: clips of the batch the classifier loss sees (its first ``classifier_clips``).
         classifier_every: the classifier loss is computed every this many steps, with this factor on its
             weight (the same weight on average, at a fraction of the cost: on every step and the whole batch
             of 32, eq. 24 made the full-profile Motion Cell train about 1.8 times as long as NC).
-        classifier_truncate: (``"samples"`` only) the gradient stops at the recurrent state between words
-            (through a rollout of tens of words the full gradient explodes).
     """
 
     joint_weights: str = "impact"
     root_weight: float = 1.0
     norm_weight: float = 0.1
-    classifier_target: str = "reconstruction"
     feature_weight: float = 1.0
     entropy_weight: float = 1.0
     classifier_clips: int = 16
     classifier_every: int = 2
-    classifier_truncate: bool = True
 
     def __post_init__(self) -> None:
         check_choice(self.joint_weights, "joint_weights", "LossConfig", JOINT_WEIGHTINGS)
-        check_choice(self.classifier_target, "classifier_target", "LossConfig", CLASSIFIER_TARGETS)
         for name in ("root_weight", "norm_weight", "feature_weight", "entropy_weight"):
             check_scalar(getattr(self, name), name, "LossConfig", minimum=0.0)
         for name in ("classifier_clips", "classifier_every"):
@@ -214,108 +201,16 @@ class ClassifierLoss(nn.Module):
         return distance, entropy
 
 
-class DistributionMatchingLoss(nn.Module):
-    """Our extension, *not* the paper's eq. 24: distribution matching of prior samples on the frozen
-    classifier's layers plus attribute cross-entropy.
-
-    Built with the real training clips, whose mean activations per (action, body) combination it keeps:
-    for every intermediate layer of the classifier, the per-channel mean over clips and frames.
-    ``forward(generated, action, body)`` takes joint positions ``(B, T, 22, 3)`` of clips sampled from the
-    model (differentiable) with attributes ``(B,)`` and returns ``(feature_matching, cross_entropy)``:
-
-    * feature matching: for every layer, the squared distance
-      between the mean activation of the generated clips and the mean of the real means of their
-      attribute combinations, divided by the squared norm of the latter, summed over layers. It matches
-      statistics, not individual clips, so samples stay free to differ;
-    * the cross-entropy of the classifier's ``action`` and ``body`` heads on the generated clips.
-    """
-
-    targets: list[Tensor]
-
-    def __init__(
-        self,
-        evaluator: Evaluator,
-        positions: Tensor,
-        action: Tensor,
-        body: Tensor,
-        n_bodies: int = 2,
-        chunk: int = 128,
-    ) -> None:
-        super().__init__()
-        missing = {"action", "body"} - set(evaluator.classifier.heads)
-        if missing:
-            raise ValueError(f"DistributionMatchingLoss: the evaluator has no {sorted(missing)} head(s)")
-        self.evaluator = evaluator.eval().requires_grad_(False)
-        self.n_bodies = n_bodies
-        combination = torch.as_tensor(action) * n_bodies + torch.as_tensor(body)
-        n_combinations = int(self.evaluator.classifier.heads["action"].out_features) * n_bodies
-        counts = torch.bincount(combination, minlength=n_combinations).double()
-        if bool((counts == 0).any()):
-            raise ValueError(
-                f"DistributionMatchingLoss: the real clips miss attribute combinations "
-                f"{torch.nonzero(counts == 0).flatten().tolist()} (action * {n_bodies} + body)"
-            )
-        sums: list[Tensor] | None = None
-        with torch.no_grad():
-            for begin in range(0, positions.shape[0], chunk):
-                clip_means = self.clip_means(self.activations(positions[begin : begin + chunk]))
-                index = combination[begin : begin + chunk]
-                parts = [
-                    torch.zeros(n_combinations, m.shape[-1], dtype=torch.float64).index_add_(
-                        0, index, m.double()
-                    )
-                    for m in clip_means
-                ]
-                sums = parts if sums is None else [s + p for s, p in zip(sums, parts)]
-        self.targets = [(s / counts[:, None]).float() for s in sums]
-
-    def activations(self, positions: Tensor) -> list[Tensor]:
-        """The classifier's intermediate activations for positions ``(B, T, 22, 3)``."""
-        return self.evaluator.classifier.layer_activations(self.evaluator.inputs(positions))
-
-    @staticmethod
-    def clip_means(activations: list[Tensor]) -> list[Tensor]:
-        """Per-clip channel means: ``(B, C, T)`` layers averaged over frames, ``(B, C)`` ones as they are."""
-        return [a.mean(dim=2) if a.dim() == 3 else a for a in activations]
-
-    def forward(self, generated: Tensor, action: Tensor, body: Tensor) -> tuple[Tensor, Tensor]:
-        if generated.dim() != 4 or generated.shape[0] != action.shape[0] or action.shape != body.shape:
-            raise ValueError(
-                f"DistributionMatchingLoss: expected generated (B, T, 22, 3) and attributes (B,), got "
-                f"{tuple(generated.shape)}, {tuple(action.shape)} and {tuple(body.shape)}"
-            )
-        outputs = self.activations(generated)
-        combination = action * self.n_bodies + body
-        matching = generated.new_zeros(())
-        for mean, target in zip(self.clip_means(outputs), self.targets):
-            wanted = target[combination].mean(0)
-            matching = matching + ((mean.mean(0) - wanted) ** 2).sum() / (wanted**2).sum().clamp(min=1e-8)
-        heads = self.evaluator.classifier.heads
-        entropy = F.cross_entropy(heads["action"](outputs[-1]), action) + F.cross_entropy(
-            heads["body"](outputs[-1]), body
-        )
-        return matching, entropy
-
-
-def motion_cell_loss(
-    cfg: LossConfig, classifier: ClassifierLoss | DistributionMatchingLoss | None = None
-) -> LossFn:
+def motion_cell_loss(cfg: LossConfig, classifier: ClassifierLoss | None = None) -> LossFn:
     """The Motion Cell objective (eq. 14) for :func:`motionlab.train.train_or_load`.
 
     Reads the schedules ``beta``, ``classifier`` (lambda_CL; the classifier runs only while it is positive,
-    and needs ``classifier``: a :class:`ClassifierLoss` for ``cfg.classifier_target == "reconstruction"``,
-    a :class:`DistributionMatchingLoss` for ``"samples"``) and ``word_drop`` from ``coeffs``. The classifier
+    and needs ``classifier``, a :class:`ClassifierLoss`) and ``word_drop`` from ``coeffs``. The classifier
     term is computed every ``cfg.classifier_every`` steps and weighted by that number (the same weight on
     average at a fraction of the cost; in between its terms are logged as 0).
     Returns the total and every term.
     """
     weights = joint_weights(cfg.joint_weights)
-    wanted = ClassifierLoss if cfg.classifier_target == "reconstruction" else DistributionMatchingLoss
-    if classifier is not None and not isinstance(classifier, wanted):
-        raise TypeError(
-            f"motion_cell_loss: classifier_target {cfg.classifier_target!r} needs a {wanted.__name__}, "
-            f"got {type(classifier).__name__}"
-        )
 
     def loss_fn(
         model: nn.Module, batch: WindowBatch, step: int, coeffs: dict[str, float]
@@ -339,15 +234,9 @@ def motion_cell_loss(
                 )
             k = min(cfg.classifier_clips, batch.poses.shape[0])
             action, body = batch.action[:k], batch.body[:k]
-            if isinstance(classifier, ClassifierLoss):  # eq. 24: each clip against its reconstruction
-                with torch.no_grad():
-                    real = codec.positions(batch.poses[:k], body)
-                matching, entropy = classifier(codec.positions(out.poses[:k], body), real, action, body)
-            else:
-                generated = codec.positions(
-                    model.rollout(action, body, batch.poses.shape[1], truncate=cfg.classifier_truncate), body
-                )
-                matching, entropy = classifier(generated, action, body)
+            with torch.no_grad():  # eq. 24: each clip against its reconstruction
+                real = codec.positions(batch.poses[:k], body)
+            matching, entropy = classifier(codec.positions(out.poses[:k], body), real, action, body)
         classifier_term = cfg.classifier_every * (
             cfg.feature_weight * matching + cfg.entropy_weight * entropy
         )
