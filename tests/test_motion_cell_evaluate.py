@@ -93,8 +93,10 @@ def test_evaluate_model_gives_a_reproducible_table_row():
     perturb(model.word_decoder.net[-1].weight, 0.05)
     first = E.evaluate_model(model, evaluator, reference, n_per_combination=1, n_repeats=2, seed=3)
     second = E.evaluate_model(model, evaluator, reference, n_per_combination=1, n_repeats=2, seed=3)
-    assert set(first.row) == {"accuracy", "fid", "diversity", "multimodality", "is"}
+    assert set(first.row) == {"accuracy", "fid", "diversity", "multimodality", "is", "is_action"}
     assert first.row == second.row
+    assert set(first.values) == set(first.row) and all(len(v) == 2 for v in first.values.values())
+    assert first.row["fid"][0] == pytest.approx(np.mean(first.values["fid"]))
     assert torch.equal(first.samples.positions, second.samples.positions)
     assert all(np.isfinite(mean) and half >= 0 for mean, half in first.row.values())
     with pytest.raises(ValueError, match="n_repeats"):
@@ -148,3 +150,58 @@ def test_speed_curve_averages_the_non_periodic_samples_and_real_level_matches():
         E.speed_curve(
             E.SampleSet(samples.positions[walks], samples.action[walks], samples.body[walks]), names
         )
+
+
+def test_joint_attribute_probs_is_the_product_of_the_two_classifiers():
+    action = torch.tensor([[0.5, 0.5, 0.0], [0.0, 0.0, 1.0]], dtype=torch.float64)
+    body = torch.tensor([[0.25, 0.75], [1.0, 0.0]], dtype=torch.float64)
+    joint = E.joint_attribute_probs(action, body)
+    expected = torch.tensor(
+        [[0.125, 0.375, 0.125, 0.375, 0.0, 0.0], [0.0, 0.0, 0.0, 0.0, 1.0, 0.0]], dtype=torch.float64
+    )
+    torch.testing.assert_close(joint, expected)  # index action * 2 + body
+    with pytest.raises(ValueError, match="joint_attribute_probs"):
+        E.joint_attribute_probs(action, body[:1])
+
+
+def test_attribute_is_of_confident_clips_reaches_the_number_of_combinations():
+    """The paper's IS over attributes: confident, balanced over all 6 x 2 combinations -> 12; the action-only
+    IS of the same clips is 6."""
+    from motionlab.metrics import inception_score
+
+    combination = torch.arange(12)
+    action = torch.nn.functional.one_hot(combination // 2, 6).double()
+    body = torch.nn.functional.one_hot(combination % 2, 2).double()
+    assert inception_score(E.joint_attribute_probs(action, body)) == pytest.approx(12.0)
+    assert inception_score(action) == pytest.approx(6.0)
+
+
+def test_attribute_metrics_one_pass_matches_the_evaluator():
+    evaluator = _untrained_evaluator()
+    data = clips()
+    reference = evaluator.features(data.positions)
+    row = E.attribute_metrics(evaluator, data.positions, data.action, reference, np.random.default_rng(0))
+    from motionlab.metrics import inception_score
+
+    joint = E.joint_attribute_probs(
+        evaluator.probs(data.positions, "action"), evaluator.probs(data.positions, "body")
+    )
+    assert row["is"] == pytest.approx(inception_score(joint), rel=1e-9)
+    assert row["is_action"] == pytest.approx(
+        inception_score(evaluator.probs(data.positions, "action")), rel=1e-9
+    )
+
+
+def test_difference_interval_is_welchs():
+    from scipy import stats
+
+    a, b = [1.0, 1.2, 0.9, 1.1, 1.05], [1.5, 1.7, 1.4, 1.9]
+    diff, lower, upper = E.difference_interval(a, b)
+    assert diff == pytest.approx(np.mean(a) - np.mean(b))
+    result = stats.ttest_ind(a, b, equal_var=False)
+    ci = result.confidence_interval(0.95)
+    assert (lower, upper) == (pytest.approx(ci.low), pytest.approx(ci.high))
+    assert upper < 0
+    assert E.difference_interval([1.0, 1.0], [1.0, 1.0]) == (0.0, 0.0, 0.0)
+    with pytest.raises(ValueError, match="difference_interval"):
+        E.difference_interval([1.0], [1.0, 2.0])

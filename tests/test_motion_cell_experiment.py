@@ -98,11 +98,11 @@ def test_learning_rate_decay_and_motion_cell_schedules():
     decay = learning_rate_decay(100)
     assert decay(0) == 1.0 and decay(60) == 1.0 and decay(100) == pytest.approx(0.1)
     assert decay(80) == pytest.approx(0.55)
-    schedules = motion_cell_schedules(100, beta=0.2, classifier=1.0, word_drop=0.5)
+    schedules = motion_cell_schedules(100, beta=1.0, classifier=1.0, word_drop=0.5)
     beta, classifier, word_drop = schedules["beta"], schedules["classifier"], schedules["word_drop"]
-    assert (
-        beta(5) == 0 and beta(40) == pytest.approx(0.2) and beta(100) == pytest.approx(0.1)
-    )  # warm-up, hold, cool-down
+    # §3.5.1: warm-up at 0, annealing 0 -> 1, cool-down at lambda_KL = 1 until the end
+    assert beta(5) == 0 and beta(10) == 0 and beta(40) == pytest.approx(0.5)
+    assert beta(70) == pytest.approx(1.0) and beta(100) == pytest.approx(1.0)
     assert classifier(29) == 0 and classifier(50) == pytest.approx(1.0)
     assert word_drop(10) == 0 and word_drop(60) == pytest.approx(0.5)
     with pytest.raises(ValueError, match="steps"):

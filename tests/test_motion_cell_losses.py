@@ -117,65 +117,50 @@ def _real_set():
     return _clip_positions(5, n=24), action, body
 
 
-def _mean_activations(loss, positions):
-    return [a.mean(dim=2) if a.dim() == 3 else a for a in loss.activations(positions)]
-
-
-def test_classifier_loss_targets_are_the_real_means_per_attribute_combination():
-    positions, action, body = _real_set()
-    loss = ClassifierLoss(_TinyEvaluator(), positions, action, body, chunk=7)
-    per_clip = _mean_activations(loss, positions)
-    for layer, target in zip(per_clip, loss.targets):
-        assert target.shape == (12, layer.shape[-1])
-        for combination in range(12):
-            members = (action * 2 + body) == combination
-            torch.testing.assert_close(target[combination], layer[members].mean(0), atol=1e-5, rtol=1e-5)
-    with pytest.raises(ValueError, match="miss attribute combinations"):
-        ClassifierLoss(_TinyEvaluator(), positions[:4], action[:4], body[:4])
-
-
-def test_classifier_loss_feature_matching_and_cross_entropy_by_hand():
+def test_classifier_loss_is_eq24_layer_distances_plus_cross_entropy_by_hand():
     positions, action, body = _real_set()
     evaluator = _TinyEvaluator()
-    loss = ClassifierLoss(evaluator, positions, action, body)
-    same = positions[::4]  # one clip per action (body 0): the real means of their combinations are not theirs
-    gen_action, gen_body = action[::4], body[::4]
-    matching, entropy = loss(same, gen_action, gen_body)
-    by_hand = 0.0
-    for generated, target in zip(_mean_activations(loss, same), loss.targets):
-        wanted = target[gen_action * 2 + gen_body].mean(0)
-        by_hand += float(((generated.mean(0) - wanted) ** 2).sum() / (wanted**2).sum())
-    assert float(matching) == pytest.approx(by_hand, rel=1e-5)
-    # statistics, not pairs: shuffling the generated clips together with their attributes changes nothing
-    order = torch.tensor([3, 0, 5, 1, 4, 2])
-    assert float(loss(same[order], gen_action[order], gen_body[order])[0]) == pytest.approx(by_hand, rel=1e-5)
-    features = evaluator.classifier.features(evaluator.inputs(same))
+    loss = ClassifierLoss(evaluator, positions, chunk=7)
+    # beta_l: one over each layer's mean squared activation on the real clips
+    acts = loss.activations(positions)
+    assert len(loss.layer_weights) == len(acts)
+    for weight, a in zip(loss.layer_weights, acts):
+        assert weight == pytest.approx(1.0 / float((a.double() ** 2).mean()), rel=1e-5)
+    real, recon = positions[:6], _clip_positions(3, n=6)
+    distance, entropy = loss(recon, real, action[:6], body[:6])
+    by_hand = sum(
+        w * float(((r - t) ** 2).mean())
+        for w, r, t in zip(loss.layer_weights, loss.activations(recon), loss.activations(real))
+    )
+    assert float(distance) == pytest.approx(by_hand, rel=1e-5)
+    features = evaluator.classifier.features(evaluator.inputs(recon))
     heads = evaluator.classifier.heads
-    expected = F.cross_entropy(heads["action"](features), gen_action) + F.cross_entropy(
-        heads["body"](features), gen_body
+    expected = F.cross_entropy(heads["action"](features), action[:6]) + F.cross_entropy(
+        heads["body"](features), body[:6]
     )
     assert float(entropy) == pytest.approx(float(expected), rel=1e-6)
-    # generating exactly the real set (every combination equally often) matches the targets' mean
-    assert float(loss(positions, action, body)[0]) == pytest.approx(0.0, abs=1e-8)
+    # pairs, not statistics: a perfect reconstruction costs nothing, a shuffled one does
+    assert float(loss(real, real, action[:6], body[:6])[0]) == pytest.approx(0.0, abs=1e-10)
+    assert float(loss(real[torch.tensor([1, 0, 2, 3, 4, 5])], real, action[:6], body[:6])[0]) > 0
+    with pytest.raises(ValueError, match="expected reconstructed and real"):
+        loss(recon[:5], real, action[:6], body[:6])
 
 
-def test_classifier_loss_gradient_reaches_the_positions_but_not_the_classifier():
-    positions, action, body = _real_set()
+def test_classifier_loss_gradient_reaches_the_reconstruction_but_not_the_classifier():
+    positions, _, _ = _real_set()
     evaluator = _TinyEvaluator()
-    loss = ClassifierLoss(evaluator, positions, action, body)
-    generated = _clip_positions(1).requires_grad_(True)
-    matching, entropy = loss(generated, torch.tensor([1, 4]), torch.tensor([0, 1]))
-    (matching + entropy).backward()
-    assert (
-        generated.grad is not None and torch.isfinite(generated.grad).all() and generated.grad.abs().sum() > 0
-    )
+    loss = ClassifierLoss(evaluator, positions)
+    recon = _clip_positions(1).requires_grad_(True)
+    distance, entropy = loss(recon, _clip_positions(2), torch.tensor([1, 4]), torch.tensor([0, 1]))
+    (distance + entropy).backward()
+    assert recon.grad is not None and torch.isfinite(recon.grad).all() and recon.grad.abs().sum() > 0
     assert all(p.grad is None for p in evaluator.parameters())
 
 
 def test_motion_cell_loss_needs_a_classifier_when_its_weight_is_positive(tiny_model, tiny_batch):
     loss_fn = motion_cell_loss(LossConfig())
     terms = loss_fn(tiny_model, tiny_batch, 0, {"beta": 0.5, "word_drop": 0.2})
-    assert set(terms) == {"loss", "rotation", "root", "kl", "feature_matching", "cross_entropy", "norm"}
+    assert set(terms) == {"loss", "rotation", "root", "kl", "layer_distance", "cross_entropy", "norm"}
     expected = terms["rotation"] + terms["root"] + 0.5 * terms["kl"] + 0.1 * terms["norm"]
     assert float(terms["loss"].detach()) == pytest.approx(float(expected.detach()), rel=1e-6)
     with pytest.raises(ValueError, match="ClassifierLoss"):
@@ -186,17 +171,17 @@ def test_motion_cell_loss_with_the_classifier_adds_its_terms_every_second_step(t
     positions, action, body = _real_set()
     loss_fn = motion_cell_loss(
         LossConfig(classifier_clips=2, classifier_every=2),
-        ClassifierLoss(_TinyEvaluator(), positions, action, body),
+        ClassifierLoss(_TinyEvaluator(), positions),
     )
     skipped = loss_fn(tiny_model, tiny_batch, 1, {"beta": 1.0, "classifier": 0.5})
-    assert float(skipped["cross_entropy"].detach()) == 0 and float(skipped["feature_matching"].detach()) == 0
+    assert float(skipped["cross_entropy"].detach()) == 0 and float(skipped["layer_distance"].detach()) == 0
     terms = loss_fn(tiny_model, tiny_batch, 2, {"beta": 1.0, "classifier": 0.5})
-    assert float(terms["cross_entropy"].detach()) > 0 and float(terms["feature_matching"].detach()) > 0
+    assert float(terms["cross_entropy"].detach()) > 0 and float(terms["layer_distance"].detach()) > 0
     expected = (
         terms["rotation"]
         + terms["root"]
         + terms["kl"]
-        + 2 * 0.5 * (terms["feature_matching"] + terms["cross_entropy"])
+        + 2 * 0.5 * (terms["layer_distance"] + terms["cross_entropy"])
         + 0.1 * terms["norm"]
     )
     assert float(terms["loss"].detach()) == pytest.approx(float(expected.detach()), rel=1e-6)

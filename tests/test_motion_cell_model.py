@@ -43,18 +43,45 @@ def test_the_posterior_sees_the_words_and_the_prior_does_not(tiny_model, tiny_ba
     assert not torch.allclose(a.prior_mu[:, 2], b.prior_mu[:, 2])
 
 
-def test_dropping_every_word_cuts_the_words_out_of_the_recurrence(tiny_model, tiny_batch):
-    g = lambda: torch.Generator().manual_seed(5)  # noqa: E731
-    a = tiny_model(tiny_batch.poses, tiny_batch.action, tiny_batch.body, word_drop=1.0, generator=g())
-    changed = tiny_batch.poses.clone()
-    changed[:, :3] += (
-        0.5  # change only word 1: with all words dropped, the prior of word 2 does not see it ...
-    )
-    b = tiny_model(changed, tiny_batch.action, tiny_batch.body, word_drop=1.0, generator=g())
-    assert not torch.allclose(a.posterior_mu[:, 0], b.posterior_mu[:, 0])
-    # ... except through the latent z_1 drawn from the (changed) posterior
-    c = tiny_model(tiny_batch.poses, tiny_batch.action, tiny_batch.body, word_drop=0.0, generator=g())
-    assert not torch.allclose(a.prior_mu[:, 1], c.prior_mu[:, 1])
+def test_dropped_words_are_replaced_by_the_models_own_output(tiny_model, tiny_batch):
+    """Scheduled sampling (§4.2): with word_drop = 1 the transition reads f_w(f_enc^w(w~_t)), the word the
+    cell decodes from its posterior latent, never the data; the posterior still reads the data."""
+    from motionlab.models.gaussian import reparameterize
+
+    model, (poses, action, body) = tiny_model, tiny_batch
+    torch.nn.init.normal_(model.word_decoder.net[-1].weight, std=0.1)  # own output != rest pose
+    out = model(poses, action, body, word_drop=1.0, generator=torch.Generator().manual_seed(5))
+    g = torch.Generator().manual_seed(5)
+    cell = model.cell
+    with torch.no_grad():
+        n_words = poses.shape[1] // 3
+        torch.rand(poses.shape[0], n_words, 1, generator=g)  # the drop mask
+        control = cell.control(action, body)
+        pre = cell.posterior_input(model.encode_words(poses), control[:, None].expand(-1, n_words, -1))
+        layers = cell.initial_state(action, body, g)
+        states = []
+        for t in range(n_words):
+            state = torch.cat(layers, dim=-1)  # both GRU states
+            states.append(state)
+            mu, logvar = cell.posterior(pre[:, t], state)
+            features = cell.latent_feature(reparameterize(mu, logvar, g))
+            own, _ = model.decode_words(cell.decode(features, state, control)[:, None])
+            layers = cell.transition(layers, model.encode_words(own)[:, 0], features, control)
+        prior_mu, _ = cell.prior(torch.stack(states, dim=1), control[:, None].expand(-1, n_words, -1))
+    torch.testing.assert_close(out.prior_mu, prior_mu)
+
+
+def test_prior_posterior_and_decoder_read_both_gru_states(tiny_model):
+    cell = tiny_model.cell
+    h = cell.cfg.hidden_dim
+    assert cell.prior_net[0].in_features == 2 * h + cell.cfg.control_dim
+    assert cell.posterior_state.in_features == 2 * h
+    assert cell.decoder_net[0].in_features == cell.cfg.feature_dim + 2 * h + cell.cfg.control_dim
+    control = cell.control(torch.tensor([0]), torch.tensor([1]))
+    lower, upper = torch.zeros(1, h), torch.zeros(1, h)
+    a = cell.prior(cell.state((lower, upper)), control)[0]
+    b = cell.prior(cell.state((lower + 1.0, upper)), control)[0]
+    assert not torch.allclose(a, b)  # the lower GRU's state reaches the prior
 
 
 def test_forward_is_deterministic_given_the_generator(tiny_model, tiny_batch):
@@ -109,11 +136,17 @@ def test_every_output_head_gives_unit_quaternions(output, params, tiny_batch):
     torch.testing.assert_close(_quaternion_norms(model, out.poses), torch.ones(out.poses.shape[:2] + (21,)))
 
 
-def test_sl_ablation_runs_the_recurrence_once_per_frame():
-    model = motion_cell(word_length=1)
+def test_sl_ablation_runs_the_recurrence_once_per_frame_without_word_layers():
+    model = motion_cell(word_length=1, word_layers=False)
+    assert isinstance(model.word_encoder, torch.nn.Identity) and isinstance(
+        model.word_decoder, torch.nn.Identity
+    )
+    assert model.cell.word_feature[0].in_features == 90 and model.cell.decoder_net[-1].out_features == 90
     b = batch(frames=10)
-    out = model(b.poses, b.action, b.body)
+    out = model(b.poses, b.action, b.body, word_drop=0.5)
     assert out.posterior_mu.shape[:2] == (12, 10)
+    torch.testing.assert_close(_quaternion_norms(model, out.poses), torch.ones(12, 10, 21))
+    assert model.generate(b.action, b.body, 7).shape == (12, 7, 90)
 
 
 def test_bad_input_raises_clear_errors(tiny_model, tiny_batch):

@@ -55,10 +55,11 @@ ROOT_NOISE = NoiseConfig(jitter=0.0005, spike_rate=0.0)
 #: Clips denoised at a time.
 CHUNK = 256
 
-#: Threads of the denoiser's training: it runs in this process while the workers train the benchmark's
-#: evaluators (or, with them cached, while nothing else runs), and its convolutions gain from both cores
-#: (24 s on one thread, 17 s on two; the denoised clips had the same fingerprint on one and on two threads).
-DENOISER_THREADS = 2
+#: Threads of the denoiser's training. It runs in this process while two workers train the benchmark's
+#: evaluators, so a second thread competes with them for the cores: on an idle machine two threads took 17 s
+#: against 24 s for one, but with the cores busy two spinning OpenMP threads slowed it about fifteenfold
+#: (8 s per step against 0.5 s). The denoised clips have the same fingerprint on one and on two threads.
+DENOISER_THREADS = 1
 
 #: Seeds of the capture noise on the training split and of the denoiser's noisy copies of the validation
 #: split.

@@ -4,8 +4,11 @@
   :data:`DISCARDED_FRAMES` = 20 are discarded (they depend on the initial state more than on the model);
   a sample set holds the same number of samples for every action x body type combination.
 * **Table 2.** Each row is the mean and 95% interval over repeated sample sets of IS, FID, accuracy and
-  diversity (:func:`motionlab.evaluation.benchmark.sample_metrics`), measured with the benchmark's GRU
-  evaluator; the real row is the held-out test split.
+  diversity (:func:`attribute_metrics`), measured with the benchmark's GRU evaluator; the real row is the
+  held-out test split (:func:`real_row`). The paper's IS (eq. 27, 28) is over the *attributes*: its
+  ``p(a | X)`` spans both controls (action x gender there, action x body type here), as the product of
+  the two attribute classifiers' outputs; ``is_action`` is the IS of the action head alone.
+  :func:`difference_interval` compares two rows (Welch's interval of the difference of their means).
 * **Mean collapse.** Each frame's distance to the data set's mean pose (mean over joints of the
   Euclidean distance, in the body frame of :func:`motionlab.evaluation.body_frame_features`), averaged
   over the samples of the non-periodic actions. A model that regresses to the mean drifts towards zero;
@@ -22,13 +25,14 @@ from typing import NamedTuple, Protocol
 
 import numpy as np
 import torch
+from scipy import stats
 from torch import Tensor
 
 from motionlab.evaluation import body_frame_features
-from motionlab.evaluation.benchmark import sample_metrics
+from motionlab.evaluation.benchmark import Benchmark, feature_metrics
 from motionlab.evaluation.evaluator import Evaluator
 from motionlab.geometry import quat_geodesic
-from motionlab.metrics import mean_ci, repeat_seed
+from motionlab.metrics import inception_score, mean_ci, repeat_seed
 from motionlab.models.motion_cell.baselines import BaselineConfig
 from motionlab.models.motion_cell.data import PoseCodec
 from motionlab.models.motion_cell.model import MotionCellConfig
@@ -68,10 +72,92 @@ class SampleSet(NamedTuple):
 
 
 class ModelEvaluation(NamedTuple):
-    """A Table 2 row ``{metric: (mean, 95% half-width)}`` and the first sample set it was measured on."""
+    """A Table 2 row ``{metric: (mean, 95% half-width)}``, the first sample set it was measured on, and
+    every repeat's values ``{metric: (v_1, ..., v_R)}`` (for :func:`difference_interval`)."""
 
     row: dict[str, tuple[float, float]]
     samples: SampleSet
+    values: dict[str, tuple[float, ...]]
+
+
+def joint_attribute_probs(action_probs: Tensor, body_probs: Tensor) -> Tensor:
+    """``p(action, body | X)`` ``(N, A * B)`` (index ``action * B + body``) from the two attribute
+    classifiers' ``(N, A)`` and ``(N, B)``: their product, as two separate classifiers give (the paper's
+    §3.4: one classifier per attribute)."""
+    if action_probs.dim() != 2 or body_probs.dim() != 2 or action_probs.shape[0] != body_probs.shape[0]:
+        raise ValueError(
+            f"joint_attribute_probs: expected (N, A) and (N, B), got {tuple(action_probs.shape)} and "
+            f"{tuple(body_probs.shape)}"
+        )
+    return (action_probs[:, :, None] * body_probs[:, None, :]).flatten(1)
+
+
+def attribute_metrics(
+    evaluator: Evaluator,
+    positions: Tensor | np.ndarray,
+    action: np.ndarray,
+    reference_features: Tensor,
+    rng: np.random.Generator,
+) -> dict[str, float]:
+    """One sample set's row: ``is`` (the paper's, over action x body), ``is_action`` (action head only),
+    ``accuracy`` (action), ``fid``, ``diversity`` and ``multimodality``, from one pass of the evaluator."""
+    features = evaluator.features(positions)
+    heads = evaluator.classifier.heads
+    with torch.no_grad():
+        action_probs = torch.softmax(heads["action"](features).double(), dim=-1)
+        body_probs = torch.softmax(heads["body"](features).double(), dim=-1)
+    row = feature_metrics(features, action_probs, np.asarray(action), reference_features, rng)
+    row["is_action"] = row.pop("is")
+    return {"is": inception_score(joint_attribute_probs(action_probs, body_probs)), **row}
+
+
+def real_row(
+    evaluator: Evaluator, benchmark: Benchmark, n_repeats: int = 10, seed: int = 0
+) -> dict[str, tuple[float, float]]:
+    """The "real data" row: the held-out test clips against the training clips, ``{metric: (mean, 95%
+    half-width)}``; the test set is fixed, only Diversity's and Multimodality's pairs are redrawn."""
+    reference = evaluator.features(benchmark.train.positions)
+    rows = [
+        attribute_metrics(
+            evaluator,
+            benchmark.test.positions,
+            benchmark.test.action,
+            reference,
+            np.random.default_rng([seed, r]),
+        )
+        for r in range(n_repeats)
+    ]
+    return {key: mean_ci([row[key] for row in rows]) for key in rows[0]}
+
+
+def difference_interval(
+    a: Sequence[float], b: Sequence[float], confidence: float = 0.95
+) -> tuple[float, float, float]:
+    """``(mean(a) - mean(b), lower, upper)``: Welch's confidence interval of the difference of two metrics'
+    means over independent repeats (unequal variances); the difference is significant when the interval
+    excludes 0."""
+    x, y = np.asarray(a, dtype=np.float64), np.asarray(b, dtype=np.float64)
+    if x.ndim != 1 or y.ndim != 1 or x.size < 2 or y.size < 2:
+        raise ValueError(
+            f"difference_interval: need two 1-D samples of 2 or more, got {x.shape} and {y.shape}"
+        )
+    check_scalar(
+        confidence,
+        "confidence",
+        "difference_interval",
+        minimum=0.0,
+        maximum=1.0,
+        include_minimum=False,
+        include_maximum=False,
+    )
+    va, vb = x.var(ddof=1) / x.size, y.var(ddof=1) / y.size
+    diff = float(x.mean() - y.mean())
+    se = float(np.sqrt(va + vb))
+    if se == 0.0:
+        return diff, diff, diff
+    dof = (va + vb) ** 2 / (va**2 / (x.size - 1) + vb**2 / (y.size - 1))
+    half = float(stats.t.ppf(0.5 * (1.0 + confidence), dof)) * se
+    return diff, diff - half, diff + half
 
 
 def attribute_grid(n_per_combination: int, n_actions: int = 6, n_bodies: int = 2) -> tuple[Tensor, Tensor]:
@@ -125,7 +211,7 @@ def evaluate_model(
         )
         first = samples if first is None else first
         rows.append(
-            sample_metrics(
+            attribute_metrics(
                 evaluator,
                 samples.evaluated,
                 samples.action.numpy(),
@@ -133,7 +219,11 @@ def evaluate_model(
                 np.random.default_rng([seed, r]),
             )
         )
-    return ModelEvaluation({key: mean_ci([row[key] for row in rows]) for key in rows[0]}, first)
+    return ModelEvaluation(
+        {key: mean_ci([row[key] for row in rows]) for key in rows[0]},
+        first,
+        {key: tuple(row[key] for row in rows) for key in rows[0]},
+    )
 
 
 def rotation_error_degrees(codec: PoseCodec, poses: Tensor, clean: Tensor) -> float:

@@ -43,7 +43,7 @@ TABLE = {
     "mcell": "Motion Cell",
     "nc": "NC (no classifier loss)",
     "nl": "NL (all alpha_k = 1)",
-    "sl": "SL (no motion words)",
+    "sl": "SL (single layer: no word encoder or decoder)",
     "erd": "ERD",
     "quaternet": "QuaterNet-style",
 }
@@ -61,9 +61,9 @@ class ExperimentConfig:
         steps: optimiser steps of every Table 2 model; representation_steps: of each output-head run.
         denoiser_steps, denoiser_batch, denoiser_lr: the denoiser's training (windows of ``window`` frames);
             denoiser_copies: noisy copies of the validation split it sees.
-        beta: KL weight after annealing; classifier: lambda_CL after its ramp; word_drop: final word-drop
-            rate; input_noise: ERD's final input noise (std, in pose-vector units); sampling: QuaterNet's
-            final scheduled-sampling probability.
+        beta: lambda_KL after annealing (the paper: 1); classifier: lambda_CL after its ramp; word_drop:
+            final rate of scheduled motion-word dropping; input_noise: ERD's final input noise (std, in
+            pose-vector units); sampling: QuaterNet's final scheduled-sampling probability.
         n_per_combination, n_repeats: evaluation sample sets (per action x body) and their number.
     """
 
@@ -82,7 +82,7 @@ class ExperimentConfig:
     denoiser_batch: int = 16
     denoiser_lr: float = 1e-3
     denoiser_copies: int = 3
-    beta: float = 0.2
+    beta: float = 1.0
     classifier: float = 1.0
     word_drop: float = 0.5
     input_noise: float = 0.05
@@ -161,8 +161,8 @@ def motion_cell_schedules(
 ) -> dict[str, Schedule]:
     """The Motion Cell's coefficient schedules over a run of ``steps``.
 
-    * ``beta``: KL annealing: 0 for the first 10% (warm-up), linear to ``beta`` by 40%, held, then a
-      cool-down to half of it over the last 10%;
+    * ``beta``: lambda_KL as in §3.5.1: 0 for the first 10% (warm-up), linear to ``beta`` by 70%
+      (annealing), then held at ``beta`` for the last 30% (the paper's "cool-down", at lambda_KL = 1);
     * ``classifier``: lambda_CL, 0 for the first 30%, linear to ``classifier`` by 50% ("ramped in after
       the start": the classifier only makes sense once reconstructions look like motion);
     * ``word_drop``: scheduled motion-word dropping, from 0 at 10% to ``word_drop`` at 60%.
@@ -173,14 +173,7 @@ def motion_cell_schedules(
         return int(round(fraction * steps))
 
     return {
-        "beta": KLAnneal(
-            max_value=beta,
-            warmup=at(0.1),
-            anneal=at(0.3),
-            cooldown_start=at(0.9),
-            cooldown=at(0.1),
-            cooldown_value=0.5 * beta,
-        ),
+        "beta": KLAnneal(max_value=beta, warmup=at(0.1), anneal=at(0.6)),
         "classifier": LinearRamp(at(0.3), at(0.2), 0.0, classifier),
         "word_drop": LinearRamp(at(0.1), at(0.5), 0.0, word_drop),
     }
@@ -227,18 +220,12 @@ class MotionCellRun:
         return cache_entry_exists(self.name, model_config, train_config, data_config)
 
     def _classifier_loss(self) -> ClassifierLoss:
-        """Eq. 24's loss with the benchmark's frozen conv evaluator, its targets taken from the (denoised)
-        training clips."""
+        """Eq. 24's loss with the benchmark's frozen conv evaluator, its layer weights taken from the
+        (denoised) training clips."""
         batches, codec = self.data.batches, self.data.codec
         with torch.no_grad():
             positions = codec.positions(batches.poses, batches.body)
-        return ClassifierLoss(
-            benchmark_evaluator("conv", progress=False),
-            positions,
-            batches.action,
-            batches.body,
-            int(codec.offsets.shape[0]),
-        )
+        return ClassifierLoss(benchmark_evaluator("conv", progress=False), positions)
 
     def train(self, progress: bool | None = None) -> tuple[nn.Module, TrainResult]:
         """Train the model (or load it from the checkpoint cache).
@@ -307,7 +294,7 @@ def runs(cfg: ExperimentConfig, data: PreparedData) -> dict[str, MotionCellRun]:
         return run(f"output_{kind}", replace(mc, output=kind), LossConfig(), short, schedules)
 
     return {
-        "sl": variant("sl", replace(mc, word_length=1), LossConfig(), cfg.classifier),
+        "sl": variant("sl", replace(mc, word_length=1, word_layers=False), LossConfig(), cfg.classifier),
         "mcell": variant("mcell", mc, LossConfig(), cfg.classifier),
         "nl": variant("nl", mc, LossConfig(joint_weights="uniform"), cfg.classifier),
         "nc": variant("nc", mc, LossConfig(), 0.0),

@@ -1,10 +1,12 @@
 """Rotation output heads: how a decoder's raw numbers become joint rotations.
 
-The paper compares three outputs (its Sec. 6.4): quaternions normalised to unit length, rotation matrices
-(9 numbers, made orthonormal by Gram–Schmidt) and axis-angle vectors (3 numbers). Each head reads
-``params_per_joint`` raw numbers per joint and returns unit quaternions ``(..., 4)``, so every loss and
-every downstream step stays the same. Raw outputs are offsets from the identity rotation (a raw output of
-zero means "no rotation"), so a freshly initialised decoder starts near the rest pose for every head.
+The paper tests three joint-angle outputs (its §3, with the result in §5.1: quaternions and rotation
+matrices comparable, both better than axis-angle): quaternions divided by their norm, rotation matrices
+(9 numbers, made orthonormal by Gram–Schmidt) and axis-angle vectors (3 numbers, not normalised). Each
+head reads ``params_per_joint`` raw numbers per joint and returns unit quaternions ``(..., 4)``, so every
+loss and every downstream step stays the same. Raw outputs are offsets from the identity rotation (a raw
+output of zero means "no rotation"), so a freshly initialised decoder starts near the rest pose
+for every head.
 """
 
 from __future__ import annotations
@@ -19,7 +21,7 @@ from motionlab.geometry import axis_angle_to_quat, gram_schmidt, matrix_to_quat,
 from motionlab.models.motion_cell.data import ROOT_DIM
 from motionlab.validation import check_choice, check_tensor
 
-#: Rotation outputs a decoder can produce (compared in the chapter, the paper's Sec. 6.4).
+#: Rotation outputs a decoder can produce (compared in the chapter; the paper's §3 and §5.1).
 OUTPUT_KINDS = ("quaternion", "matrix", "axis_angle")
 
 _IDENTITY = {

@@ -4,25 +4,30 @@
 its recurrence once per word instead of once per frame (the paper: ``l = 3``), which shortens the
 recurrence threefold and lets one latent variable describe a short movement. ``f_enc^w`` maps the ``l``
 pose vectors of a word to a code; ``f_dec^w`` maps a code back to ``l`` raw poses (the output head of
-:mod:`.heads` turns them into rotations). With ``l = 1`` a word is a single pose (the SL ablation).
+:mod:`.heads` turns them into rotations). The SL ablation (the paper's §5.1) removes both: ``l = 1`` and
+``word_layers=False``, so the cell reads and writes single pose vectors.
 
 **The cell** is one step of a conditional variational RNN over motion words (the paper's Algorithms 1,
-2). At word ``t`` with recurrent state ``h_{t-1}`` (the top of two stacked GRU cells) and control ``c``:
+2). At word ``t`` with recurrent state ``h_{t-1} = [h^1_{t-1}, h^2_{t-1}]`` (both of the two stacked GRU
+cells, concatenated, as in §3.3.1) and control ``c``:
 
-* prior      ``p(z_t | h_{t-1}, c) = N(mu_p, sigma_p^2)``, an MLP of ``[h_{t-1}, f_c(c)]``;
-* posterior  ``q(z_t | w_t, h_{t-1}, c) = N(mu_q, sigma_q^2)``, an MLP of ``[f_w(w_t), h_{t-1}, f_c(c)]``;
-* decoder    the code of word ``t`` from ``[f_z(z_t), h_{t-1}, f_c(c)]`` (then ``f_dec^w`` gives its poses);
-* transition ``h_t = GRU_2(GRU_1([f_w(w_t), f_z(z_t), f_c(c)], h^1_{t-1}), h^2_{t-1})``.
+* prior      ``p(z_t | h_{t-1}, c) = N(mu_p, sigma_p^2)``, an MLP of ``[h_{t-1}, f_c(c)]`` (eq. 8);
+* posterior  ``q(z_t | w_t, h_{t-1}, c) = N(mu_q, sigma_q^2)``, an MLP of ``[f_w(w_t), h_{t-1}, f_c(c)]``
+  (eq. 5);
+* decoder    the code of word ``t`` from ``[f_z(z_t), h_{t-1}, f_c(c)]`` (eq. 10; then ``f_dec^w`` gives its
+  poses);
+* transition ``h_t = GRU_2(GRU_1([f_w(w_t), f_z(z_t), f_c(c)], h^1_{t-1}), h^2_{t-1})`` (eq. 11).
 
 ``f_w``, ``f_z`` are feature MLPs of a word code and a latent, ``f_c`` embeds the one-hot action and body
 type. The initial state of both GRU cells is drawn from a learned Gaussian, one per attribute combination.
 
 **The model.** Training (:meth:`MotionCellModel.forward`) reconstructs windows of pose vectors through the
-posterior, teacher-forced, with *scheduled motion-word dropping*: each word's features are replaced by
-zeros in the recurrence input with probability ``word_drop`` (the posterior still sees the word), which
-makes the state lean on the latents, as it must at generation time. Generation
-(:meth:`MotionCellModel.generate`) draws the initial state and then, word after word, a latent from the
-prior, decodes it, and feeds the generated word back; it runs for any number of frames.
+posterior, teacher-forced, with *scheduled motion-word dropping* (§4.2, strategy ii): with probability
+``word_drop`` the ground-truth word is dropped from the transition's input and the model's own output for
+that step, ``w~_t`` (decoded from the posterior latent), takes its place, as it does at generation time
+(eq. 13). The posterior always sees the real word. Generation (:meth:`MotionCellModel.generate`) draws the
+initial state and then, word after word, a latent from the prior, decodes it, and feeds the generated word
+back; it runs for any number of frames.
 """
 
 from __future__ import annotations
@@ -48,11 +53,14 @@ class MotionCellConfig:
 
     Attributes:
         n_joints: skeleton joints ``J``; a pose vector has ``(J - 1) * 4 + 6`` channels.
-        word_length: poses per motion word ``l`` (the paper: 3; 1 feeds poses directly, the SL ablation).
+        word_length: poses per motion word ``l`` (the paper: 3; the SL ablation: 1).
+        word_layers: whether the word encoder ``f_enc^w`` and decoder ``f_dec^w`` exist; without them (the SL
+            ablation) ``f_w`` reads the ``l`` pose vectors and the cell's decoder outputs the raw poses.
         word_dim: size of a motion word's code (output of ``f_enc^w``, input of ``f_dec^w``).
         feature_dim: output size of the feature MLPs ``f_w`` and ``f_z``.
         latent_dim: size of the per-word latent ``z_t``.
-        hidden_dim: width of each of the two stacked GRU cells and of the prior / posterior / decoder MLPs.
+        hidden_dim: width of each of the two stacked GRU cells (the state ``h`` the prior, posterior and
+            decoder read is both, ``2 * hidden_dim``) and of those MLPs' hidden layers.
         control_dim: size of the control embedding ``f_c(c)`` of action and body type.
         n_actions, n_bodies: number of action classes and body types (the control attributes).
         output: rotation output of the decoder, one of :data:`~.heads.OUTPUT_KINDS`.
@@ -68,6 +76,7 @@ class MotionCellConfig:
     n_actions: int = 6
     n_bodies: int = 2
     output: str = "quaternion"
+    word_layers: bool = True
 
     def __post_init__(self) -> None:
         for name in (
@@ -83,6 +92,8 @@ class MotionCellConfig:
             check_scalar(getattr(self, name), name, "MotionCellConfig", kind=numbers.Integral, minimum=1)
         check_scalar(self.n_joints, "n_joints", "MotionCellConfig", kind=numbers.Integral, minimum=2)
         check_choice(self.output, "output", "MotionCellConfig", OUTPUT_KINDS)
+        if not isinstance(self.word_layers, bool):
+            raise TypeError(f"MotionCellConfig: word_layers must be a bool, got {self.word_layers!r}")
 
     @property
     def pose_dim(self) -> int:
@@ -217,18 +228,24 @@ class MotionCell(nn.Module):
     all words after the loop: :meth:`posterior_input` before it, :meth:`prior` and :meth:`decode` after it.
     """
 
-    def __init__(self, cfg: MotionCellConfig) -> None:
+    def __init__(
+        self, cfg: MotionCellConfig, word_in: int | None = None, word_out: int | None = None
+    ) -> None:
+        """``word_in``, ``word_out``: sizes of the words ``f_w`` reads and the decoder writes (default: the
+        code size ``cfg.word_dim``; without word layers, the pose vectors and the raw poses of a word)."""
         super().__init__()
         self.cfg = cfg
         h, f, z, c = cfg.hidden_dim, cfg.feature_dim, cfg.latent_dim, cfg.control_dim
+        word_in = cfg.word_dim if word_in is None else word_in
+        word_out = cfg.word_dim if word_out is None else word_out
         self.control = ControlEmbedding(cfg.n_actions, cfg.n_bodies, c)  # f_c
-        self.word_feature = mlp([cfg.word_dim, f, f])  # f_w
+        self.word_feature = mlp([word_in, f, f])  # f_w
         self.latent_feature = mlp([z, f, f])  # f_z
-        self.prior_net = mlp([h + c, h, 2 * z])
+        self.prior_net = mlp([2 * h + c, h, 2 * z])
         self.posterior_in = nn.Linear(f + c, h)  # the posterior's first layer, split: [f_w, f_c] part ...
-        self.posterior_state = nn.Linear(h, h, bias=False)  # ... and h_{t-1} part
+        self.posterior_state = nn.Linear(2 * h, h, bias=False)  # ... and h_{t-1} part
         self.posterior_out = nn.Linear(h, 2 * z)
-        self.decoder_net = mlp([f + h + c, h, cfg.word_dim])
+        self.decoder_net = mlp([f + 2 * h + c, h, word_out])
         self.gru = nn.ModuleList([nn.GRUCell(2 * f + c, h), nn.GRUCell(h, h)])
         self.initial = InitialState(cfg.n_actions, cfg.n_bodies, 2 * h)
 
@@ -238,8 +255,13 @@ class MotionCell(nn.Module):
         """Sampled states ``(h^1_0, h^2_0)``, each ``(B, hidden_dim)``."""
         return tuple(self.initial(action, body, generator).chunk(2, dim=-1))  # type: ignore[return-value]
 
+    @staticmethod
+    def state(layers: tuple[Tensor, Tensor]) -> Tensor:
+        """The Motion Cell state ``h = [h^1, h^2]`` ``(B, 2 * hidden_dim)`` of both GRU cells (§3.3.1)."""
+        return torch.cat(layers, dim=-1)
+
     def prior(self, state: Tensor, control: Tensor) -> tuple[Tensor, Tensor]:
-        """Prior mean and log-variance ``(..., latent_dim)`` from states and controls ``(..., h)``, ``(...,
+        """Prior mean and log-variance ``(..., latent_dim)`` from states and controls ``(..., 2 h)``, ``(...,
         c)``."""
         mu, raw = self.prior_net(torch.cat([state, control], dim=-1)).chunk(2, dim=-1)
         return mu, bounded_logvar(raw)
@@ -294,9 +316,16 @@ class MotionCellModel(nn.Module):
         self.cfg = cfg
         self.codec = codec
         self.head = OutputHead(cfg.output)
-        self.word_encoder = WordEncoder(cfg.pose_dim, cfg.word_length, cfg.word_dim)
-        self.word_decoder = WordDecoder(cfg.word_dim, cfg.word_length, self.head.raw_dim(cfg.n_joints))
-        self.cell = MotionCell(cfg)
+        raw_dim = self.head.raw_dim(cfg.n_joints)
+        if cfg.word_layers:
+            self.word_encoder: nn.Module = WordEncoder(cfg.pose_dim, cfg.word_length, cfg.word_dim)
+            self.word_decoder: nn.Module = WordDecoder(cfg.word_dim, cfg.word_length, raw_dim)
+            self.cell = MotionCell(cfg)
+        else:  # SL: the cell reads pose vectors and writes raw poses itself
+            self.word_encoder = self.word_decoder = nn.Identity()
+            self.cell = MotionCell(cfg, cfg.pose_dim * cfg.word_length, raw_dim * cfg.word_length)
+            nn.init.zeros_(self.cell.decoder_net[-1].weight)  # start at the rest pose, as WordDecoder does
+            nn.init.zeros_(self.cell.decoder_net[-1].bias)
 
     def decode_words(self, codes: Tensor) -> tuple[Tensor, Tensor]:
         """Pose vectors ``(B, N * l, 90)`` and rotation parameters ``(B, N * l, J - 1, p)`` of word codes
@@ -329,7 +358,9 @@ class MotionCellModel(nn.Module):
 
         Args:
             action, body: control attributes ``(B,)``.
-            word_drop: probability in ``[0, 1]`` of dropping each word from the recurrence input.
+            word_drop: probability in ``[0, 1]`` of dropping each ground-truth word from the transition's
+                input; the model's own output for that word (decoded from its posterior latent, without
+                gradient) is fed instead, as at generation time (scheduled sampling).
             generator: draws the initial state, the dropped words and the latents (default: global RNG).
         """
         self._check_poses(poses)
@@ -341,14 +372,20 @@ class MotionCellModel(nn.Module):
         controls = control[:, None].expand(batch, n_words, control.shape[-1])
         posterior_pre = cell.posterior_input(word_features, controls)
         keep = torch.rand(batch, n_words, 1, generator=generator) >= word_drop
-        recurrent_words = word_features * keep
         layers = cell.initial_state(action, body, generator)
         states, latent_features, mus, logvars = [], [], [], []
         for t in range(n_words):
-            states.append(layers[1])
-            mu, logvar = cell.posterior(posterior_pre[:, t], layers[1])
+            state = cell.state(layers)
+            states.append(state)
+            mu, logvar = cell.posterior(posterior_pre[:, t], state)
             features = cell.latent_feature(reparameterize(mu, logvar, generator))
-            layers = cell.transition(layers, recurrent_words[:, t], features, control)
+            word_input = word_features[:, t]
+            if not bool(keep[:, t].all()):
+                with torch.no_grad():  # the model's own output w~_t, fed back as in eq. 13
+                    own, _ = self.decode_words(cell.decode(features, state, control)[:, None])
+                    own_features = self.encode_words(own)[:, 0]
+                word_input = torch.where(keep[:, t], word_input, own_features)
+            layers = cell.transition(layers, word_input, features, control)
             latent_features.append(features)
             mus.append(mu)
             logvars.append(logvar)
@@ -396,9 +433,10 @@ class MotionCellModel(nn.Module):
         layers = cell.initial_state(action, body, generator)
         words = []
         for _ in range(math.ceil(n_frames / self.cfg.word_length)):
-            mu, logvar = cell.prior(layers[1], control)
+            state = cell.state(layers)
+            mu, logvar = cell.prior(state, control)
             features = cell.latent_feature(reparameterize(mu, logvar, generator))
-            word, _ = self.decode_words(cell.decode(features, layers[1], control)[:, None])
+            word, _ = self.decode_words(cell.decode(features, state, control)[:, None])
             words.append(word)
             layers = cell.transition(layers, self.encode_words(word)[:, 0], features, control)
             if truncate:
