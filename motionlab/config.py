@@ -59,6 +59,16 @@ def choose(quick: T, full: T) -> T:
 build_dir = paths.build_dir
 
 
+class ProfileConfig:
+    """Mixin for an experiment's config class with ``quick()`` and ``full()`` constructors: :meth:`current`
+    is the one of the active profile (:func:`profile`)."""
+
+    @classmethod
+    def current(cls):  # -> the subclass
+        """:meth:`quick` or :meth:`full`, for the active :func:`profile`."""
+        return cls.quick() if is_quick() else cls.full()
+
+
 def checkpoint_dir() -> Path:
     """Where trained models are cached, keyed by a hash of their configuration."""
     return build_dir() / "checkpoints"

@@ -43,7 +43,7 @@ def moglow_name(dropout: float, rescale: bool = True) -> str:
 
 
 @dataclass(frozen=True)
-class ExperimentConfig:
+class ExperimentConfig(config.ProfileConfig):
     """Every size, step count and schedule of chapter 06 (:meth:`full` is the default, :meth:`quick` tiny).
 
     Attributes:
@@ -157,11 +157,6 @@ class ExperimentConfig:
             n_repeats=2,
             bench_batch=8,
         )
-
-    @classmethod
-    def current(cls) -> ExperimentConfig:
-        """The config of the active profile (:func:`motionlab.config.profile`)."""
-        return cls.quick() if config.is_quick() else cls.full()
 
     def moglow(self, dropout: float, rescale: bool = True) -> MoGlowConfig:
         """The chapter's MoGlow with history dropout ``dropout`` (kept poses rescaled unless ``rescale`` is

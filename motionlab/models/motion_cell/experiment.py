@@ -50,7 +50,7 @@ TABLE = {
 
 
 @dataclass(frozen=True)
-class ExperimentConfig:
+class ExperimentConfig(config.ProfileConfig):
     """Everything the chapter's runs depend on: :meth:`quick` (tiny and fast) or :meth:`full` (the reported
     models); :meth:`current` is the one of the active profile.
 
@@ -143,11 +143,6 @@ class ExperimentConfig:
     def full(cls) -> ExperimentConfig:
         """The reported models (the defaults)."""
         return cls()
-
-    @classmethod
-    def current(cls) -> ExperimentConfig:
-        """:meth:`quick` or :meth:`full`, for :func:`motionlab.config.profile`."""
-        return cls.quick() if config.profile() == "quick" else cls.full()
 
 
 def learning_rate_decay(steps: int) -> LinearRamp:

@@ -63,7 +63,7 @@ def cache_name(variant: str) -> str:
 
 
 @dataclass(frozen=True)
-class ExperimentConfig:
+class ExperimentConfig(config.ProfileConfig):
     """Every size and schedule of chapter 08; the defaults are the full profile (:meth:`full`).
 
     Attributes:
@@ -149,11 +149,6 @@ class ExperimentConfig:
             n_codes=3,
             n_end_points=3,
         )
-
-    @classmethod
-    def current(cls) -> ExperimentConfig:
-        """:meth:`quick` or :meth:`full`, for the active :func:`motionlab.config.profile`."""
-        return cls.quick() if config.is_quick() else cls.full()
 
     def train_config(self) -> TrainConfig:
         """Every variant's :class:`~motionlab.train.TrainConfig`, with the teacher-forcing schedule."""

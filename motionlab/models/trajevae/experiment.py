@@ -107,7 +107,7 @@ def _train_config(steps: int, batch_size: int, checkpoint_every: int | None) -> 
 
 
 @dataclass(frozen=True)
-class ExperimentConfig:
+class ExperimentConfig(config.ProfileConfig):
     """Every size and schedule of chapter 07 for one profile.
 
     Attributes:
@@ -164,11 +164,6 @@ class ExperimentConfig:
             train=_train_config(steps=400, batch_size=32, checkpoint_every=100),
             n_eval_windows=48,
         )
-
-    @classmethod
-    def current(cls) -> ExperimentConfig:
-        """The config of the active profile (:func:`motionlab.config.profile`)."""
-        return cls.quick() if config.profile() == "quick" else cls.full()
 
 
 def ladder(full: TrajeVAEConfig) -> dict[str, TrajeVAEConfig]:

@@ -29,7 +29,7 @@ from motionlab.validation import check_scalar
 
 
 @dataclass(frozen=True)
-class ExperimentConfig:
+class ExperimentConfig(config.ProfileConfig):
     """The chapter's sizes and budgets for one profile (:meth:`quick`: every code path in seconds;
     :meth:`full`: the reported runs).
 
@@ -101,11 +101,6 @@ class ExperimentConfig:
             per_action=10,
             n_repeats=3,
         )
-
-    @classmethod
-    def current(cls) -> ExperimentConfig:
-        """The config of the active profile (:func:`motionlab.config.profile`)."""
-        return cls.quick() if config.is_quick() else cls.full()
 
     def pose_model(self, variational: bool = True, prior_var: float = 1.0) -> VAEConfig:
         """An unconditional pose (V)AE on 64-number pose vectors; ``prior_var`` is sigma_p^2."""
