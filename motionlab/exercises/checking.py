@@ -76,6 +76,11 @@ def close(a: torch.Tensor, b: torch.Tensor, tolerance: float = 1e-9) -> bool:
     return a.shape == b.shape and bool(torch.allclose(a, b, atol=tolerance, rtol=tolerance))
 
 
+def close_each(a: torch.Tensor, b: torch.Tensor, tolerance: float = 1e-9) -> torch.Tensor:
+    """Element-wise agreement of two same-shaped tensors."""
+    return torch.isclose(a, b, atol=tolerance, rtol=tolerance)
+
+
 def random_unit_quaternions(
     shape: tuple[int, ...], seed: int, dtype: torch.dtype = torch.float64
 ) -> torch.Tensor:

@@ -8,7 +8,7 @@ from collections.abc import Callable
 
 import torch
 
-from motionlab.exercises.checking import CheckResult, Diagnosis, as_result, close, run_checks
+from motionlab.exercises.checking import CheckResult, Diagnosis, as_result, close, close_each, run_checks
 from motionlab.models.odmo.losses import contrastive_loss
 from motionlab.models.trajevae.dct import dct_matrix
 
@@ -107,11 +107,6 @@ def _contrastive_values(fn: ContrastiveLoss) -> None:
         f"the {'same' if wrong_same else 'different'}-class losses are wrong: 1/2 d^2 for the same class, "
         "1/2 max(0, m - d)^2 for different classes"
     )
-
-
-def close_each(a: torch.Tensor, b: torch.Tensor, tolerance: float = 1e-9) -> torch.Tensor:
-    """Element-wise agreement of two same-shaped tensors."""
-    return torch.isclose(a, b, atol=tolerance, rtol=tolerance)
 
 
 def _contrastive_gradient_at_zero(fn: ContrastiveLoss) -> None:
