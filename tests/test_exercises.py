@@ -83,6 +83,7 @@ def test_skeletons_raise_not_implemented_with_a_message_and_the_checker_says_not
         ("04", "my_subtree_reach"),
         ("05", "my_affine_forward"),
         ("05", "my_affine_inverse"),
+        ("06", "my_sample_loop"),
         ("07", "my_dct_matrix"),
         ("08", "my_contrastive_loss"),
     ],
@@ -386,4 +387,54 @@ def _reach(combine="max", include_own=False, forward=False):
 )
 def test_subtree_reach_checker_names_the_mistake(wrong, says) -> None:
     result = exercises.check_subtree_reach(wrong)
+    assert result.status == "wrong" and says in result.message, result
+
+
+def _loop(
+    window=lambda control, t, tau: control[:, t : t + tau + 1],
+    scale=True,
+    update=True,
+    carry=True,
+    keep=lambda past: past,
+    newest_first=False,
+):
+    def loop(invert_frame, control, seed_pose, noise, temperature):
+        tau = seed_pose.shape[1]
+        past, state, poses = seed_pose, None, []
+        for t in range(control.shape[1] - tau):
+            visible = keep(past.flip(1) if newest_first else past)
+            cond = torch.cat([visible.flatten(1), window(control, t, tau).flatten(1)], dim=1)
+            pose, new_state = invert_frame((temperature if scale else 1.0) * noise[:, t], cond, state)
+            state = new_state if carry else None
+            poses.append(pose)
+            if update:
+                past = torch.cat([past[:, 1:], pose[:, None]], dim=1)
+        return torch.stack(poses, dim=1)
+
+    return loop
+
+
+@pytest.mark.parametrize(
+    "wrong, says",
+    [
+        (_loop(window=lambda control, t, tau: control[:, t + 1 : t + tau + 2]), "window is control[:, t"),
+        (_loop(window=lambda control, t, tau: control[:, t : t + tau + 1].flip(1)), "current control last"),
+        (_loop(newest_first=True), "oldest first"),
+        (_loop(scale=False), "not scaled"),
+        (_loop(update=False), "update the history"),
+        (_loop(carry=False), "carry the LSTM state"),
+        (
+            _loop(
+                keep=lambda past: (
+                    past * (torch.rand(past.shape, generator=torch.Generator().manual_seed(0)) > 0.95)
+                )
+            ),
+            "dropout is for training only",
+        ),
+        (lambda *args: _loop()(*args).transpose(0, 1), "along dim 1"),
+        (lambda frame, control, seed, noise, temperature: noise, "once per generated frame"),
+    ],
+)
+def test_sample_loop_checker_names_the_mistake(wrong, says) -> None:
+    result = exercises.check_sample_loop(wrong)
     assert result.status == "wrong" and says in result.message, result

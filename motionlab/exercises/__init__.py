@@ -11,10 +11,12 @@ several typical mistakes.
 
 Modules: :mod:`~motionlab.exercises.rotations` (chapter 01), :mod:`~motionlab.exercises.kinematics`
 (chapter 02), :mod:`~motionlab.exercises.vae` (chapter 03), :mod:`~motionlab.exercises.hierarchy` (chapter
-04), :mod:`~motionlab.exercises.flows` (chapter 05), :mod:`~motionlab.exercises.sequences` (chapters 07 and
-08); :mod:`~motionlab.exercises.checking` holds what they share.
+04), :mod:`~motionlab.exercises.flows` (chapter 05), :mod:`~motionlab.exercises.autoregressive` (chapter 06),
+:mod:`~motionlab.exercises.sequences` (chapters 07 and 08); :mod:`~motionlab.exercises.checking` holds what
+they share.
 """
 
+from motionlab.exercises.autoregressive import check_sample_loop
 from motionlab.exercises.checking import CheckResult
 from motionlab.exercises.flows import check_affine_forward, check_affine_inverse
 from motionlab.exercises.hierarchy import check_subtree_reach
@@ -33,6 +35,7 @@ __all__ = [
     "check_gaussian_kl",
     "check_quat_mul",
     "check_reparameterize",
+    "check_sample_loop",
     "check_slerp",
     "check_subtree_reach",
 ]
