@@ -438,3 +438,46 @@ def _loop(
 def test_sample_loop_checker_names_the_mistake(wrong, says) -> None:
     result = exercises.check_sample_loop(wrong)
     assert result.status == "wrong" and says in result.message, result
+
+
+# The hooks the end-of-chapter exercises use instead of edits to the package.
+
+
+def test_motion_cell_temperature_scales_the_prior_noise() -> None:
+    from test_motion_cell_common import motion_cell, perturb
+
+    model = motion_cell().eval()
+    perturb(model.word_decoder.net[-1].weight, 0.1)  # a decoder that moves
+    action, body = torch.tensor([0, 1]), torch.tensor([1, 0])
+
+    def sample(**kwargs) -> torch.Tensor:
+        return model.generate(action, body, 7, torch.Generator().manual_seed(3), **kwargs)
+
+    assert torch.equal(sample(), sample(temperature=1.0))
+    cool, hot = sample(temperature=0.0), sample(temperature=2.0)
+    assert cool.shape == hot.shape == (2, 7, 90) and not torch.equal(cool, hot)
+    with pytest.raises(ValueError, match="temperature"):
+        sample(temperature=-1.0)
+
+
+def test_moglow_history_dropout_can_be_overridden_in_a_subclass() -> None:
+    from motionlab.models.moglow import MoGlow, MoGlowConfig
+
+    class WholeWindow(MoGlow):
+        def keep_mask(self, batch, frames, generator=None):
+            keep = super().keep_mask(batch, frames, generator)
+            calls.append((batch, frames))
+            return keep[..., :1].expand_as(keep)  # one flag per frame for the whole window
+
+    calls: list[tuple[int, int]] = []
+    model = WholeWindow(
+        MoGlowConfig(pose_dim=6, control_dim=2, history=3, steps=1, hidden=4, cond_features=3)
+    )
+    pose, control = torch.randn(2, 9, 6), torch.randn(2, 9, 2)
+    model.train()(pose, control, torch.Generator().manual_seed(0))
+    assert calls == [(2, 6)]
+    model.eval()(pose, control)
+    assert calls == [(2, 6)]
+    full = MoGlow(model.cfg)
+    full.load_state_dict(model.state_dict())
+    assert torch.equal(full.eval()(pose, control), model(pose, control))
