@@ -481,3 +481,28 @@ def test_moglow_history_dropout_can_be_overridden_in_a_subclass() -> None:
     full = MoGlow(model.cfg)
     full.load_state_dict(model.state_dict())
     assert torch.equal(full.eval()(pose, control), model(pose, control))
+
+
+def exercise_sections() -> list[tuple[str, str]]:
+    """(chapter file name, its '## Exercises' text) of every chapter."""
+    sections = []
+    for path in sorted(NOTEBOOKS.glob("[0-9][0-9]_*.ipynb")):
+        text = "\n".join("".join(c["source"]) for c in json.loads(path.read_text())["cells"])
+        if "## Exercises" in text:
+            sections.append((path.name, text.split("## Exercises", 1)[1].split("\n## ", 1)[0]))
+    return sections
+
+
+@pytest.mark.parametrize("chapter, text", exercise_sections(), ids=[c[:2] for c, _ in exercise_sections()])
+def test_end_of_chapter_exercises_say_how_long_and_how_to_tell_success(chapter: str, text: str) -> None:
+    items = re.split(r"\n\d+\. ", "\n" + text.split("\n1. ", 1)[1])[1:]
+    assert len(items) >= 4, f"{chapter}: expected the numbered exercises"
+    for number, item in enumerate(items, 1):
+        assert re.search(r"\d+ (min|hours?)", item), f"{chapter} exercise {number}: no time estimate"
+        assert "**Success:**" in item, f"{chapter} exercise {number}: no success criterion"
+        assert not re.search(r"(edit|change|in) `motionlab/", item), (
+            f"{chapter} exercise {number}: edits the package"
+        )
+    answers = NOTEBOOKS / "solutions" / f"{chapter.removesuffix('.ipynb')}_exercises.md"
+    assert answers.exists(), f"{chapter}: no worked answers at {answers.name}"
+    assert answers.read_text().count("\n## ") >= len(items), f"{chapter}: an exercise without a worked answer"
