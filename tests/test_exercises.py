@@ -78,14 +78,19 @@ def test_skeletons_raise_not_implemented_with_a_message_and_the_checker_says_not
         ("01", "my_quat_mul"),
         ("01", "my_slerp"),
         ("02", "my_chain_positions"),
+        ("02", "my_foot_skating"),
         ("03", "my_reparameterize"),
         ("03", "my_gaussian_kl"),
         ("04", "my_subtree_reach"),
+        ("04", "my_impact_weights"),
         ("05", "my_affine_forward"),
         ("05", "my_affine_inverse"),
         ("06", "my_sample_loop"),
+        ("06", "my_keep_mask"),
         ("07", "my_dct_matrix"),
+        ("07", "my_given_trajectories"),
         ("08", "my_contrastive_loss"),
+        ("08", "my_covariance_prior"),
     ],
 )
 def test_solutions_pass_their_checkers(chapter: str, name: str) -> None:
@@ -437,6 +442,144 @@ def _loop(
 )
 def test_sample_loop_checker_names_the_mistake(wrong, says) -> None:
     result = exercises.check_sample_loop(wrong)
+    assert result.status == "wrong" and says in result.message, result
+
+
+def _skating(horizontal=True, per_second=True, both_ends=True, pooled=True):
+    def skating(feet, contacts, fps):
+        if not pooled and feet.ndim == 4:
+            return float(np.mean([_skating()(f, c, fps) for f, c in zip(feet, contacts)]))
+        step = feet[..., 1:, :, :] - feet[..., :-1, :, :]
+        speed = np.linalg.norm(step[..., :2] if horizontal else step, axis=-1) * (fps if per_second else 1)
+        planted = contacts[..., :-1, :] & contacts[..., 1:, :] if both_ends else contacts[..., :-1, :]
+        return float(speed[planted].mean())
+
+    return skating
+
+
+@pytest.mark.parametrize(
+    "wrong, says",
+    [
+        (_skating(horizontal=False), "horizontal"),
+        (_skating(per_second=False), "multiply the per-frame displacement by fps"),
+        (_skating(both_ends=False), "*both* ends"),
+        (_skating(pooled=False), "pool the planted pairs"),
+        (lambda feet, contacts, fps: _skating()(feet, contacts, fps) * np.ones(2), "one number"),
+    ],
+)
+def test_foot_skating_checker_names_the_mistake(wrong, says) -> None:
+    result = exercises.check_foot_skating(wrong)
+    assert result.status == "wrong" and says in result.message, result
+
+
+def _weights(floor="relative", normalise="mean", floor_first=True):
+    def weights(reach, leaf_floor):
+        def raise_(r):
+            if floor == "none":
+                return r
+            return np.maximum(r, leaf_floor * r.max() if floor == "relative" else leaf_floor)
+
+        def scale(r):
+            return r / getattr(r, normalise)()
+
+        return scale(raise_(reach)) if floor_first else raise_(scale(reach))
+
+    return weights
+
+
+@pytest.mark.parametrize(
+    "wrong, says",
+    [
+        (_weights(floor="none"), "end effectors get alpha = 0"),
+        (_weights(floor="absolute"), "a fraction of the largest"),
+        (_weights(normalise="sum"), "sum to 1"),
+        (_weights(normalise="max"), "largest weight is 1"),
+        (_weights(floor_first=False), "floor first"),
+        (lambda reach, leaf_floor: _weights()(reach, leaf_floor)[1:], "one alpha_k per joint"),
+    ],
+)
+def test_impact_weights_checker_names_the_mistake(wrong, says) -> None:
+    result = exercises.check_impact_weights(wrong)
+    assert result.status == "wrong" and says in result.message, result
+
+
+def _keep(draw=lambda u, p: u >= p, rescale=lambda p: 1 / (1 - p), seeded=True, at_generation=False):
+    def keep_mask(batch, frames, history, dropout, generator, training):
+        if not training and not at_generation:
+            return torch.ones(batch, frames, history)
+        u = torch.rand(batch, frames, history, generator=generator if seeded else None)
+        return draw(u, dropout).float() * rescale(dropout)
+
+    return keep_mask
+
+
+@pytest.mark.parametrize(
+    "wrong, says",
+    [
+        (_keep(rescale=lambda p: 1.0), "not rescaled"),
+        (_keep(rescale=lambda p: 1 - p), "divide by it instead"),
+        (_keep(draw=lambda u, p: u < p), "probability of *dropping*"),
+        (_keep(seeded=False), "generator=generator"),
+        (_keep(at_generation=True), "for training only"),
+        (_keep(), "p = 1 gives NaN or inf"),
+        (_keep(rescale=lambda p: torch.tensor(1.0) / (1 - p)), "p = 1 gives NaN or inf"),
+        (lambda b, f, h, p, g, training: _keep()(f, b, h, p, g, training), "(batch, frames, history)"),
+    ],
+)
+def test_keep_mask_checker_names_the_mistake(wrong, says) -> None:
+    result = exercises.check_keep_mask(wrong)
+    assert result.status == "wrong" and says in result.message, result
+
+
+def _given(tile=torch.repeat_interleave, keep_given=True, frame_axis=True):
+    def given(poses, mask):
+        flags = mask if keep_given else ~mask
+        channels = tile(flags, 3, dim=-1) if tile is torch.repeat_interleave else flags.repeat(3)
+        return poses * (channels[..., None, :] if frame_axis else channels).to(poses.dtype)
+
+    return given
+
+
+@pytest.mark.parametrize(
+    "wrong, says",
+    [
+        (_given(tile=None), "repeat_interleave"),
+        (_given(keep_given=False), "zeroed the given ones"),
+        (_given(frame_axis=False), "add one (mask[..., None, :])"),
+        (lambda poses, mask: poses[..., mask.repeat_interleave(3, dim=-1)], "keep the shape"),
+        (lambda poses, mask: _given()(poses.detach(), mask), "no gradient"),
+    ],
+)
+def test_given_trajectories_checker_names_the_mistake(wrong, says) -> None:
+    result = exercises.check_given_trajectories(wrong)
+    assert result.status == "wrong" and says in result.message, result
+
+
+def _prior(trace=lambda logvar, s2: logvar.exp() / s2, log_det_sign=-1.0, on_mean=0.0, reduce=True):
+    def prior(mu, logvar, prior_variance):
+        terms = trace(logvar, prior_variance) + log_det_sign * logvar + on_mean * mu**2 / prior_variance
+        return terms.sum(dim=-1) if reduce else terms
+
+    return prior
+
+
+@pytest.mark.parametrize(
+    "wrong, says",
+    [
+        (_prior(log_det_sign=1.0), "wrong sign of the log-determinant"),
+        (_prior(on_mean=1.0), "no prior on the means"),
+        (_prior(reduce=False), "sum over the D code dimensions"),
+        (_prior(trace=lambda logvar, s2: logvar.exp() / s2**2), "not its square"),
+        (_prior(trace=lambda logvar, s2: logvar / s2), "exp(logvar)"),
+        (_prior(trace=lambda logvar, s2: logvar.exp() / 0.05), "not a constant"),
+        (
+            lambda mu, logvar, s2: _prior()(mu, logvar, s2) - logvar.shape[-1] * (1 - math.log(s2)),
+            "minus its minimum",
+        ),
+    ],
+)
+def test_covariance_prior_checker_names_the_mistake(wrong, says) -> None:
+    result = exercises.check_covariance_prior(wrong)
     assert result.status == "wrong" and says in result.message, result
 
 

@@ -1,5 +1,7 @@
-"""Chapter 06's exercise: MoGlow's autoregressive sampling loop, checked against the package's generic loop
-:func:`motionlab.models.moglow.sampling.autoregressive_sample` with a small stand-in for the flow's inverse.
+"""Chapter 06's exercises: MoGlow's history dropout, checked against
+:func:`motionlab.models.moglow.conditioning.history_keep_mask`, and its autoregressive sampling loop, checked
+against the package's generic loop :func:`motionlab.models.moglow.sampling.autoregressive_sample` with a small
+stand-in for the flow's inverse.
 
 The reader's loop receives ``invert_frame(z_t, cond_t, state) -> (pose_t, state)``, the one-frame inverse
 of a MoGlow (the Glow steps undone in reverse order, as in :func:`~motionlab.models.moglow.sampling.
@@ -9,6 +11,7 @@ part (latent, conditioning, carried state, output) the reader's loop departs fro
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any
@@ -16,9 +19,11 @@ from typing import Any
 import torch
 
 from motionlab.exercises.checking import CheckResult, Diagnosis, as_result, close, run_checks
+from motionlab.models.moglow.conditioning import history_keep_mask
 from motionlab.models.moglow.sampling import autoregressive_sample
 
 InvertFrame = Callable[[torch.Tensor, torch.Tensor, Any], tuple[torch.Tensor, Any]]
+KeepMask = Callable[[int, int, int, float, torch.Generator, bool], torch.Tensor]
 SampleLoop = Callable[[InvertFrame, torch.Tensor, torch.Tensor, torch.Tensor, float], torch.Tensor]
 
 BATCH, HISTORY, POSE, CONTROL, FRAMES, TEMPERATURE = 2, 3, 4, 2, 6, 0.7
@@ -208,4 +213,85 @@ def check_sample_loop(fn: SampleLoop) -> CheckResult:
         [_follow_the_calls, _other_sizes],
         "conditions each frame on the last tau poses and the current control window, scales the latent by "
         "the temperature, carries the state and appends each pose to the history",
+    )
+
+
+def _keep_mask_reference(batch: int, frames: int, history: int, dropout: float, seed: int) -> torch.Tensor:
+    generator = torch.Generator().manual_seed(seed)
+    return history_keep_mask(batch, frames, history, dropout, generator, rescale=True)
+
+
+def _keep_mask_call(fn: KeepMask, shape: tuple[int, int, int], dropout: float, seed: int, training: bool):
+    got = as_result(fn(*shape, dropout, torch.Generator().manual_seed(seed), training), "my_keep_mask")
+    if tuple(got.shape) != shape:
+        raise Diagnosis(
+            f"the keep flags should be (batch, frames, history) = {shape}, got {tuple(got.shape)}"
+        )
+    return got.to(torch.float32)
+
+
+def _keep_mask_training(fn: KeepMask) -> None:
+    shape, dropout = (64, 40, 5), 0.6
+    got = _keep_mask_call(fn, shape, dropout, 0, True)
+    want = _keep_mask_reference(*shape, dropout, 0)
+    if close(got, want, 1e-6):
+        return
+    kept = want > 0
+    if close(got, kept.float(), 1e-6):
+        raise Diagnosis(
+            "the kept poses are not rescaled: multiply them by 1 / (1 - p) (inverted dropout) so that a "
+            "linear map of the history keeps its expectation"
+        )
+    if close(got, kept.float() * (1 - dropout), 1e-6):
+        raise Diagnosis("the kept poses are multiplied by 1 - p: divide by it instead, 1 / (1 - p)")
+    flipped = (~kept).float() / (1 - dropout)
+    if close(got, flipped, 1e-6) or close(got, (~kept).float() / dropout, 1e-6):
+        raise Diagnosis(
+            "you keep a pose with probability p: p is the probability of *dropping* it, keep = (u >= p)"
+        )
+    again = _keep_mask_call(fn, shape, dropout, 0, True)
+    if not close(got, again, 1e-6):
+        raise Diagnosis("two calls with the same seed differ: draw the uniforms with generator=generator")
+    values = set(got.unique().tolist())
+    if values <= {0.0, 1 / (1 - dropout)} or values <= {0.0, 1.0}:
+        raise Diagnosis(
+            "the flags are not the package's draw: u = torch.rand(batch, frames, history, "
+            "generator=generator), one uniform per sequence, frame and lag, kept where u >= p"
+        )
+    raise Diagnosis(
+        "the keep flags are wrong: (u >= p) / (1 - p) with u uniform, shape (batch, frames, history)"
+    )
+
+
+def _keep_mask_generation_and_edges(fn: KeepMask) -> None:
+    shape = (3, 7, 4)
+    got = _keep_mask_call(fn, shape, 0.95, 1, False)
+    if not close(got, torch.ones(shape), 1e-6):
+        raise Diagnosis(
+            "with training=False every flag should be 1: the history dropout is for training only, "
+            "generation and the held-out likelihood see the whole history"
+        )
+    for dropout in (0.0, 1.0):
+        try:
+            got = _keep_mask_call(fn, shape, dropout, 2, True)
+        except ZeroDivisionError:
+            got = torch.full(shape, math.inf)
+        if not torch.isfinite(got).all():
+            raise Diagnosis(
+                f"p = {dropout:g} gives NaN or inf (a division by 1 - p = 0): with p = 1 every pose is "
+                "dropped, all flags 0; rescale only when p < 1"
+            )
+        if not close(got, _keep_mask_reference(*shape, dropout, 2), 1e-6):
+            raise Diagnosis(f"p = {dropout:g} should give all flags {1 - dropout:g}, got other values")
+
+
+def check_keep_mask(fn: KeepMask) -> CheckResult:
+    """Check ``fn(batch, frames, history, dropout, generator, training) -> keep (batch, frames, history)``:
+    MoGlow's history dropout with kept poses rescaled by ``1 / (1 - dropout)``, all ones when not training."""
+    return run_checks(
+        "keep_mask",
+        fn,
+        [_keep_mask_training, _keep_mask_generation_and_edges],
+        "matches history_keep_mask(..., rescale=True) in training, keeps everything at generation, and "
+        "handles p = 0 and p = 1",
     )

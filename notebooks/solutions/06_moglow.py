@@ -1,4 +1,4 @@
-"""Worked solution to chapter 06's "your turn" exercise (checked by tests/test_exercises.py)."""
+"""Worked solutions to chapter 06's "your turn" exercises (checked by tests/test_exercises.py)."""
 
 from __future__ import annotations
 
@@ -26,3 +26,14 @@ def my_sample_loop(
         poses.append(pose)
         past = torch.cat([past[:, 1:], pose[:, None]], dim=1)
     return torch.stack(poses, dim=1)
+
+
+def my_keep_mask(
+    batch: int, frames: int, history: int, dropout: float, generator: torch.Generator, training: bool
+) -> torch.Tensor:
+    """Keep flags (batch, frames, history): in training each previous pose is dropped (0) with probability
+    dropout and a kept one scaled by 1 / (1 - dropout) (inverted dropout); outside training all are 1."""
+    if not training:
+        return torch.ones(batch, frames, history)
+    keep = (torch.rand(batch, frames, history, generator=generator) >= dropout).float()
+    return keep / (1.0 - dropout) if dropout < 1.0 else keep
