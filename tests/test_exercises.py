@@ -457,21 +457,6 @@ def _skating(horizontal=True, per_second=True, both_ends=True, pooled=True):
     return skating
 
 
-@pytest.mark.parametrize(
-    "wrong, says",
-    [
-        (_skating(horizontal=False), "horizontal"),
-        (_skating(per_second=False), "multiply the per-frame displacement by fps"),
-        (_skating(both_ends=False), "*both* ends"),
-        (_skating(pooled=False), "pool the planted pairs"),
-        (lambda feet, contacts, fps: _skating()(feet, contacts, fps) * np.ones(2), "one number"),
-    ],
-)
-def test_foot_skating_checker_names_the_mistake(wrong, says) -> None:
-    result = exercises.check_foot_skating(wrong)
-    assert result.status == "wrong" and says in result.message, result
-
-
 def _weights(floor="relative", normalise="mean", floor_first=True):
     def weights(reach, leaf_floor):
         def raise_(r):
@@ -487,22 +472,6 @@ def _weights(floor="relative", normalise="mean", floor_first=True):
     return weights
 
 
-@pytest.mark.parametrize(
-    "wrong, says",
-    [
-        (_weights(floor="none"), "end effectors get alpha = 0"),
-        (_weights(floor="absolute"), "a fraction of the largest"),
-        (_weights(normalise="sum"), "sum to 1"),
-        (_weights(normalise="max"), "largest weight is 1"),
-        (_weights(floor_first=False), "floor first"),
-        (lambda reach, leaf_floor: _weights()(reach, leaf_floor)[1:], "one alpha_k per joint"),
-    ],
-)
-def test_impact_weights_checker_names_the_mistake(wrong, says) -> None:
-    result = exercises.check_impact_weights(wrong)
-    assert result.status == "wrong" and says in result.message, result
-
-
 def _keep(draw=lambda u, p: u >= p, rescale=lambda p: 1 / (1 - p), seeded=True, at_generation=False):
     def keep_mask(batch, frames, history, dropout, generator, training):
         if not training and not at_generation:
@@ -511,24 +480,6 @@ def _keep(draw=lambda u, p: u >= p, rescale=lambda p: 1 / (1 - p), seeded=True, 
         return draw(u, dropout).float() * rescale(dropout)
 
     return keep_mask
-
-
-@pytest.mark.parametrize(
-    "wrong, says",
-    [
-        (_keep(rescale=lambda p: 1.0), "not rescaled"),
-        (_keep(rescale=lambda p: 1 - p), "divide by it instead"),
-        (_keep(draw=lambda u, p: u < p), "probability of *dropping*"),
-        (_keep(seeded=False), "generator=generator"),
-        (_keep(at_generation=True), "for training only"),
-        (_keep(), "p = 1 gives NaN or inf"),
-        (_keep(rescale=lambda p: torch.tensor(1.0) / (1 - p)), "p = 1 gives NaN or inf"),
-        (lambda b, f, h, p, g, training: _keep()(f, b, h, p, g, training), "(batch, frames, history)"),
-    ],
-)
-def test_keep_mask_checker_names_the_mistake(wrong, says) -> None:
-    result = exercises.check_keep_mask(wrong)
-    assert result.status == "wrong" and says in result.message, result
 
 
 def _given(tile=torch.repeat_interleave, keep_given=True, frame_axis=True):
@@ -540,21 +491,6 @@ def _given(tile=torch.repeat_interleave, keep_given=True, frame_axis=True):
     return given
 
 
-@pytest.mark.parametrize(
-    "wrong, says",
-    [
-        (_given(tile=None), "repeat_interleave"),
-        (_given(keep_given=False), "zeroed the given ones"),
-        (_given(frame_axis=False), "add one (mask[..., None, :])"),
-        (lambda poses, mask: poses[..., mask.repeat_interleave(3, dim=-1)], "keep the shape"),
-        (lambda poses, mask: _given()(poses.detach(), mask), "no gradient"),
-    ],
-)
-def test_given_trajectories_checker_names_the_mistake(wrong, says) -> None:
-    result = exercises.check_given_trajectories(wrong)
-    assert result.status == "wrong" and says in result.message, result
-
-
 def _prior(trace=lambda logvar, s2: logvar.exp() / s2, log_det_sign=-1.0, on_mean=0.0, reduce=True):
     def prior(mu, logvar, prior_variance):
         terms = trace(logvar, prior_variance) + log_det_sign * logvar + on_mean * mu**2 / prior_variance
@@ -564,22 +500,63 @@ def _prior(trace=lambda logvar, s2: logvar.exp() / s2, log_det_sign=-1.0, on_mea
 
 
 @pytest.mark.parametrize(
-    "wrong, says",
+    "checker, wrong, says",
     [
-        (_prior(log_det_sign=1.0), "wrong sign of the log-determinant"),
-        (_prior(on_mean=1.0), "no prior on the means"),
-        (_prior(reduce=False), "sum over the D code dimensions"),
-        (_prior(trace=lambda logvar, s2: logvar.exp() / s2**2), "not its square"),
-        (_prior(trace=lambda logvar, s2: logvar / s2), "exp(logvar)"),
-        (_prior(trace=lambda logvar, s2: logvar.exp() / 0.05), "not a constant"),
+        ("check_foot_skating", _skating(horizontal=False), "horizontal"),
+        ("check_foot_skating", _skating(per_second=False), "multiply the per-frame displacement by fps"),
+        ("check_foot_skating", _skating(both_ends=False), "*both* ends"),
+        ("check_foot_skating", _skating(pooled=False), "pool the planted pairs"),
         (
+            "check_foot_skating",
+            lambda feet, contacts, fps: _skating()(feet, contacts, fps) * np.ones(2),
+            "one number",
+        ),
+        ("check_impact_weights", _weights(floor="none"), "end effectors get alpha = 0"),
+        ("check_impact_weights", _weights(floor="absolute"), "a fraction of the largest"),
+        ("check_impact_weights", _weights(normalise="sum"), "sum to 1"),
+        ("check_impact_weights", _weights(normalise="max"), "largest weight is 1"),
+        ("check_impact_weights", _weights(floor_first=False), "floor first"),
+        (
+            "check_impact_weights",
+            lambda reach, leaf_floor: _weights()(reach, leaf_floor)[1:],
+            "one alpha_k per joint",
+        ),
+        ("check_keep_mask", _keep(rescale=lambda p: 1.0), "not rescaled"),
+        ("check_keep_mask", _keep(rescale=lambda p: 1 - p), "divide by it instead"),
+        ("check_keep_mask", _keep(draw=lambda u, p: u < p), "probability of *dropping*"),
+        ("check_keep_mask", _keep(seeded=False), "generator=generator"),
+        ("check_keep_mask", _keep(at_generation=True), "for training only"),
+        ("check_keep_mask", _keep(), "p = 1 gives NaN or inf"),
+        ("check_keep_mask", _keep(rescale=lambda p: torch.tensor(1.0) / (1 - p)), "p = 1 gives NaN or inf"),
+        (
+            "check_keep_mask",
+            lambda b, f, h, p, g, training: _keep()(f, b, h, p, g, training),
+            "(batch, frames, history)",
+        ),
+        ("check_given_trajectories", _given(tile=None), "repeat_interleave"),
+        ("check_given_trajectories", _given(keep_given=False), "zeroed the given ones"),
+        ("check_given_trajectories", _given(frame_axis=False), "add one (mask[..., None, :])"),
+        (
+            "check_given_trajectories",
+            lambda poses, mask: poses[..., mask.repeat_interleave(3, dim=-1)],
+            "keep the shape",
+        ),
+        ("check_given_trajectories", lambda poses, mask: _given()(poses.detach(), mask), "no gradient"),
+        ("check_covariance_prior", _prior(log_det_sign=1.0), "wrong sign of the log-determinant"),
+        ("check_covariance_prior", _prior(on_mean=1.0), "no prior on the means"),
+        ("check_covariance_prior", _prior(reduce=False), "sum over the D code dimensions"),
+        ("check_covariance_prior", _prior(trace=lambda logvar, s2: logvar.exp() / s2**2), "not its square"),
+        ("check_covariance_prior", _prior(trace=lambda logvar, s2: logvar / s2), "exp(logvar)"),
+        ("check_covariance_prior", _prior(trace=lambda logvar, s2: logvar.exp() / 0.05), "not a constant"),
+        (
+            "check_covariance_prior",
             lambda mu, logvar, s2: _prior()(mu, logvar, s2) - logvar.shape[-1] * (1 - math.log(s2)),
             "minus its minimum",
         ),
     ],
 )
-def test_covariance_prior_checker_names_the_mistake(wrong, says) -> None:
-    result = exercises.check_covariance_prior(wrong)
+def test_checker_names_the_mistake(checker, wrong, says) -> None:
+    result = getattr(exercises, checker)(wrong)
     assert result.status == "wrong" and says in result.message, result
 
 
