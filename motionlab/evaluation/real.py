@@ -46,7 +46,7 @@ from motionlab.data.cmu_mocap import (
 from motionlab.data.datasets import Standardizer
 from motionlab.evaluation.benchmark import feature_metrics
 from motionlab.evaluation.evaluator import Evaluator, data_fingerprint
-from motionlab.metrics import Interval, repeat_metric
+from motionlab.metrics import Interval, mean_ci
 from motionlab.models.classifiers import ClassifierConfig, MotionClassifier
 from motionlab.train import TrainConfig, TrainResult, is_cached, train_or_load
 from motionlab.validation import check_scalar
@@ -260,20 +260,47 @@ class RealEvaluatorRun:
 Draw = Callable[[np.random.Generator], tuple[Tensor | np.ndarray, np.ndarray]]
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class Protocol:
-    """ODMO's evaluation protocol on MoCap: ``n`` clips per sample set (400), ``n_sets`` sets (10), windows of
-    ``window`` frames (100), the reference set drawn from ``reference`` (the training clips)."""
+    """ODMO's evaluation protocol on MoCap, with its reference sets drawn and featurised once.
+
+    Attributes:
+        reference: the training clips (the classes of every sample set are stratified as theirs).
+        reference_features: ``n_sets`` tensors ``(n, 30)``: the evaluator's features of a fresh stratified
+            set of ``n`` random training windows per sample set (FID's reference).
+        n: clips per sample set (the paper: 400); window: frames per clip (100); seed: seeds every draw.
+    """
 
     reference: MocapClips
-    n: int = 400
-    n_sets: int = 10
-    window: int = 100
+    reference_features: tuple[Tensor, ...]
+    n: int
+    window: int
+    seed: int
 
-    def __post_init__(self) -> None:
-        for name in ("n", "window"):
-            check_scalar(getattr(self, name), name, "Protocol", kind=numbers.Integral, minimum=1)
-        check_scalar(self.n_sets, "n_sets", "Protocol", kind=numbers.Integral, minimum=2)
+    @classmethod
+    def build(
+        cls,
+        evaluator: Evaluator,
+        reference: MocapClips,
+        n: int = 400,
+        n_sets: int = 10,
+        window: int = 100,
+        seed: int = 0,
+    ) -> Protocol:
+        """Draw and featurise the ``n_sets`` reference sets (set ``r`` from the seed ``[seed, r, 0]``)."""
+        for name, value in (("n", n), ("window", window)):
+            check_scalar(value, name, "Protocol.build", kind=numbers.Integral, minimum=1)
+        check_scalar(n_sets, "n_sets", "Protocol.build", kind=numbers.Integral, minimum=2)
+        features = tuple(
+            evaluator.features(draw_real(np.random.default_rng([seed, r, 0]), reference, n, window)[0])
+            for r in range(n_sets)
+        )
+        return cls(reference, features, n, window, seed)
+
+    @property
+    def n_sets(self) -> int:
+        """Sample sets per row."""
+        return len(self.reference_features)
 
     def stratified_actions(self, rng: np.random.Generator) -> np.ndarray:
         """The classes ``(n,)`` of one sample set, in proportion to the reference clips."""
@@ -288,19 +315,22 @@ def draw_real(
     return windows.positions, windows.action
 
 
-def table2_row(evaluator: Evaluator, protocol: Protocol, draw: Draw, seed: int = 0) -> dict[str, Interval]:
+def table2_row(evaluator: Evaluator, protocol: Protocol, draw: Draw) -> dict[str, Interval]:
     """One row of Table 2: ``{metric: Interval}`` (accuracy as a fraction) over ``protocol.n_sets`` sets.
 
-    Each set compares ``draw(rng)`` with a fresh stratified reference set of the training windows (FID), and
-    draws the Diversity and Multimodality pairs from the same ``rng``.
+    Set ``r`` is ``draw(rng)`` with ``rng`` seeded ``[seed, r, 1]``, compared with reference set ``r`` (FID);
+    the same ``rng`` then draws the Diversity and Multimodality pairs.
     """
-
-    def one_set(generator: torch.Generator) -> dict[str, float]:
-        rng = np.random.default_rng(generator.initial_seed())
-        reference, _ = draw_real(rng, protocol.reference, protocol.n, protocol.window)
+    rows = []
+    for r, reference in enumerate(protocol.reference_features):
+        rng = np.random.default_rng([protocol.seed, r, 1])
         positions, action = draw(rng)
         features, probs = evaluator.features_and_probs(positions, "action")
-        row = feature_metrics(features, probs, np.asarray(action), evaluator.features(reference), rng)
-        return {name: row[name] for name in TABLE2_METRICS}
+        rows.append(feature_metrics(features, probs, np.asarray(action), reference, rng))
+    return {name: interval([row[name] for row in rows]) for name in TABLE2_METRICS}
 
-    return repeat_metric(one_set, lambda generator: generator, protocol.n_sets, seed)
+
+def interval(values: list[float]) -> Interval:
+    """Mean and 95 % interval half-width of ``values`` as an :class:`~motionlab.metrics.Interval`."""
+    mean, half_width = mean_ci(values)
+    return Interval(mean, half_width, tuple(float(v) for v in values), 0.95)
