@@ -390,9 +390,7 @@ def level_floor(positions: ArrayLike, quantile: float = 0.05) -> np.ndarray:
     the minimum, so that a few frames of marker noise below the floor do not lift the whole clip).
     """
     where = "level_floor"
-    array = np.asarray(
-        check_array(positions, "positions", where, trailing=(None, None, 3)), dtype=np.float64
-    )
+    array = np.asarray(check_array(positions, "positions", where, trailing=(None, None, 3)), dtype=np.float64)
     check_scalar(quantile, "quantile", where, minimum=0, maximum=1)
     floor = np.quantile(array[..., 2].min(axis=-1), quantile)
     return array - np.array([0.0, 0.0, floor])

@@ -66,3 +66,27 @@ def contact_share(
         x, fps=fps, height_threshold=height_threshold, speed_threshold=speed_threshold, feet=feet
     )
     return contacts.mean(axis=0)
+
+
+def resample(positions: ArrayLike, fps: float, new_fps: float) -> np.ndarray:
+    """A clip ``(T, J, 3)`` at ``fps`` linearly interpolated to ``new_fps`` over the same duration:
+    ``(floor((T - 1) new_fps / fps) + 1, J, 3)``, frame ``k`` at time ``k / new_fps``."""
+    func = "resample"
+    x = _clip(positions, func)
+    rate = float(check_scalar(fps, "fps", func, minimum=0, include_minimum=False))
+    new_rate = float(check_scalar(new_fps, "new_fps", func, minimum=0, include_minimum=False))
+    times = np.arange(int(np.floor((x.shape[0] - 1) * new_rate / rate + 1e-9)) + 1) * rate / new_rate
+    flat = x.reshape(x.shape[0], -1)
+    columns = [np.interp(times, np.arange(x.shape[0]), flat[:, k]) for k in range(flat.shape[1])]
+    return np.stack(columns, axis=-1).reshape((len(times),) + x.shape[1:])
+
+
+def facing_root_path(positions: ArrayLike, left_hip: int, right_hip: int) -> np.ndarray:
+    """The root's path on the floor ``(T, 2)`` of a clip ``(T, J, 3)``, from the origin, turned so that the
+    first frame faces +x (forward = the right-to-left hip vector turned by -90 degrees about z)."""
+    x = _clip(positions, "facing_root_path")
+    across = x[0, left_hip, :2] - x[0, right_hip, :2]
+    yaw = np.arctan2(-across[0], across[1])
+    path = x[:, 0, :2] - x[0, 0, :2]
+    cos, sin = np.cos(-yaw), np.sin(-yaw)
+    return path @ np.array([[cos, sin], [-sin, cos]])

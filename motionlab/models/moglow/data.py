@@ -217,7 +217,7 @@ def real_features(positions: Tensor) -> MoGlowFeatures:
     The data has no joint rotations, so the heading comes from the hips and shoulders
     (:func:`motionlab.data.cmu_mocap.heading_yaw`) instead of the root's orientation.
     """
-    check_tensor(positions, "positions", "real_features", trailing=(N_JOINTS, 3), min_leading=2)
+    check_tensor(positions, "positions", "real_features", trailing=(N_JOINTS, 3), min_leading=1)
     yaw = torch.as_tensor(cmu_heading_yaw(positions.numpy()), dtype=positions.dtype)
     features = to_moglow(positions, yaw_to_quat(yaw))
     return MoGlowFeatures(features[..., :-CONTROL_DIM], features[..., -CONTROL_DIM:])

@@ -281,7 +281,7 @@ class RealLocomotionConfig(config.ProfileConfig):
 
     data: MoGlowDataConfig = MoGlowDataConfig(actions=("Walk", "Run"))
     window: int = 20
-    stride: int = 5
+    stride: int = 20
     history: int = 5
     moglow_steps: int = 4
     moglow_hidden: int = 64

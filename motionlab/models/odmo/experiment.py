@@ -417,9 +417,7 @@ def measure_real(
     (:func:`~motionlab.evaluation.real.table2_row`)."""
     kind = "prior" if variant in cfg.prior_sampled else "modes"
     sampler = ODMOSampler.from_data(model, data, kind=kind, seed=cfg.seed)
-    row = table2_row(
-        evaluator, protocol, partial(draw_generated, sampler=sampler, protocol=protocol), cfg.seed
-    )
+    row = table2_row(evaluator, protocol, partial(draw_generated, sampler=sampler, protocol=protocol))
     return RealMeasured(sampler, row)
 
 
