@@ -46,6 +46,8 @@ BUDGETS: dict[str, tuple[float, float]] = {
     "06": (180, 40),
     "07": (180, 40),
     "08": (180, 40),
+    "09": (180, 40),
+    "10": (240, 40),
 }
 
 #: A cell may take at most this many times its chapter's budget. Some chapters spend most of their time in

@@ -12,13 +12,15 @@ several typical mistakes.
 Modules: :mod:`~motionlab.exercises.rotations` (chapter 01), :mod:`~motionlab.exercises.kinematics`
 (chapter 02), :mod:`~motionlab.exercises.vae` (chapter 03), :mod:`~motionlab.exercises.hierarchy` (chapter
 04), :mod:`~motionlab.exercises.flows` (chapter 05), :mod:`~motionlab.exercises.sequences` (chapters 07 and
-08); :mod:`~motionlab.exercises.checking` holds what they share.
+08), :mod:`~motionlab.exercises.metrics` (chapter 09); :mod:`~motionlab.exercises.checking` holds what
+they share.
 """
 
 from motionlab.exercises.checking import CheckResult
 from motionlab.exercises.flows import check_affine_forward, check_affine_inverse
 from motionlab.exercises.hierarchy import check_subtree_reach
 from motionlab.exercises.kinematics import check_chain_positions
+from motionlab.exercises.metrics import check_apd, check_fid
 from motionlab.exercises.rotations import check_quat_mul, check_slerp
 from motionlab.exercises.sequences import check_contrastive_loss, check_dct_matrix
 from motionlab.exercises.vae import check_gaussian_kl, check_reparameterize
@@ -27,9 +29,11 @@ __all__ = [
     "CheckResult",
     "check_affine_forward",
     "check_affine_inverse",
+    "check_apd",
     "check_chain_positions",
     "check_contrastive_loss",
     "check_dct_matrix",
+    "check_fid",
     "check_gaussian_kl",
     "check_quat_mul",
     "check_reparameterize",
