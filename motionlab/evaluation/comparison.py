@@ -133,7 +133,7 @@ def _select(n: int | None, count: int) -> slice:
     return slice(0, count if n is None else min(n, count))
 
 
-def motion_cell_method(benchmark: Benchmark, test: CommonTest) -> Method:
+def motion_cell_methods(benchmark: Benchmark, test: CommonTest) -> dict[str, Method]:
     """Chapter 04's Motion Cell, given each test clip's action and body type."""
     from motionlab.models.motion_cell.denoise import prepare_training_data
     from motionlab.models.motion_cell.experiment import ExperimentConfig, runs
@@ -152,7 +152,7 @@ def motion_cell_method(benchmark: Benchmark, test: CommonTest) -> Method:
         poses = model.generate(action[pick], body[pick], n_frames, generator)
         return model.codec.positions(poses, body[pick])
 
-    return Method(
+    method = Method(
         "Motion Cell",
         "action label, body type",
         model,
@@ -161,10 +161,12 @@ def motion_cell_method(benchmark: Benchmark, test: CommonTest) -> Method:
         lambda g: generate(g, 1),
         "04",
     )
+    return {"Motion Cell": method}
 
 
-def moglow_method(benchmark: Benchmark, test: CommonTest, temperature: float = 0.5) -> Method:
-    """Chapter 06's MoGlow (history dropout 0.95, the paper's rate), given each test clip's root-velocity
+def moglow_methods(benchmark: Benchmark, test: CommonTest, temperature: float = 0.5) -> dict[str, Method]:
+    """Chapter 06's MoGlow with the paper's history dropout 0.95 (``"MoGlow"``) and without dropout
+    (``"MoGlow p=0"``, the chapter's better variant on our data), each given every test clip's root-velocity
     control and its first ``history`` frames as the seed; sampled at the chapter's ``temperature``."""
     from motionlab.models.moglow.data import clip_features
     from motionlab.models.moglow.experiment import ExperimentConfig, load_data, moglow_name, runs
@@ -172,31 +174,36 @@ def moglow_method(benchmark: Benchmark, test: CommonTest, temperature: float = 0
 
     ex = ExperimentConfig.current()
     data = load_data(ex, benchmark)
-    model, result = runs(ex, data)[moglow_name(0.95)].train(progress=False)
-    model.eval()
-    history = model.cfg.history
+    named = runs(ex, data)
     raw = clip_features(test.clips, replace(ex.data, actions=COMMON_ACTIONS), augment=False)
-    seed = seed_features(raw, range(raw.pose.shape[0]), history)
-    control = raw.control[:, 1 + history :]
 
-    @torch.no_grad()
-    def generate(generator: torch.Generator, n: int | None = None) -> Tensor:
-        pick = _select(n, control.shape[0])
-        part = type(seed)(seed.pose[pick], seed.control[pick])
-        return generate_motion(model, data.scalers, control[pick], part, temperature, generator).positions
+    def method(name: str, dropout: float) -> Method:
+        model, result = named[moglow_name(dropout)].train(progress=False)
+        model.eval()
+        history = model.cfg.history
+        seed = seed_features(raw, range(raw.pose.shape[0]), history)
+        control = raw.control[:, 1 + history :]
 
-    return Method(
-        "MoGlow",
-        "control (root velocity) every frame, seed frames",
-        model,
-        result.metrics["train_seconds"],
-        generate,
-        lambda g: generate(g, 1),
-        "06",
-    )
+        @torch.no_grad()
+        def generate(generator: torch.Generator, n: int | None = None) -> Tensor:
+            pick = _select(n, control.shape[0])
+            part = type(seed)(seed.pose[pick], seed.control[pick])
+            return generate_motion(model, data.scalers, control[pick], part, temperature, generator).positions
+
+        return Method(
+            name,
+            "control (root velocity) every frame, seed frames",
+            model,
+            result.metrics["train_seconds"],
+            generate,
+            lambda g: generate(g, 1),
+            "06",
+        )
+
+    return {"MoGlow": method("MoGlow", 0.95), "MoGlow p=0": method("MoGlow p=0", 0.0)}
 
 
-def trajevae_method(benchmark: Benchmark, test: CommonTest) -> Method:
+def trajevae_methods(benchmark: Benchmark, test: CommonTest) -> dict[str, Method]:
     """Chapter 07's TrajeVAE (the last rung), given each test clip's first pose and its pelvis trajectory
     (k = 1 joint), at its 15 fps; its completions are resampled to 30 fps."""
     from motionlab.models.trajevae.data import FPS as TRAJEVAE_FPS
@@ -233,7 +240,7 @@ def trajevae_method(benchmark: Benchmark, test: CommonTest) -> Method:
         clip = torch.cat([windows[pick, :1], completed], dim=1)
         return resample(clip.reshape(clip.shape[0], clip.shape[1], -1, 3), TRAJEVAE_FPS, FPS)
 
-    return Method(
+    method = Method(
         "TrajeVAE",
         "initial pose, pelvis trajectory (k = 1)",
         model,
@@ -242,9 +249,10 @@ def trajevae_method(benchmark: Benchmark, test: CommonTest) -> Method:
         lambda g: generate(g, 1),
         "07",
     )
+    return {"TrajeVAE": method}
 
 
-def odmo_method(benchmark: Benchmark, test: CommonTest) -> Method:
+def odmo_methods(benchmark: Benchmark, test: CommonTest) -> dict[str, Method]:
     """Chapter 08's ODMO with mode-preserving sampling, given each test clip's action and end point (its
     root's last position, in the clip's own start frame)."""
     from motionlab.models.odmo.data import prepare
@@ -269,7 +277,7 @@ def odmo_method(benchmark: Benchmark, test: CommonTest) -> Method:
         with torch.no_grad():
             return sampler.generate(codes, action[pick], end_points[pick])[0]
 
-    return Method(
+    method = Method(
         "ODMO",
         "action label, end point",
         model,
@@ -278,15 +286,21 @@ def odmo_method(benchmark: Benchmark, test: CommonTest) -> Method:
         lambda g: generate(g, 1),
         "08",
     )
+    return {"ODMO": method}
 
 
-#: The methods of the comparison, in the course's order.
-METHODS: dict[str, Callable[[Benchmark, CommonTest], Method]] = {
-    "Motion Cell": motion_cell_method,
-    "MoGlow": moglow_method,
-    "TrajeVAE": trajevae_method,
-    "ODMO": odmo_method,
-}
+#: Each family's methods ``{name: Method}``, in the course's order.
+METHODS: tuple[Callable[[Benchmark, CommonTest], dict[str, Method]], ...] = (
+    motion_cell_methods,
+    moglow_methods,
+    trajevae_methods,
+    odmo_methods,
+)
+
+
+def load_methods(benchmark: Benchmark, test: CommonTest) -> dict[str, Method]:
+    """Every method of the comparison by name (the models from the checkpoint cache)."""
+    return {name: method for family in METHODS for name, method in family(benchmark, test).items()}
 
 
 def measured_part(positions: Tensor) -> Tensor:
