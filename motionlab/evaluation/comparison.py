@@ -114,6 +114,7 @@ class Method:
             :data:`FRAMES` frames).
         generate_one: ``generate_one(generator)`` one sample of the first test clip (batch 1, for speed).
         chapter: where the model comes from.
+        seed_frames: leading output frames that are given, not generated (MoGlow's seed of real frames).
     """
 
     name: str
@@ -123,6 +124,7 @@ class Method:
     generate: Callable[[torch.Generator], Tensor]
     generate_one: Callable[[torch.Generator], Tensor]
     chapter: str
+    seed_frames: int = 0
 
     @property
     def parameters(self) -> int:
@@ -198,6 +200,7 @@ def moglow_methods(benchmark: Benchmark, test: CommonTest, temperature: float = 
             generate,
             lambda g: generate(g, 1),
             "06",
+            history,
         )
 
     return {"MoGlow": method("MoGlow", 0.95), "MoGlow p=0": method("MoGlow p=0", 0.0)}
