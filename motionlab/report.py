@@ -316,7 +316,8 @@ def write_front_page(
 <p class="lead">{html.escape(INTRO)}</p>
 <p class="muted">Profile <b>{html.escape(str(results.get("profile", "")))}</b>, Python
 {html.escape(str(results.get("python", "")))}, torch {html.escape(str(results.get("torch", "")))}.
-Chapter time {total / 60:.1f} min (the whole course's budget: {COURSE_BUDGET_SECONDS / 60:.0f} min).
+Chapter time <span class="{"bad" if total > COURSE_BUDGET_SECONDS else "ok"}">{total / 60:.1f} min</span>
+(the whole course's budget: {COURSE_BUDGET_SECONDS / 60:.0f} min).
 Raw numbers: <a href="results.json">results.json</a>.</p>
 <h2>Claims at a glance</h2>
 <p>Statements from the papers (and a few of ours) checked on our data. A known gap is a claim that does not

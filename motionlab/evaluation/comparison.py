@@ -52,7 +52,7 @@ COLUMNS: dict[str, str] = {
     "fid": "↓",
     "diversity": "→ real",
     "multimodality": "→ real",
-    "apd": "→ real",
+    "apd": "m, spread per condition",
     "skating": "→ real",
     "penetration": "↓",
     "jerk": "→ real",
