@@ -2,9 +2,9 @@
 
 Each model family was measured in its own chapter on its own terms (MoGlow on locomotion at 30 fps, TrajeVAE
 at 15 fps, ODMO at 10 fps upsampled to 30). Here every generator gets the *same* held-out clips, the
-benchmark's test clips of :data:`COMMON_ACTIONS` (the actions every model was trained on), and produces one
-sample per clip from what that clip gives it (:attr:`Method.given`): the Motion Cell its action and body type,
-MoGlow the clip's root-velocity control and its first frames, TrajeVAE its first pose and the pelvis
+benchmark's test clips of :data:`COMMON_ACTIONS` (locomotion, which every model was trained on), and produces
+one sample per clip from what that clip gives it (:attr:`Method.given`): the Motion Cell its action and body
+type, MoGlow the clip's root-velocity control and its first frames, TrajeVAE its first pose and the pelvis
 trajectory, ODMO its action and end point. Every output is resampled to :data:`FPS` (linear interpolation in
 time, :func:`resample`) and its last :data:`FRAMES` frames are measured, so a seed of real frames never
 counts.
@@ -37,7 +37,8 @@ from motionlab.metrics import (
 )
 from motionlab.validation import check_scalar, check_tensor
 
-#: The actions of the common test set: the two every generator was trained on (MoGlow knows no others).
+#: The actions of the common test set: locomotion, MoGlow's task (its chapter adds only wave), which every
+#: generator was trained on.
 COMMON_ACTIONS = ("walk", "jog")
 
 #: The common frame rate (the data's).
