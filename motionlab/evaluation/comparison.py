@@ -10,7 +10,7 @@ time, :func:`resample`) and its last :data:`FRAMES` frames are measured, so a se
 counts.
 
 The models are the chapters' own, loaded from the checkpoint cache through each family's ``runs`` (trained
-there when the cache does not hold them). :func:`method_rows` measures every method on ``n_repeats`` sample
+there when the cache does not hold them). :func:`method_row` measures a method on ``n_repeats`` sample
 sets and returns means with 95 % intervals.
 """
 
@@ -186,6 +186,10 @@ def moglow_methods(benchmark: Benchmark, test: CommonTest, temperature: float = 
         history = model.cfg.history
         seed = seed_features(raw, range(raw.pose.shape[0]), history)
         control = raw.control[:, 1 + history :]
+        if control.shape[1] < FRAMES:  # the measured frames must all be generated ones
+            raise ValueError(
+                f"moglow_methods: {control.shape[1]} generated frames, fewer than FRAMES = {FRAMES}"
+            )
 
         @torch.no_grad()
         def generate(generator: torch.Generator, n: int | None = None) -> Tensor:
