@@ -81,7 +81,7 @@ class ExperimentConfig(config.ProfileConfig):
     moglow_hidden: int = 64
     cond_features: int = 64
     baseline_hidden: int = 256
-    moglow_train_steps: int = 500
+    moglow_train_steps: int = 400
     moglow_lr: float = 2e-3
     baseline_train_steps: int = 300
     baseline_lr: float = 1e-3
