@@ -13,8 +13,8 @@ Modules: :mod:`~motionlab.exercises.rotations` (chapter 01), :mod:`~motionlab.ex
 :mod:`~motionlab.exercises.skating` (chapter 02), :mod:`~motionlab.exercises.vae` (chapters 03 and 08),
 :mod:`~motionlab.exercises.hierarchy` (chapter 04), :mod:`~motionlab.exercises.flows` (chapter 05),
 :mod:`~motionlab.exercises.autoregressive` (chapter 06), :mod:`~motionlab.exercises.sequences` (chapters 07
-and 08), :mod:`~motionlab.exercises.real` (chapter 10); :mod:`~motionlab.exercises.checking` holds what they
-share.
+and 08), :mod:`~motionlab.exercises.metrics` (chapter 09), :mod:`~motionlab.exercises.real` (chapter 10);
+:mod:`~motionlab.exercises.checking` holds what they share.
 """
 
 from motionlab.exercises.autoregressive import check_keep_mask, check_sample_loop
@@ -22,6 +22,7 @@ from motionlab.exercises.checking import CheckResult
 from motionlab.exercises.flows import check_affine_forward, check_affine_inverse
 from motionlab.exercises.hierarchy import check_impact_weights, check_subtree_reach
 from motionlab.exercises.kinematics import check_chain_positions
+from motionlab.exercises.metrics import check_apd, check_fid
 from motionlab.exercises.real import check_bone_length_variation
 from motionlab.exercises.rotations import check_quat_mul, check_slerp
 from motionlab.exercises.sequences import check_contrastive_loss, check_dct_matrix, check_given_trajectories
@@ -32,11 +33,13 @@ __all__ = [
     "CheckResult",
     "check_affine_forward",
     "check_affine_inverse",
+    "check_apd",
     "check_bone_length_variation",
     "check_chain_positions",
     "check_contrastive_loss",
     "check_covariance_prior",
     "check_dct_matrix",
+    "check_fid",
     "check_foot_skating",
     "check_gaussian_kl",
     "check_given_trajectories",
