@@ -92,7 +92,13 @@ def parser() -> argparse.ArgumentParser:
     )
     p.add_argument("family", choices=list(FAMILIES), metavar="FAMILY", help=", ".join(FAMILIES))
     p.add_argument("--config", choices=CONFIGS, default="full", help="the experiment configuration (full)")
-    p.add_argument("--run", help="which of the chapter's runs (default: the chapter's main model)")
+    p.add_argument(
+        "--run",
+        "--run-name",
+        dest="run",
+        help="which of the chapter's runs (default: the chapter's main model); under torchrun write "
+        "--run-name, as torchrun reads --run as an abbreviation of its own --run-path",
+    )
     p.add_argument(
         "--set",
         action="append",

@@ -21,8 +21,6 @@ from typing import Any
 
 from torch import nn
 
-from motionlab.metrics import mean_ci
-
 
 @dataclass(frozen=True)
 class DataSet:
@@ -101,6 +99,8 @@ def jsonable(value: Any) -> Any:
 
 
 def _interval(values: Any) -> dict[str, float]:
+    from motionlab.metrics import mean_ci
+
     mean, half = mean_ci(values)
     return {"mean": float(mean), "ci95": float(half)}
 
