@@ -174,3 +174,20 @@ def test_an_interrupted_run_resumes_to_the_weights_of_an_uninterrupted_one(tmp_p
     assert result.resumed_from_step == 4 and not result.loaded_from_cache
     for key, value in straight.state_dict().items():
         assert torch.equal(resumed.state_dict()[key], value), key
+
+
+def test_the_chapter_loads_what_the_command_trained(tmp_path, monkeypatch):
+    """The command writes the chapter's own cache entry: the chapter's run (same config) loads it."""
+    monkeypatch.setenv("MOTIONLAB_PROFILE", "quick")
+    monkeypatch.setenv("MOTIONLAB_BUILD", str(fresh_build(tmp_path / "build")))
+    out = tmp_path / "out"
+    assert main(["vae", "--config", "quick", "--run", "pose_ae", "--skip-evaluation", "--out", str(out)]) == 0
+    from motionlab.models.vae.experiment import ExperimentConfig, runs
+
+    chapter_run = runs(ExperimentConfig.current(), n_actions=6)["pose_ae"]
+    assert chapter_run.is_cached()
+    model, result = chapter_run.train(progress=False)
+    assert result.loaded_from_cache
+    written = state_dict(out)
+    for key, value in model.state_dict().items():
+        assert torch.equal(written[key], value), key

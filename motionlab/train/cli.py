@@ -118,6 +118,9 @@ def parser() -> argparse.ArgumentParser:
     )
     p.add_argument("--tensorboard", type=Path, metavar="DIR", help="also log the loss terms for TensorBoard")
     p.add_argument("--seed", type=_non_negative, help="seed of the initial weights and the batches")
+    p.add_argument(
+        "--skip-evaluation", action="store_true", help="train only (no evaluation.json; e.g. to time a run)"
+    )
     return p
 
 
@@ -366,11 +369,12 @@ def train_command(args: argparse.Namespace) -> dict[str, Any]:
         checkpoint = out / "checkpoints" / result.path.name
         shutil.copy2(result.path, checkpoint)
     _write_json(out / "history.json", result.history.to_dict())
-    evaluate = dataset.evaluate or family.evaluate
-    evaluation_started = time.perf_counter()
-    evaluation = evaluate(cfg, data, run_name, model)
-    evaluation_seconds = time.perf_counter() - evaluation_started
-    _write_json(out / "evaluation.json", evaluation)
+    evaluation_seconds = None
+    if not args.skip_evaluation:
+        evaluate = dataset.evaluate or family.evaluate
+        evaluation_started = time.perf_counter()
+        _write_json(out / "evaluation.json", evaluate(cfg, data, run_name, model))
+        evaluation_seconds = time.perf_counter() - evaluation_started
     steps = int(result.metrics["steps"])
     summary = {
         "family": family.name,
