@@ -27,7 +27,7 @@ from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
-from motionlab.train.families import FAMILIES, Family, jsonable
+from motionlab.train.families import FAMILIES, DataSet, Family, jsonable
 
 CONFIGS = ("quick", "full", "long")
 PROG = "python -m motionlab.train"
@@ -175,10 +175,12 @@ def set_field(cfg: Any, key: str, text: str) -> Any:
     return dataclasses.replace(cfg, **{head: value})
 
 
-def build_config(family: Family, args: argparse.Namespace, run: str) -> Any:
-    """The family's ExperimentConfig of ``--config`` with ``--set`` and ``--steps`` applied."""
+def build_config(family: Family, dataset: DataSet, args: argparse.Namespace, run: str) -> Any:
+    """The family's ExperimentConfig of ``--config`` for ``dataset``, ``--set`` and ``--steps`` applied."""
     cfg = family.config(args.config)
     try:
+        if dataset.configure is not None:
+            cfg = dataset.configure(cfg)
         for item in args.set:
             key, sep, text = item.partition("=")
             if not sep or not key:
@@ -308,7 +310,8 @@ def train_command(args: argparse.Namespace) -> dict[str, Any]:
     run_name = args.run or family.default_run
     data_name, data_path = choose_data(family, args.data)
     device = choose_device(args.device)
-    cfg = build_config(family, args, run_name)
+    dataset = family.datasets[data_name]
+    cfg = build_config(family, dataset, args, run_name)
     tensorboard = TensorBoardLog(args.tensorboard) if args.tensorboard else None
 
     import torch
@@ -318,7 +321,6 @@ def train_command(args: argparse.Namespace) -> dict[str, Any]:
 
     config.setup(seed=0)
     rank, world_size, device = start_processes(device)
-    dataset = family.datasets[data_name]
     data = dataset.load(cfg) if data_path is None else dataset.load(cfg, data_path)
     runs = family.runs(cfg, data)
     if run_name not in runs:

@@ -34,6 +34,8 @@ class DataSet:
         evaluate: ``evaluate(cfg, data, run_name, model)`` for this data set, when it differs from the
             family's (``None``: the family's).
         reads_folder: ``load`` reads the folder of clips given as ``--data PATH`` (``load(cfg, path)``).
+        configure: ``configure(cfg) -> cfg``, the family's config adapted to this data (e.g. its class and
+            joint counts), applied before ``--set`` and ``--steps``; ``None``: the config as it is.
     """
 
     description: str
@@ -41,6 +43,7 @@ class DataSet:
     unavailable: str = ""
     evaluate: Callable[[Any, Any, str, nn.Module], dict[str, Any]] | None = None
     reads_folder: bool = False
+    configure: Callable[[Any], Any] | None = None
 
 
 @dataclass(frozen=True)
@@ -362,7 +365,8 @@ FAMILIES: dict[str, Family] = {
         {
             "benchmark": DataSet(BENCHMARK, _odmo_benchmark),
             # ODMO on the CMU MoCap data (motionlab.data.cmu_mocap): once motionlab.models.odmo prepares
-            # and evaluates it, set load (``load(cfg, path=None)``; path: --data FOLDER) and evaluate.
+            # and evaluates it, set load (``load(cfg, path=None) -> data`` with ``data.train`` an ODMOData;
+            # path: --data FOLDER), evaluate, and configure (the config for its classes and joints).
             "cmu": DataSet(
                 "the CMU MoCap clips of data_real/ (Action2Motion's selection), or a --data FOLDER of them",
                 None,
