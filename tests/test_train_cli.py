@@ -95,14 +95,16 @@ def test_help_lists_families_configs_and_data_sets(capsys):
 
 
 def test_tensorboard_is_an_optional_extra(tmp_path, monkeypatch, capsys):
+    monkeypatch.setenv("MOTIONLAB_PROFILE", "quick")  # the command sets it: restored after the test
     monkeypatch.setitem(sys.modules, "torch.utils.tensorboard", None)  # as when tensorboard is not installed
     assert main(["vae", "--config", "quick", "--tensorboard", str(tmp_path)]) == 2
     assert "pip install 'motionlab[tensorboard]'" in capsys.readouterr().err
 
 
-def test_a_cuda_request_without_a_gpu_is_refused(capsys):
+def test_a_cuda_request_without_a_gpu_is_refused(monkeypatch, capsys):
     if torch.cuda.is_available():
         pytest.skip("this machine has a GPU")
+    monkeypatch.setenv("MOTIONLAB_PROFILE", "quick")
     assert main(["vae", "--device", "cuda"]) == 2
     assert "no CUDA device" in capsys.readouterr().err
 
