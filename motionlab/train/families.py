@@ -306,7 +306,7 @@ def _odmo_evaluate(cfg: Any, data: _ODMOData, run: str, model: nn.Module) -> dic
     }
 
 
-BENCHMARK = "the course benchmark: the chapters' synthetic motion data (6 actions x 3 styles x 2 bodies)"
+BENCHMARK = "the course benchmark: the chapters' synthetic motion data (6 actions x 2 styles x 2 bodies)"
 
 FAMILIES: dict[str, Family] = {
     "vae": Family(
