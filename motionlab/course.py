@@ -2,8 +2,9 @@
 
 For each ``notebooks/NN_name.ipynb`` in order: execute it headless in a fresh kernel (cwd ``notebooks/``,
 widget state stored in the notebook), record its wall time in ``results.json``, and write the executed
-notebook and an HTML rendering. Then write ``index.html``: a link to every chapter, its time against its
-budget, and the metrics and claims tables of ``results.json``.
+notebook and an HTML rendering. Then write the front page ``index.html`` (:mod:`motionlab.report`): what
+the course is, the claims at a glance, chapter 09's comparison of the four generators, one card per chapter
+(summary, key figure, time against budget, claims) and every metric.
 
 A chapter that fails (an error, or a claim that stopped holding in the full profile) does not stop the
 build: the remaining chapters still run so the report shows everything, and the command exits non-zero.
@@ -21,18 +22,17 @@ Usage: ``python -m motionlab.course [--only 01 03] [--notebooks DIR]``.
 from __future__ import annotations
 
 import argparse
-import html
 import re
 import sys
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
 
 import nbformat
 from nbconvert import HTMLExporter
 
 from motionlab import config
 from motionlab.execution import CellLimits, execute_notebook, read_notebook
+from motionlab.report import ChapterStatus, write_front_page
 from motionlab.report_assets import install_assets, localize_page
 from motionlab.results import load_results, results_path, update_notebook
 
@@ -46,6 +46,8 @@ BUDGETS: dict[str, tuple[float, float]] = {
     "06": (180, 40),
     "07": (180, 40),
     "08": (180, 40),
+    "09": (180, 40),
+    "10": (240, 40),
 }
 
 #: A cell may take at most this many times its chapter's budget. Some chapters spend most of their time in
@@ -148,89 +150,23 @@ def execute_chapter(path: Path, out_dir: Path, assets: dict[str, str] | None = N
     return ChapterRun(name, seconds, error, tuple(retries))
 
 
-def _claim_rows(results: dict[str, Any]) -> str:
-    rows = []
-    for chapter, entry in sorted(results.get("notebooks", {}).items()):
-        for claim_id, claim in sorted(entry.get("claims", {}).items()):
-            if claim.get("holds"):
-                verdict, css = "holds", "ok"
-            elif not claim.get("expected", True):
-                verdict, css = f"known gap: {claim.get('why', '')}", "gap"
-            else:
-                verdict, css = "FAILS", "bad"
-            rows.append(
-                f"<tr class='{css}'><td>{html.escape(chapter)}</td><td><code>{html.escape(claim_id)}"
-                "</code></td>"
-                f"<td>{html.escape(str(claim.get('text', '')))}</td>"
-                f"<td>{claim.get('value', float('nan')):.4g}</td>"
-                f"<td>{html.escape(str(claim.get('op', '')))} {claim.get('threshold', float('nan')):.4g}</td>"
-                f"<td>{html.escape(verdict)}</td></tr>"
-            )
-    return "\n".join(rows)
-
-
-def _metric_rows(results: dict[str, Any]) -> str:
-    rows = []
-    for chapter, entry in sorted(results.get("notebooks", {}).items()):
-        metrics = entry.get("metrics", {})
-        for key in sorted(k for k in metrics if not k.endswith(".ci95")):
-            ci = metrics.get(f"{key}.ci95")
-            shown = f"{metrics[key]:.4g}" + (f" ± {ci:.2g}" if ci is not None else "")
-            rows.append(
-                f"<tr><td>{html.escape(chapter)}</td><td><code>{html.escape(key)}</code></td><td>{shown}</td></tr>"
-            )
-    return "\n".join(rows)
-
-
 def write_index(out_dir: Path, runs: list[ChapterRun]) -> Path:
-    """Write ``index.html`` from the runs and ``results.json``."""
+    """Write the report's front page ``index.html`` (:mod:`motionlab.report`) from ``results.json``.
+
+    It shows the chapters that ran now (``runs``) and, from earlier builds of the same profile, every other
+    chapter whose executed notebook is in ``out_dir`` (its time from ``results.json``).
+    """
     results = load_results()
-    chapter_rows = []
-    for run in runs:
-        budget = budget_seconds(run.name)
-        over = budget is not None and run.seconds > budget
-        status = "failed: " + html.escape(run.error) if run.error else ("over budget" if over else "ok")
-        if run.retries:
-            status += "".join(f"<br>executed again after: {html.escape(retry)}" for retry in run.retries)
-        css = "bad" if run.error or over else "ok"
-        chapter_rows.append(
-            f"<tr class='{css}'><td><a href='{run.name}.html'>{html.escape(run.name)}</a></td>"
-            f"<td>{run.seconds:.1f} s</td><td>{'' if budget is None else f'{budget:.0f} s'}</td>"
-            f"<td>{status}</td></tr>"
-        )
-    total = sum(run.seconds for run in runs)
-    page = f"""<!DOCTYPE html>
-<html lang="en"><head><meta charset="utf-8"><title>motionlab course report</title>
-<style>
-body {{ font-family: system-ui, sans-serif; max-width: 70em; margin: 2em auto; padding: 0 1em; }}
-table {{ border-collapse: collapse; margin-bottom: 2em; }}
-td, th {{ border: 1px solid #ccc; padding: 0.3em 0.6em; text-align: left; vertical-align: top; }}
-tr.ok td:last-child {{ color: #176117; }} tr.bad td:last-child {{ color: #a11; font-weight: bold; }}
-tr.gap td:last-child {{ color: #8a5a00; }}
-</style></head><body>
-<h1>motionlab: probabilistic human-motion synthesis</h1>
-<p>Profile <b>{html.escape(results["profile"])}</b>, Python {html.escape(results["python"])},
-torch {html.escape(results["torch"])}. Total chapter time {total / 60:.1f} min.
-Raw numbers: <a href="results.json">results.json</a>.</p>
-<h2>Chapters</h2>
-<table><tr><th>chapter</th><th>time</th><th>budget</th><th>status</th></tr>
-{"".join(chapter_rows)}
-</table>
-<h2>Claims</h2>
-<p>Statements from the papers (and a few of ours) checked on our data. A known gap is a claim that
-does not hold here after investigation; the chapter explains why.</p>
-<table><tr><th>chapter</th><th>claim</th><th>statement</th><th>value</th><th>threshold</th><th>verdict</th></tr>
-{_claim_rows(results)}
-</table>
-<h2>Metrics</h2>
-<table><tr><th>chapter</th><th>metric</th><th>value (± 95% CI half-width)</th></tr>
-{_metric_rows(results)}
-</table>
-</body></html>
-"""
-    index = out_dir / "index.html"
-    index.write_text(page, encoding="utf-8")
-    return index
+    ran = {run.name: run for run in runs}
+    earlier = {path.stem for path in out_dir.glob("[0-9][0-9]_*.ipynb")} - set(ran)
+    chapters = [
+        ChapterStatus(run.name, run.seconds, run.error, run.retries)
+        if (run := ran.get(name)) is not None
+        else ChapterStatus(name, results.get("notebooks", {}).get(name, {}).get("seconds"), current=False)
+        for name in sorted(set(ran) | earlier)
+    ]
+    budgets = {chapter.name: budget_seconds(chapter.name) for chapter in chapters}
+    return write_front_page(out_dir, results, chapters, budgets)
 
 
 def select_chapters(notebook_dir: Path, only: list[str] | None = None) -> list[Path]:

@@ -351,3 +351,50 @@ def test_argument_checks(clips: cm.MocapClips) -> None:
         cm.face_x(np.zeros((4, 22, 3)))
     with pytest.raises(ValueError, match="no horizontal direction"):
         cm.heading_yaw(np.zeros((20, 3)))
+
+
+# ----------------------------------------------------------------------------------------------------
+# mirror map, floor levelling, splits
+
+
+def test_mirror_map_swaps_sides_and_is_an_involution() -> None:
+    mirror = np.array(cm.MIRROR)
+    assert (mirror[mirror] == np.arange(cm.N_JOINTS)).all()
+    for name, index in cm.JOINT.items():
+        partner = cm.JOINT_NAMES[mirror[index]]
+        if name.startswith("left_"):
+            assert partner == "right_" + name[5:]
+        elif name.startswith("right_"):
+            assert partner == "left_" + name[6:]
+        else:
+            assert partner == name
+    assert np.array(cm.PARENTS)[mirror][1:].tolist() == mirror[np.array(cm.PARENTS)[1:]].tolist()
+
+
+def test_level_floor_puts_the_low_quantile_of_the_lowest_joint_at_zero() -> None:
+    clip = _clip(40).astype(np.float64) * 0.05 + [0.0, 0.0, 0.7]
+    levelled = cm.level_floor(clip, quantile=0.1)
+    assert np.quantile(levelled[..., 2].min(-1), 0.1) == pytest.approx(0.0, abs=1e-12)
+    np.testing.assert_allclose(levelled[..., :2], clip[..., :2])
+    np.testing.assert_allclose(np.diff(levelled[..., 2], axis=0), np.diff(clip[..., 2], axis=0))
+    with pytest.raises(ValueError, match="quantile"):
+        cm.level_floor(clip, quantile=1.5)
+
+
+def test_split_is_stratified_disjoint_and_seeded(clips: cm.MocapClips) -> None:
+    bench = cm.odmo_clips(clips)
+    train, test = cm.split_clips(bench, 0.2, rng=3)
+    assert train.n_clips + test.n_clips == bench.n_clips
+    assert not {id(p) for p in train.positions} & {id(p) for p in test.positions}  # shared arrays, no copies
+    for name, count in bench.class_counts().items():
+        assert test.class_counts()[name] == min(max(round(0.2 * count), 1), count - 1)
+    again = cm.split_clips(bench, 0.2, rng=3)[1]
+    assert again.clip_id == test.clip_id
+
+
+def test_split_refuses_a_class_with_one_clip(clips: cm.MocapClips) -> None:
+    lonely = clips.subset(
+        np.concatenate([np.flatnonzero(clips.action == 0)[:3], np.flatnonzero(clips.action == 2)[:1]])
+    )
+    with pytest.raises(ValueError, match="Run has 1 clip"):
+        cm.split_clips(lonely)

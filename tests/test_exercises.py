@@ -78,13 +78,19 @@ def test_skeletons_raise_not_implemented_with_a_message_and_the_checker_says_not
         ("01", "my_quat_mul"),
         ("01", "my_slerp"),
         ("02", "my_chain_positions"),
+        ("02", "my_foot_skating"),
         ("03", "my_reparameterize"),
         ("03", "my_gaussian_kl"),
         ("04", "my_subtree_reach"),
+        ("04", "my_impact_weights"),
         ("05", "my_affine_forward"),
         ("05", "my_affine_inverse"),
+        ("06", "my_sample_loop"),
+        ("06", "my_keep_mask"),
         ("07", "my_dct_matrix"),
+        ("07", "my_given_trajectories"),
         ("08", "my_contrastive_loss"),
+        ("08", "my_covariance_prior"),
     ],
 )
 def test_solutions_pass_their_checkers(chapter: str, name: str) -> None:
@@ -387,3 +393,236 @@ def _reach(combine="max", include_own=False, forward=False):
 def test_subtree_reach_checker_names_the_mistake(wrong, says) -> None:
     result = exercises.check_subtree_reach(wrong)
     assert result.status == "wrong" and says in result.message, result
+
+
+def _loop(
+    window=lambda control, t, tau: control[:, t : t + tau + 1],
+    scale=True,
+    update=True,
+    carry=True,
+    keep=lambda past: past,
+    newest_first=False,
+):
+    def loop(invert_frame, control, seed_pose, noise, temperature):
+        tau = seed_pose.shape[1]
+        past, state, poses = seed_pose, None, []
+        for t in range(control.shape[1] - tau):
+            visible = keep(past.flip(1) if newest_first else past)
+            cond = torch.cat([visible.flatten(1), window(control, t, tau).flatten(1)], dim=1)
+            pose, new_state = invert_frame((temperature if scale else 1.0) * noise[:, t], cond, state)
+            state = new_state if carry else None
+            poses.append(pose)
+            if update:
+                past = torch.cat([past[:, 1:], pose[:, None]], dim=1)
+        return torch.stack(poses, dim=1)
+
+    return loop
+
+
+@pytest.mark.parametrize(
+    "wrong, says",
+    [
+        (_loop(window=lambda control, t, tau: control[:, t + 1 : t + tau + 2]), "window is control[:, t"),
+        (_loop(window=lambda control, t, tau: control[:, t : t + tau + 1].flip(1)), "current control last"),
+        (_loop(newest_first=True), "oldest first"),
+        (_loop(scale=False), "not scaled"),
+        (_loop(update=False), "update the history"),
+        (_loop(carry=False), "carry the LSTM state"),
+        (
+            _loop(
+                keep=lambda past: (
+                    past * (torch.rand(past.shape, generator=torch.Generator().manual_seed(0)) > 0.95)
+                )
+            ),
+            "dropout is for training only",
+        ),
+        (lambda *args: _loop()(*args).transpose(0, 1), "along dim 1"),
+        (lambda frame, control, seed, noise, temperature: noise, "once per generated frame"),
+    ],
+)
+def test_sample_loop_checker_names_the_mistake(wrong, says) -> None:
+    result = exercises.check_sample_loop(wrong)
+    assert result.status == "wrong" and says in result.message, result
+
+
+def _skating(horizontal=True, per_second=True, both_ends=True, pooled=True):
+    def skating(feet, contacts, fps):
+        if not pooled and feet.ndim == 4:
+            return float(np.mean([_skating()(f, c, fps) for f, c in zip(feet, contacts)]))
+        step = feet[..., 1:, :, :] - feet[..., :-1, :, :]
+        speed = np.linalg.norm(step[..., :2] if horizontal else step, axis=-1) * (fps if per_second else 1)
+        planted = contacts[..., :-1, :] & contacts[..., 1:, :] if both_ends else contacts[..., :-1, :]
+        return float(speed[planted].mean())
+
+    return skating
+
+
+def _weights(floor="relative", normalise="mean", floor_first=True):
+    def weights(reach, leaf_floor):
+        def raise_(r):
+            if floor == "none":
+                return r
+            return np.maximum(r, leaf_floor * r.max() if floor == "relative" else leaf_floor)
+
+        def scale(r):
+            return r / getattr(r, normalise)()
+
+        return scale(raise_(reach)) if floor_first else raise_(scale(reach))
+
+    return weights
+
+
+def _keep(draw=lambda u, p: u >= p, rescale=lambda p: 1 / (1 - p), seeded=True, at_generation=False):
+    def keep_mask(batch, frames, history, dropout, generator, training):
+        if not training and not at_generation:
+            return torch.ones(batch, frames, history)
+        u = torch.rand(batch, frames, history, generator=generator if seeded else None)
+        return draw(u, dropout).float() * rescale(dropout)
+
+    return keep_mask
+
+
+def _given(tile=torch.repeat_interleave, keep_given=True, frame_axis=True):
+    def given(poses, mask):
+        flags = mask if keep_given else ~mask
+        channels = tile(flags, 3, dim=-1) if tile is torch.repeat_interleave else flags.repeat(3)
+        return poses * (channels[..., None, :] if frame_axis else channels).to(poses.dtype)
+
+    return given
+
+
+def _prior(trace=lambda logvar, s2: logvar.exp() / s2, log_det_sign=-1.0, on_mean=0.0, reduce=True):
+    def prior(mu, logvar, prior_variance):
+        terms = trace(logvar, prior_variance) + log_det_sign * logvar + on_mean * mu**2 / prior_variance
+        return terms.sum(dim=-1) if reduce else terms
+
+    return prior
+
+
+@pytest.mark.parametrize(
+    "checker, wrong, says",
+    [
+        ("check_foot_skating", _skating(horizontal=False), "horizontal"),
+        ("check_foot_skating", _skating(per_second=False), "multiply the per-frame displacement by fps"),
+        ("check_foot_skating", _skating(both_ends=False), "*both* ends"),
+        ("check_foot_skating", _skating(pooled=False), "pool the planted pairs"),
+        (
+            "check_foot_skating",
+            lambda feet, contacts, fps: _skating()(feet, contacts, fps) * np.ones(2),
+            "one number",
+        ),
+        ("check_impact_weights", _weights(floor="none"), "end effectors get alpha = 0"),
+        ("check_impact_weights", _weights(floor="absolute"), "a fraction of the largest"),
+        ("check_impact_weights", _weights(normalise="sum"), "sum to 1"),
+        ("check_impact_weights", _weights(normalise="max"), "largest weight is 1"),
+        ("check_impact_weights", _weights(floor_first=False), "floor first"),
+        (
+            "check_impact_weights",
+            lambda reach, leaf_floor: _weights()(reach, leaf_floor)[1:],
+            "one alpha_k per joint",
+        ),
+        ("check_keep_mask", _keep(rescale=lambda p: 1.0), "not rescaled"),
+        ("check_keep_mask", _keep(rescale=lambda p: 1 - p), "divide by it instead"),
+        ("check_keep_mask", _keep(draw=lambda u, p: u < p), "probability of *dropping*"),
+        ("check_keep_mask", _keep(seeded=False), "generator=generator"),
+        ("check_keep_mask", _keep(at_generation=True), "for training only"),
+        ("check_keep_mask", _keep(), "p = 1 gives NaN or inf"),
+        ("check_keep_mask", _keep(rescale=lambda p: torch.tensor(1.0) / (1 - p)), "p = 1 gives NaN or inf"),
+        (
+            "check_keep_mask",
+            lambda b, f, h, p, g, training: _keep()(f, b, h, p, g, training),
+            "(batch, frames, history)",
+        ),
+        ("check_given_trajectories", _given(tile=None), "repeat_interleave"),
+        ("check_given_trajectories", _given(keep_given=False), "zeroed the given ones"),
+        ("check_given_trajectories", _given(frame_axis=False), "add one (mask[..., None, :])"),
+        (
+            "check_given_trajectories",
+            lambda poses, mask: poses[..., mask.repeat_interleave(3, dim=-1)],
+            "keep the shape",
+        ),
+        ("check_given_trajectories", lambda poses, mask: _given()(poses.detach(), mask), "no gradient"),
+        ("check_covariance_prior", _prior(log_det_sign=1.0), "wrong sign of the log-determinant"),
+        ("check_covariance_prior", _prior(on_mean=1.0), "no prior on the means"),
+        ("check_covariance_prior", _prior(reduce=False), "sum over the D code dimensions"),
+        ("check_covariance_prior", _prior(trace=lambda logvar, s2: logvar.exp() / s2**2), "not its square"),
+        ("check_covariance_prior", _prior(trace=lambda logvar, s2: logvar / s2), "exp(logvar)"),
+        ("check_covariance_prior", _prior(trace=lambda logvar, s2: logvar.exp() / 0.05), "not a constant"),
+        (
+            "check_covariance_prior",
+            lambda mu, logvar, s2: _prior()(mu, logvar, s2) - logvar.shape[-1] * (1 - math.log(s2)),
+            "minus its minimum",
+        ),
+    ],
+)
+def test_checker_names_the_mistake(checker, wrong, says) -> None:
+    result = getattr(exercises, checker)(wrong)
+    assert result.status == "wrong" and says in result.message, result
+
+
+# The hooks the end-of-chapter exercises use instead of edits to the package.
+
+
+def test_motion_cell_temperature_scales_the_prior_noise() -> None:
+    from test_motion_cell_common import motion_cell, perturb
+
+    model = motion_cell().eval()
+    perturb(model.word_decoder.net[-1].weight, 0.1)  # a decoder that moves
+    action, body = torch.tensor([0, 1]), torch.tensor([1, 0])
+
+    def sample(**kwargs) -> torch.Tensor:
+        return model.generate(action, body, 7, torch.Generator().manual_seed(3), **kwargs)
+
+    assert torch.equal(sample(), sample(temperature=1.0))
+    cool, hot = sample(temperature=0.0), sample(temperature=2.0)
+    assert cool.shape == hot.shape == (2, 7, 90) and not torch.equal(cool, hot)
+    with pytest.raises(ValueError, match="temperature"):
+        sample(temperature=-1.0)
+
+
+def test_moglow_history_dropout_can_be_overridden_in_a_subclass() -> None:
+    from motionlab.models.moglow import MoGlow, MoGlowConfig
+
+    class WholeWindow(MoGlow):
+        def keep_mask(self, batch, frames, generator=None):
+            keep = super().keep_mask(batch, frames, generator)
+            calls.append((batch, frames))
+            return keep[..., :1].expand_as(keep)  # one flag per frame for the whole window
+
+    calls: list[tuple[int, int]] = []
+    model = WholeWindow(
+        MoGlowConfig(pose_dim=6, control_dim=2, history=3, steps=1, hidden=4, cond_features=3)
+    )
+    pose, control = torch.randn(2, 9, 6), torch.randn(2, 9, 2)
+    model.train()(pose, control, torch.Generator().manual_seed(0))
+    assert calls == [(2, 6)]
+    model.eval()(pose, control)
+    assert calls == [(2, 6)]
+    full = MoGlow(model.cfg)
+    full.load_state_dict(model.state_dict())
+    assert torch.equal(full.eval()(pose, control), model(pose, control))
+
+
+def exercise_sections() -> list[tuple[str, str]]:
+    """(chapter file name, its '## Exercises' text) of every chapter."""
+    sections = []
+    for path in sorted(NOTEBOOKS.glob("[0-9][0-9]_*.ipynb")):
+        text = "\n".join("".join(c["source"]) for c in json.loads(path.read_text())["cells"])
+        if "## Exercises" in text:
+            sections.append((path.name, text.split("## Exercises", 1)[1].split("\n## ", 1)[0]))
+    return sections
+
+
+@pytest.mark.parametrize("chapter, text", exercise_sections(), ids=[c[:2] for c, _ in exercise_sections()])
+def test_end_of_chapter_exercises_say_how_long_and_how_to_tell_success(chapter: str, text: str) -> None:
+    items = re.split(r"\n\d+\. ", "\n" + text.split("\n1. ", 1)[1])[1:]
+    assert len(items) >= 4, f"{chapter}: expected the numbered exercises"
+    for number, item in enumerate(items, 1):
+        assert re.search(r"\d+ (min|hours?)", item), f"{chapter} exercise {number}: no time estimate"
+        assert "**Success:**" in item, f"{chapter} exercise {number}: no success criterion"
+        assert not re.search(r"(edit|change|in) `motionlab/", item), (
+            f"{chapter} exercise {number}: edits the package"
+        )
+    answers = NOTEBOOKS / "solutions" / f"{chapter.removesuffix('.ipynb')}_exercises.md"
+    assert answers.exists(), f"{chapter}: no worked answers at {answers.name}"
+    assert answers.read_text().count("\n## ") >= len(items), f"{chapter}: an exercise without a worked answer"

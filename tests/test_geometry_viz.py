@@ -43,10 +43,11 @@ def test_plot_interpolation_checks_its_arguments():
 
 
 def test_benchmark_reports_throughput_bandwidth_and_copy_reference():
-    result = bench.kernel_speed(n_items=2000, repeats=2)
+    result = bench.kernel_speed(n_items=2000, repeats=2, include_compiled=False)  # make bench compiles
     for kernel in ("quat_to_matrix", "quat_geodesic", "matrix_geodesic"):
         assert result[f"{kernel}.items_per_s"] > 0
         assert result[f"{kernel}.bytes_per_s"] > 0
         assert result[f"{kernel}.copy_bytes_per_s"] > 0
         assert 0 < result[f"{kernel}.fraction_of_copy_bandwidth"]
     assert result["n_items"] == 2000 and result["threads"] == 1
+    assert result["pipeline.eager.items_per_s"] > 0 and "pipeline.compiled.items_per_s" not in result

@@ -22,7 +22,7 @@ from motionlab.models.moglow import (
     select_actions,
     splice_controls,
 )
-from motionlab.widgets.moglow import STAND_SPEED, show_steering, steer, steering_control
+from motionlab.widgets.moglow import STAND_SPEED, Character, show_steering, steer, steering_control
 
 
 @pytest.fixture(scope="module")
@@ -65,6 +65,18 @@ def test_steering_control_retargets_a_recorded_clip(library):
         steering_control(features, speed=-1.0, turn=0.0, frames=10)
 
 
+def test_steering_control_reads_speeds_and_turns_at_the_data_frame_rate(library):
+    _, features = library
+    at_30, index = steering_control(features, speed=1.8, turn=30.0, frames=150)
+    at_12, index_12 = steering_control(features, speed=1.8, turn=30.0, frames=150, fps=12.0)
+    # the same recorded clips read at 12 fps move 12/30 as fast: another clip matches 1.8 m/s
+    assert math.isclose(float(at_12[:, 0].mean()) * 12, 1.8, rel_tol=0.05)
+    recorded_turn = float(features.control[index_12, 1:, 2].mean())
+    assert math.isclose(float(at_12[:, 2].mean()), recorded_turn + math.radians(30) / 12, abs_tol=2e-3)
+    with pytest.raises(ValueError, match="fps"):
+        steering_control(features, speed=1.0, turn=0.0, frames=10, fps=0.0)
+
+
 def test_steer_is_seeded_and_follows_the_speed(library, model):
     _, features = library
     net, scalers = model
@@ -82,6 +94,17 @@ def test_show_steering_draws(library, model):
     net, scalers = model
     figure = show_steering(net, scalers, features, speed=1.0, turn=-20.0, temperature=0.3)
     assert len(figure.axes) == 6
+    plt.close("all")
+
+
+def test_show_steering_draws_another_character(library, model):
+    _, features = library
+    net, scalers = model
+    other = Character(fps=12.0, toes=(4, 8), feet=(3, 4, 7, 8))  # another frame rate, toes and feet
+    figure = show_steering(net, scalers, features, speed=1.0, turn=10.0, temperature=0.3, character=other)
+    assert len(figure.axes) == 6
+    path = plt.figure(1).axes[0]  # the path from above: pelvis and the two toes' trails
+    assert [line.get_label() for line in path.lines][-2:] == ["left toe", "right toe"]
     plt.close("all")
 
 

@@ -148,6 +148,20 @@ PARENTS = parents_from_chains(KINEMATIC_CHAIN, N_JOINTS)
 """Parent of each joint, what :mod:`motionlab.viz` draws with (``filmstrip(clip, PARENTS)``)."""
 
 
+def _mirror_permutation(names: Sequence[str]) -> tuple[int, ...]:
+    """Index of each joint's mirror image (``left_*`` <-> ``right_*``; the others map to themselves)."""
+    swapped = [n.replace("left_", "@").replace("right_", "left_").replace("@", "right_") for n in names]
+    return tuple(list(names).index(n) for n in swapped)
+
+
+MIRROR = _mirror_permutation(JOINT_NAMES)
+"""The left/right joint map ``(J,)``: joint ``j`` of a mirrored pose is joint ``MIRROR[j]`` of the original
+reflected (``motionlab.data.augment.mirror_positions(x, torch.tensor(MIRROR))``)."""
+
+FEET = (JOINT["left_ankle"], JOINT["left_toe"], JOINT["right_ankle"], JOINT["right_toe"])
+"""The joints that touch the floor in locomotion (foot contact, floor levelling)."""
+
+
 # ----------------------------------------------------------------------------------------------------
 # the clips
 
@@ -369,6 +383,19 @@ def root_relative(positions: ArrayLike) -> np.ndarray:
     return array - array[..., :1, :]
 
 
+def level_floor(positions: ArrayLike, quantile: float = 0.05) -> np.ndarray:
+    """A clip ``(T, J, 3)`` (z up) moved vertically so that its floor is at height 0. Float64.
+
+    The floor is the ``quantile`` of the lowest joint's height over the frames (a low quantile rather than
+    the minimum, so that a few frames of marker noise below the floor do not lift the whole clip).
+    """
+    where = "level_floor"
+    array = np.asarray(check_array(positions, "positions", where, trailing=(None, None, 3)), dtype=np.float64)
+    check_scalar(quantile, "quantile", where, minimum=0, maximum=1)
+    floor = np.quantile(array[..., 2].min(axis=-1), quantile)
+    return array - np.array([0.0, 0.0, floor])
+
+
 # ----------------------------------------------------------------------------------------------------
 # ODMO's protocol
 
@@ -449,6 +476,29 @@ def stratified_indices(action: ArrayLike, n: int, rng: RngLike = 0) -> np.ndarra
         )
         picked.append(order[:count])
     return generator.permutation(np.concatenate(picked))
+
+
+def split_clips(
+    clips: MocapClips, test_share: float = 0.2, rng: RngLike = 0
+) -> tuple[MocapClips, MocapClips]:
+    """A stratified train/test split: ``round(test_share * N_c)`` clips of every class ``c`` (at least one,
+    at most ``N_c - 1``) go to the test set, drawn at random. Returns ``(train, test)``, each in the original
+    clip order."""
+    where = "split_clips"
+    check_scalar(
+        test_share, "test_share", where, minimum=0, maximum=1, include_minimum=False, include_maximum=False
+    )
+    generator = as_rng(rng, where)
+    test = np.zeros(clips.n_clips, dtype=bool)
+    for value in np.unique(clips.action):
+        members = np.flatnonzero(clips.action == value)
+        if members.size < 2:
+            raise ValueError(
+                f"{where}: class {clips.action_names[value]} has {members.size} clip; a split needs 2"
+            )
+        count = min(max(round(test_share * members.size), 1), members.size - 1)
+        test[generator.choice(members, size=count, replace=False)] = True
+    return clips.subset(~test), clips.subset(test)
 
 
 # ----------------------------------------------------------------------------------------------------

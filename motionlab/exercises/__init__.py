@@ -9,30 +9,45 @@ chapter goes on with the package version. Solutions live outside the chapters, i
 skeleton in the chapters raises ``NotImplementedError`` with a message, and that each checker recognises
 several typical mistakes.
 
-Modules: :mod:`~motionlab.exercises.rotations` (chapter 01), :mod:`~motionlab.exercises.kinematics`
-(chapter 02), :mod:`~motionlab.exercises.vae` (chapter 03), :mod:`~motionlab.exercises.hierarchy` (chapter
-04), :mod:`~motionlab.exercises.flows` (chapter 05), :mod:`~motionlab.exercises.sequences` (chapters 07 and
-08); :mod:`~motionlab.exercises.checking` holds what they share.
+Modules: :mod:`~motionlab.exercises.rotations` (chapter 01), :mod:`~motionlab.exercises.kinematics` and
+:mod:`~motionlab.exercises.skating` (chapter 02), :mod:`~motionlab.exercises.vae` (chapters 03 and 08),
+:mod:`~motionlab.exercises.hierarchy` (chapter 04), :mod:`~motionlab.exercises.flows` (chapter 05),
+:mod:`~motionlab.exercises.autoregressive` (chapter 06), :mod:`~motionlab.exercises.sequences` (chapters 07
+and 08), :mod:`~motionlab.exercises.metrics` (chapter 09), :mod:`~motionlab.exercises.real` (chapter 10);
+:mod:`~motionlab.exercises.checking` holds what they share.
 """
 
+from motionlab.exercises.autoregressive import check_keep_mask, check_sample_loop
 from motionlab.exercises.checking import CheckResult
 from motionlab.exercises.flows import check_affine_forward, check_affine_inverse
-from motionlab.exercises.hierarchy import check_subtree_reach
+from motionlab.exercises.hierarchy import check_impact_weights, check_subtree_reach
 from motionlab.exercises.kinematics import check_chain_positions
+from motionlab.exercises.metrics import check_apd, check_fid
+from motionlab.exercises.real import check_bone_length_variation
 from motionlab.exercises.rotations import check_quat_mul, check_slerp
-from motionlab.exercises.sequences import check_contrastive_loss, check_dct_matrix
-from motionlab.exercises.vae import check_gaussian_kl, check_reparameterize
+from motionlab.exercises.sequences import check_contrastive_loss, check_dct_matrix, check_given_trajectories
+from motionlab.exercises.skating import check_foot_skating
+from motionlab.exercises.vae import check_covariance_prior, check_gaussian_kl, check_reparameterize
 
 __all__ = [
     "CheckResult",
     "check_affine_forward",
     "check_affine_inverse",
+    "check_apd",
+    "check_bone_length_variation",
     "check_chain_positions",
     "check_contrastive_loss",
+    "check_covariance_prior",
     "check_dct_matrix",
+    "check_fid",
+    "check_foot_skating",
     "check_gaussian_kl",
+    "check_given_trajectories",
+    "check_impact_weights",
+    "check_keep_mask",
     "check_quat_mul",
     "check_reparameterize",
+    "check_sample_loop",
     "check_slerp",
     "check_subtree_reach",
 ]

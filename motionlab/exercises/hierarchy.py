@@ -1,5 +1,6 @@
-"""Chapter 04's exercise: how far each joint's rotation reaches, the ``L_k`` behind the Motion Cell's joint
-weights (eq. 23), checked against :func:`motionlab.skeleton.subtree_reach`."""
+"""Chapter 04's exercises: how far each joint's rotation reaches, the ``L_k`` behind the Motion Cell's joint
+weights (eq. 23), and the weights themselves, checked against :func:`motionlab.skeleton.subtree_reach` and
+:func:`motionlab.skeleton.joint_impact_weights`."""
 
 from __future__ import annotations
 
@@ -8,9 +9,10 @@ from collections.abc import Callable, Sequence
 import numpy as np
 
 from motionlab.exercises.checking import CheckResult, Diagnosis, run_checks
-from motionlab.skeleton import average_skeleton, subtree_reach
+from motionlab.skeleton import Skeleton, average_skeleton, joint_impact_weights, subtree_reach
 
 SubtreeReach = Callable[[Sequence[int], np.ndarray], np.ndarray]
+ImpactWeights = Callable[[np.ndarray, float], np.ndarray]
 
 
 def _trees() -> list[tuple[str, list[int], np.ndarray]]:
@@ -65,4 +67,64 @@ def check_subtree_reach(fn: SubtreeReach) -> CheckResult:
         fn,
         [_reach_values],
         "matches motionlab.skeleton.subtree_reach on the skeleton, a chain and a random tree",
+    )
+
+
+def _as_skeleton(parents: list[int], bones: np.ndarray, seed: int) -> Skeleton:
+    """A skeleton with these parents and bone lengths (random bone directions)."""
+    directions = np.random.default_rng(seed).normal(size=(len(parents), 3))
+    offsets = directions / np.linalg.norm(directions, axis=1, keepdims=True) * bones[:, None]
+    return Skeleton(tuple(f"joint{j}" for j in range(len(parents))), tuple(parents), offsets)
+
+
+def _weight_cases() -> list[tuple[str, np.ndarray, float, np.ndarray]]:
+    """(what, L, leaf_floor, the package's weights) for the skeleton, a chain and a random tree."""
+    cases = []
+    for seed, (name, parents, bones) in enumerate(_trees()):
+        skeleton = _as_skeleton(parents, bones, seed)
+        reach = subtree_reach(skeleton.parents, skeleton.bone_lengths())
+        for floor in (0.1, 0.3, 0.0, 1.0):
+            cases.append(
+                (f"{name} with leaf_floor = {floor:g}", reach, floor, joint_impact_weights(skeleton, floor))
+            )
+    return cases
+
+
+def _weights_values(fn: ImpactWeights) -> None:
+    for name, reach, floor, want in _weight_cases():
+        got = np.asarray(fn(reach.copy(), floor), dtype=float)
+        if got.shape != want.shape:
+            raise Diagnosis(f"for {name} return one alpha_k per joint, shape {want.shape}, got {got.shape}")
+        if np.allclose(got, want):
+            continue
+        floored = np.maximum(reach, floor * reach.max())
+        if np.allclose(got, floored / floored.sum()):
+            raise Diagnosis(f"for {name} the weights sum to 1; divide by the mean so that they average 1")
+        if np.allclose(got, floored / floored.max()):
+            raise Diagnosis(f"for {name} the largest weight is 1; divide by the mean so that they average 1")
+        if np.allclose(got, reach / reach.mean()):
+            raise Diagnosis(
+                f"for {name} the end effectors get alpha = 0; raise every L_k to at least leaf_floor * "
+                "max(L) first, so that their orientation still counts in the loss"
+            )
+        absolute = np.maximum(reach, floor)
+        if np.allclose(got, absolute / absolute.mean()):
+            raise Diagnosis(f"for {name} the floor is a fraction of the largest L_k: leaf_floor * max(L)")
+        if not np.isclose(got.mean(), 1.0):
+            raise Diagnosis(
+                f"for {name} the weights average {got.mean():.3f}: floor first, then divide by the mean"
+            )
+        raise Diagnosis(
+            f"for {name} the weights are wrong: alpha = max(L, leaf_floor * max(L)), over its mean"
+        )
+
+
+def check_impact_weights(fn: ImpactWeights) -> CheckResult:
+    """Check ``fn(reach (J,), leaf_floor) -> alpha (J,)``: each ``L_k`` raised to at least ``leaf_floor *
+    max(L)``, then divided by the mean (eq. 23's joint impact weights, mean 1)."""
+    return run_checks(
+        "impact_weights",
+        fn,
+        [_weights_values],
+        "matches motionlab.skeleton.joint_impact_weights on the skeleton, a chain and a random tree",
     )

@@ -1,5 +1,6 @@
-"""Chapters 07 and 08's exercises: the DCT basis of TrajeVAE and ODMO's contrastive loss, checked against
-:mod:`motionlab.models.trajevae.dct` and :mod:`motionlab.models.odmo.losses`."""
+"""Chapters 07 and 08's exercises: the DCT basis of TrajeVAE, its masked-joint input and ODMO's contrastive
+loss, checked against :mod:`motionlab.models.trajevae.dct`, :mod:`motionlab.models.trajevae.masks` and
+:mod:`motionlab.models.odmo.losses`."""
 
 from __future__ import annotations
 
@@ -11,8 +12,10 @@ import torch
 from motionlab.exercises.checking import CheckResult, Diagnosis, as_result, close, close_each, run_checks
 from motionlab.models.odmo.losses import contrastive_loss
 from motionlab.models.trajevae.dct import dct_matrix
+from motionlab.models.trajevae.masks import given_trajectories, hidden_poses
 
 DCTMatrix = Callable[[int], torch.Tensor]
+GivenTrajectories = Callable[[torch.Tensor, torch.Tensor], torch.Tensor]
 ContrastiveLoss = Callable[[torch.Tensor, torch.Tensor, torch.Tensor, float], torch.Tensor]
 
 
@@ -133,4 +136,67 @@ def check_contrastive_loss(fn: ContrastiveLoss) -> CheckResult:
         fn,
         [_contrastive_values, _contrastive_gradient_at_zero],
         "matches ODMO's eq. 1 per pair (without slack), with finite gradients for equal codes",
+    )
+
+
+def _masked_inputs(batch: tuple[int, ...], seed: int) -> tuple[torch.Tensor, torch.Tensor]:
+    generator = torch.Generator().manual_seed(seed)
+    poses = torch.randn(*batch, 9, 5 * 3, generator=generator, dtype=torch.float64)
+    mask = torch.rand(*batch, 5, generator=generator) < 0.5
+    mask[..., 0], mask[..., 1] = True, False  # at least one given and one hidden joint
+    return poses, mask
+
+
+def _given_problem(got: torch.Tensor, poses: torch.Tensor, mask: torch.Tensor) -> str | None:
+    want = given_trajectories(poses, mask)
+    if close(got, want):
+        return None
+    if got.shape != want.shape:
+        return (
+            f"keep the shape of poses {tuple(want.shape)}, with zeros for the joints to complete (got "
+            f"{tuple(got.shape)}): the model reads fixed-size frames"
+        )
+    if close(got, hidden_poses(poses, mask)):
+        return "you kept the joints to complete and zeroed the given ones: Y = X ⊙ M keeps those with m_j = 1"
+    tiled = mask.repeat(*[1] * (mask.dim() - 1), 3)[..., None, :]
+    if close(got, poses * tiled):
+        return (
+            "the channels are x, y, z of joint 0, then of joint 1, ...: repeat each joint's flag three times "
+            "in place (repeat_interleave), not the whole mask"
+        )
+    return "Y is wrong: the given joints' x, y, z as they are, every other channel 0"
+
+
+def _given_one_mask(fn: GivenTrajectories) -> None:
+    poses, mask = _masked_inputs((), 1)
+    problem = _given_problem(as_result(fn(poses, mask), "given_trajectories"), poses, mask)
+    if problem is not None:
+        raise Diagnosis(f"with poses (9, 15) and mask (5,): {problem}")
+
+
+def _given_per_sequence(fn: GivenTrajectories) -> None:
+    poses, mask = _masked_inputs((4,), 2)
+    poses.requires_grad_(True)
+    try:
+        got = as_result(fn(poses, mask), "given_trajectories")
+    except RuntimeError as error:
+        raise Diagnosis(
+            f"with a mask per sequence, poses (4, 9, 15) and mask (4, 5), your function raised: {error}; the "
+            "mask has no frame axis, add one (mask[..., None, :]) so that it applies to every frame"
+        ) from None
+    problem = _given_problem(got, poses.detach(), mask)
+    if problem is not None:
+        raise Diagnosis(f"with poses (4, 9, 15) and a mask per sequence (4, 5): {problem}")
+    if not got.requires_grad:
+        raise Diagnosis("no gradient flows to the poses: compute with torch operations only")
+
+
+def check_given_trajectories(fn: GivenTrajectories) -> CheckResult:
+    """Check ``fn(poses (..., T, J * 3), mask (..., J) bool) -> Y (..., T, J * 3)``: ``Y = X ⊙ M``, the given
+    joints' trajectories and zeros elsewhere."""
+    return run_checks(
+        "given_trajectories",
+        fn,
+        [_given_one_mask, _given_per_sequence],
+        "matches motionlab.models.trajevae.masks.given_trajectories, for one mask and a mask per sequence",
     )

@@ -1,17 +1,21 @@
-"""Chapter 03's exercises: the reparameterisation trick and the closed-form Gaussian KL, checked against
-:mod:`motionlab.models.gaussian`."""
+"""Chapter 03's exercises, the reparameterisation trick and the closed-form Gaussian KL, checked against
+:mod:`motionlab.models.gaussian`; and chapter 08's σ² prior on the code covariance (ODMO's eq. 1), checked
+against :func:`motionlab.models.odmo.losses.prior_term`."""
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable
 
 import torch
 
 from motionlab.exercises.checking import CheckResult, Diagnosis, as_result, close, run_checks
 from motionlab.models.gaussian import gaussian_kl
+from motionlab.models.odmo.losses import prior_term
 
 Reparameterize = Callable[[torch.Tensor, torch.Tensor, torch.Generator], torch.Tensor]
 GaussianKL = Callable[[torch.Tensor, torch.Tensor], torch.Tensor]
+CovariancePrior = Callable[[torch.Tensor, torch.Tensor, float], torch.Tensor]
 
 
 def _posterior(n: int, seed: int) -> tuple[torch.Tensor, torch.Tensor]:
@@ -119,4 +123,81 @@ def check_gaussian_kl(fn: GaussianKL) -> CheckResult:
         fn,
         [_kl_values, _kl_is_zero_at_the_prior],
         "matches motionlab.models.gaussian.gaussian_kl per dimension, 0 at the prior, with gradients",
+    )
+
+
+def _covariance_reference(mu: torch.Tensor, logvar: torch.Tensor, prior_variance: float) -> torch.Tensor:
+    """Eq. 1's term ``(B,)``: the package's ``prior_term(..., "covariance")`` plus its minimum,
+    ``D (1 - ln σ²)``."""
+    minimum = logvar.shape[-1] * (1.0 - math.log(prior_variance))
+    return prior_term(mu, logvar, prior_variance, "covariance") + minimum
+
+
+def _covariance_values(fn: CovariancePrior) -> None:
+    generator = torch.Generator().manual_seed(4)
+    mu = 3.0 * torch.randn(5, 6, generator=generator, dtype=torch.float64)
+    logvar = torch.randn(5, 6, generator=generator, dtype=torch.float64) - 2.0
+    sigma2 = 0.05
+    got = as_result(fn(mu, logvar, sigma2), "covariance_prior")
+    want = _covariance_reference(mu, logvar, sigma2)
+    per_dimension = logvar.exp() / sigma2 - logvar
+    if got.shape == per_dimension.shape and close(got, per_dimension):
+        raise Diagnosis("return one value per clip (B,): sum over the D code dimensions")
+    if got.shape != want.shape:
+        raise Diagnosis(f"mu and logvar (5, 6) should give one value per clip, (5,), got {tuple(got.shape)}")
+    if close(got, want):
+        return
+    variance = logvar.exp()
+    for wrong, text in (
+        (want + (mu**2).sum(-1) / sigma2, "the paper puts no prior on the means: drop the mu^2 / σ² term"),
+        (want + (mu**2).sum(-1), "the paper puts no prior on the means: drop the mu^2 term"),
+        ((variance / sigma2 + logvar).sum(-1), "wrong sign of the log-determinant: -ln det Σ = -sum logvar"),
+        (
+            (variance / sigma2**2 - logvar).sum(-1),
+            "prior_variance is σ² already, a variance: divide by it, not its square",
+        ),
+        (
+            (variance / sigma2**0.5 - logvar).sum(-1),
+            "prior_variance is σ², a variance: divide by it, not its root",
+        ),
+        ((variance * sigma2 - logvar).sum(-1), "Tr Σ is divided by σ², not multiplied"),
+        ((logvar / sigma2 - logvar).sum(-1), "logvar is log s²: the trace needs the variances exp(logvar)"),
+        (
+            (logvar.exp().sqrt() / sigma2 - logvar).sum(-1),
+            "Σ = diag(s²): exp(logvar) is s², not exp(logvar / 2)",
+        ),
+        (0.5 * want, "eq. 1's term has no factor 1/2: -ln det Σ + Tr Σ / σ²"),
+        (
+            want - logvar.shape[-1] * (1 - math.log(sigma2)),
+            "that is the package's prior_term, the term minus its minimum; write eq. 1's term itself, "
+            "-ln det Σ + Tr Σ / σ²",
+        ),
+    ):
+        if close(got, wrong):
+            raise Diagnosis(text)
+    raise Diagnosis("the term is wrong: sum over k of exp(logvar_k) / σ² - logvar_k")
+
+
+def _covariance_minimum_and_gradient(fn: CovariancePrior) -> None:
+    sigma2 = 0.3
+    logvar = torch.full((2, 4), math.log(sigma2), dtype=torch.float64, requires_grad=True)
+    mu = torch.zeros(2, 4, dtype=torch.float64)
+    got = as_result(fn(mu, logvar, sigma2), "covariance_prior")
+    if not close(got, _covariance_reference(mu, logvar.detach(), sigma2)):
+        raise Diagnosis(f"wrong for σ² = {sigma2} at its minimum s² = σ²: use prior_variance, not a constant")
+    if not got.requires_grad:
+        raise Diagnosis("no gradient reaches logvar: compute with torch operations only")
+    (gradient,) = torch.autograd.grad(got.sum(), logvar)
+    if not close(gradient, torch.zeros_like(gradient)):
+        raise Diagnosis("the gradient should vanish at s² = σ², the term's minimum")
+
+
+def check_covariance_prior(fn: CovariancePrior) -> CheckResult:
+    """Check ``fn(mu, logvar, prior_variance) -> (B,)``: ODMO's eq. 1 prior term ``-ln det Σ + Tr Σ / σ²`` for
+    ``Σ = diag(exp(logvar))``, codes ``(B, D)``, no term on ``mu``."""
+    return run_checks(
+        "covariance_prior",
+        fn,
+        [_covariance_values, _covariance_minimum_and_gradient],
+        "matches eq. 1's covariance term (the package's prior_term plus its minimum), smallest at s² = σ²",
     )

@@ -9,8 +9,9 @@ module                 metrics
 :mod:`.trajectory`     :func:`min_ade`, :func:`min_fde`, :func:`multimodal_ground_truth`, :func:`mmade`,
                        :func:`mmfde`, :func:`end_point_error`,
                        :func:`end_point_mse`
-:mod:`.physical`       :func:`foot_skating`, :func:`infer_foot_contacts`, :func:`bone_lengths`,
-                       :func:`bone_length_error`
+:mod:`.physical`       :func:`foot_skating`, :func:`infer_foot_contacts`, :func:`ground_penetration`,
+                       :func:`jerk`, :func:`bone_lengths`, :func:`bone_length_error`,
+                       :func:`bone_length_drift`
 :mod:`.modes`          :func:`mode_homogeneity`, :func:`mode_purity`, :func:`adjusted_rand_index`,
                        :func:`contingency_table`
 :mod:`.intervals`      :func:`mean_ci`, :func:`repeat_metric`, :class:`Interval`
@@ -36,10 +37,13 @@ from motionlab.metrics.intervals import Interval, mean_ci, repeat_metric, repeat
 from motionlab.metrics.modes import adjusted_rand_index, contingency_table, mode_homogeneity, mode_purity
 from motionlab.metrics.physical import (
     FOOT_JOINTS,
+    bone_length_drift,
     bone_length_error,
     bone_lengths,
     foot_skating,
+    ground_penetration,
     infer_foot_contacts,
+    jerk,
 )
 from motionlab.metrics.trajectory import (
     end_point_error,
@@ -58,6 +62,7 @@ __all__ = [
     "Interval",
     "adjusted_rand_index",
     "apd",
+    "bone_length_drift",
     "bone_length_error",
     "bone_lengths",
     "class_apd",
@@ -70,7 +75,9 @@ __all__ = [
     "foot_skating",
     "frechet_distance",
     "inception_score",
+    "ground_penetration",
     "infer_foot_contacts",
+    "jerk",
     "mean_ci",
     "min_ade",
     "min_fde",

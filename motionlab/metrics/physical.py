@@ -1,4 +1,5 @@
-"""Physical plausibility of joint-position motion: foot skating and bone-length error.
+"""Physical plausibility of joint-position motion: foot skating, ground penetration, jerk, bone-length
+error and drift.
 
 Positions are world coordinates in metres, ``(..., T, J, 3)``, z up (so "horizontal" means x and y),
 sampled at ``fps`` frames per second.
@@ -9,6 +10,17 @@ feet barely move, so lower is better. When contacts are not given they are infer
 is low (less than ``height_threshold`` above the lowest height that joint reaches in the clip) and slow
 (horizontal speed, by central differences, below ``speed_threshold``). Heights are relative to each
 joint's own minimum so that ankles, which never touch the floor, are handled like toes.
+
+**Ground penetration**: the mean depth (m) of the foot joints below the floor, ``max(0, floor - z)``, over
+frames and feet; a body that stands on the floor gives 0.
+
+**Jerk**: the mean norm (m/s³) of the third time derivative of every joint's position (third finite
+differences times ``fps³``). Real motion is smooth; a generator that adds frame-to-frame noise has a large
+jerk even when each pose looks right.
+
+**Bone-length drift**: the standard deviation over frames of each bone's length, averaged over bones and
+clips (m). It needs no reference skeleton: a model that outputs joint rotations and applies forward
+kinematics gives exactly 0; a model that outputs joint positions lets bones stretch and shrink.
 
 **Bone-length error**: the mean absolute difference, over frames and bones, between the distances of each
 joint to its parent and the skeleton's reference bone lengths. Rigid bones give 0.
@@ -185,3 +197,46 @@ def bone_length_error(
         )
     reference = ref[np.asarray(parents) >= 0]
     return float(np.abs(measured - reference).mean())
+
+
+def ground_penetration(
+    positions: ArrayLike, *, floor: float = 0.0, feet: Sequence[int] = FOOT_JOINTS
+) -> float:
+    """Mean depth (m) of the foot joints below the floor, ``mean(max(0, floor - z))`` over frames and feet.
+
+    Args:
+        positions: joint positions ``(..., T, J, 3)``, z up, metres.
+        floor: the floor's height (m).
+        feet: the joints that touch the floor (default :data:`FOOT_JOINTS`).
+    """
+    func = "ground_penetration"
+    x = _positions(positions, func)
+    indices = _foot_indices(feet, x.shape[-2], func)
+    level = float(check_scalar(floor, "floor", func))
+    return float(np.maximum(level - x[..., indices, 2], 0.0).mean())
+
+
+def jerk(positions: ArrayLike, *, fps: float = 30.0) -> float:
+    """Mean norm (m/s³) of the third time derivative of the joint positions.
+
+    Args:
+        positions: joint positions ``(..., T, J, 3)`` with ``T >= 4``.
+        fps: frame rate (the derivative is the third finite difference times ``fps ** 3``).
+    """
+    func = "jerk"
+    x = _positions(positions, func, min_frames=4)
+    rate = float(check_scalar(fps, "fps", func, minimum=0, include_minimum=False))
+    return float(np.linalg.norm(np.diff(x, n=3, axis=-3), axis=-1).mean() * rate**3)
+
+
+def bone_length_drift(positions: ArrayLike, parents: ArrayLike | Sequence[int]) -> float:
+    """Mean over clips and bones of the standard deviation over frames of the bone length (m).
+
+    Args:
+        positions: joint positions ``(..., T, J, 3)`` with ``T >= 2``.
+        parents: parent index of each joint ``(J,)``, ``-1`` for roots.
+    """
+    func = "bone_length_drift"
+    x = _positions(positions, func, min_frames=2)
+    lengths = _bone_lengths(x, parents, func)  # (..., T, B)
+    return float(lengths.std(axis=-2).mean())

@@ -1,7 +1,8 @@
-"""Worked solution to chapter 02's "your turn" exercise (checked by tests/test_exercises.py)."""
+"""Worked solutions to chapter 02's "your turn" exercises (checked by tests/test_exercises.py)."""
 
 from __future__ import annotations
 
+import numpy as np
 import torch
 
 from motionlab.geometry import quat_apply, quat_mul
@@ -19,3 +20,11 @@ def my_chain_positions(rotations: torch.Tensor, root: torch.Tensor, offsets: tor
         positions.append(positions[-1] + quat_apply(frame, offsets[k].expand_as(root)))
         frame = quat_mul(frame, rotations[..., k, :])
     return torch.stack(positions, dim=-2)
+
+
+def my_foot_skating(feet: np.ndarray, contacts: np.ndarray, fps: float) -> float:
+    """Mean horizontal speed (m/s) over the frame pairs planted at both ends; feet (..., T, F, 3), contacts
+    (..., T, F) bool. The planted pairs of all clips are pooled, then averaged."""
+    planted = contacts[..., 1:, :] & contacts[..., :-1, :]  # (..., T - 1, F)
+    step = feet[..., 1:, :, :2] - feet[..., :-1, :, :2]  # horizontal: z is up
+    return float((np.linalg.norm(step, axis=-1) * fps)[planted].mean())

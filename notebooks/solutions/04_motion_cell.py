@@ -1,4 +1,4 @@
-"""Worked solution to chapter 04's "your turn" exercise (checked by tests/test_exercises.py)."""
+"""Worked solutions to chapter 04's "your turn" exercises (checked by tests/test_exercises.py)."""
 
 from __future__ import annotations
 
@@ -18,3 +18,10 @@ def my_subtree_reach(parents: Sequence[int], bone_lengths: np.ndarray) -> np.nda
         parent = parents[joint]
         reach[parent] = max(reach[parent], reach[joint] + bone_lengths[joint])
     return reach
+
+
+def my_impact_weights(reach: np.ndarray, leaf_floor: float) -> np.ndarray:
+    """alpha (J,), mean 1: each L_k raised to at least leaf_floor * max(L) (so that the end effectors'
+    orientation still counts), then divided by the mean (so that a weighted loss keeps its scale)."""
+    floored = np.maximum(reach, leaf_floor * reach.max())
+    return floored / floored.mean()

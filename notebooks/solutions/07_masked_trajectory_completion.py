@@ -1,4 +1,4 @@
-"""Worked solution to chapter 07's "your turn" exercise (checked by tests/test_exercises.py)."""
+"""Worked solutions to chapter 07's "your turn" exercises (checked by tests/test_exercises.py)."""
 
 from __future__ import annotations
 
@@ -15,3 +15,9 @@ def my_dct_matrix(n_frames: int) -> torch.Tensor:
     scale = torch.full((n_frames, 1), math.sqrt(2.0 / n_frames), dtype=torch.float64)
     scale[0] = math.sqrt(1.0 / n_frames)
     return scale * torch.cos(math.pi * (2 * t + 1) * k / (2 * n_frames))
+
+
+def my_given_trajectories(poses: torch.Tensor, mask: torch.Tensor) -> torch.Tensor:
+    """Y = X ⊙ M (..., T, J * 3): poses (..., T, J * 3) with the joints outside mask (..., J) set to 0."""
+    channels = mask.repeat_interleave(3, dim=-1)  # (..., J * 3): x, y, z of each joint in turn
+    return poses * channels[..., None, :].to(poses.dtype)  # the same mask in every frame

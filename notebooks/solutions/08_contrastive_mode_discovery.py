@@ -1,4 +1,4 @@
-"""Worked solution to chapter 08's "your turn" exercise (checked by tests/test_exercises.py)."""
+"""Worked solutions to chapter 08's "your turn" exercises (checked by tests/test_exercises.py)."""
 
 from __future__ import annotations
 
@@ -13,3 +13,9 @@ def my_contrastive_loss(
     squared = (mu_a - mu_b).pow(2).sum(dim=-1)
     distance = squared.clamp_min(1e-12).sqrt()  # sqrt's slope is infinite at 0
     return 0.5 * torch.where(same, squared, torch.relu(margin - distance).pow(2))
+
+
+def my_covariance_prior(mu: torch.Tensor, logvar: torch.Tensor, prior_variance: float) -> torch.Tensor:
+    """ODMO's eq. 1 prior term -ln det Σ + Tr Σ / σ² (B,) for Σ = diag(exp(logvar)), codes (B, D); the means
+    mu get no prior (the springs place them)."""
+    return (logvar.exp() / prior_variance - logvar).sum(dim=-1)

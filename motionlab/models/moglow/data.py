@@ -27,8 +27,10 @@ import torch
 from torch import Tensor
 
 from motionlab.data.augment import mirror_positions, mirror_rotations
+from motionlab.data.cmu_mocap import MIRROR, N_JOINTS, MocapClips
+from motionlab.data.cmu_mocap import heading_yaw as cmu_heading_yaw
 from motionlab.data.datasets import Standardizer
-from motionlab.data.representations import CONTROL_FEATURES, representation, to_moglow
+from motionlab.data.representations import CONTROL_FEATURES, representation, to_moglow, yaw_to_quat
 from motionlab.data.store import MotionSet
 from motionlab.data.synthetic import generator_fingerprint
 from motionlab.evaluation.benchmark import Benchmark, benchmark_sizes
@@ -203,3 +205,55 @@ def data_identity(cfg: MoGlowDataConfig, length: int, stride: int) -> dict[str, 
         "sizes": list(benchmark_sizes()),
         "generator": generator_fingerprint(),
     }
+
+
+# ----------------------------------------------------------------------------------------------------
+# real motion (chapter 10): CMU clips of positions only
+
+
+def real_features(positions: Tensor) -> MoGlowFeatures:
+    """Pose ``(..., T, 58)`` and control ``(..., T, 3)`` of real clips ``(..., T, 20, 3)`` (z up, metres).
+
+    The data has no joint rotations, so the heading comes from the hips and shoulders
+    (:func:`motionlab.data.cmu_mocap.heading_yaw`) instead of the root's orientation.
+    """
+    check_tensor(positions, "positions", "real_features", trailing=(N_JOINTS, 3), min_leading=1)
+    yaw = torch.as_tensor(cmu_heading_yaw(positions.numpy()), dtype=positions.dtype)
+    features = to_moglow(positions, yaw_to_quat(yaw))
+    return MoGlowFeatures(features[..., :-CONTROL_DIM], features[..., -CONTROL_DIM:])
+
+
+def real_clip_windows(
+    clips: MocapClips, cfg: MoGlowDataConfig, length: int, stride: int, augment: bool
+) -> MoGlowFeatures:
+    """Raw windows of ``length`` frames every ``stride`` frames of the clips of ``cfg.actions`` (names of
+    ``clips.action_names``), augmented as ``cfg`` says when ``augment`` (mirrored with
+    :data:`~motionlab.data.cmu_mocap.MIRROR`, played backwards). Clips shorter than ``length + 1`` frames
+    are left out; frame 0 of every clip (no control) is skipped."""
+    names = list(clips.action_names)
+    unknown = [a for a in cfg.actions if a not in names]
+    if unknown:
+        raise ValueError(f"real_clip_windows: unknown actions {unknown}; the clips have {names}")
+    wanted = np.isin(clips.action, [names.index(a) for a in cfg.actions]) & (clips.lengths > length)
+    windows = []
+    for index in np.flatnonzero(wanted):
+        positions = torch.as_tensor(clips.positions[index], dtype=torch.float32)[None]
+        if augment and cfg.mirror:
+            positions = torch.cat([positions, mirror_positions(positions, torch.tensor(MIRROR))])
+        if augment and cfg.reverse_time:
+            positions = torch.cat([positions, positions.flip(1)])
+        windows.append(sequence_windows(real_features(positions), length, stride))
+    if not windows:
+        raise ValueError(f"real_clip_windows: no clip of {cfg.actions} has more than {length} frames")
+    return MoGlowFeatures(*(torch.cat(parts) for parts in zip(*windows)))
+
+
+def prepare_real(
+    train: MocapClips, test: MocapClips, cfg: MoGlowDataConfig, length: int, stride: int
+) -> PreparedData:
+    """Standardised windows of real clips: the training windows augmented, the test windows not, the scalers
+    fitted on the training windows' frames."""
+    raw = real_clip_windows(train, cfg, length, stride, augment=True)
+    scalers = fit_scalers(raw)
+    test_windows = real_clip_windows(test, cfg, length, stride, augment=False)
+    return PreparedData(standardize(raw, scalers), standardize(test_windows, scalers), scalers)

@@ -139,20 +139,24 @@ class MoGlow(nn.Module):
         cfg = self.cfg
         check_pose_control(pose, control, cfg.pose_dim, cfg.control_dim, cfg.history + 1, "MoGlow", True)
         batch, frames, _ = pose.shape
-        keep = None
-        if self.training and self.cfg.dropout > 0:
-            keep = history_keep_mask(
-                batch,
-                frames - self.cfg.history,
-                self.cfg.history,
-                self.cfg.dropout,
-                generator,
-                rescale=self.cfg.dropout_rescale,
-            )
+        keep = self.keep_mask(batch, frames - cfg.history, generator) if self.training else None
         cond = autoregressive_conditioning(pose, control, self.cfg.history, keep).transpose(1, 2)
         u, linear_logdet = self.linear(pose[:, self.cfg.history :].transpose(1, 2), cond)
         z, logdet = self.flow(u, self.cond_encoder(cond.transpose(1, 2)).transpose(1, 2))
         return z.transpose(1, 2), logdet + linear_logdet
+
+    def keep_mask(self, batch: int, frames: int, generator: torch.Generator | None = None) -> Tensor | None:
+        """The training-time history dropout: keep flags ``(batch, frames, tau)`` (:func:`history_keep_mask`
+        with ``cfg.dropout`` and ``cfg.dropout_rescale``), or ``None`` when nothing is dropped.
+
+        A subclass may override it to drop the history differently (e.g. whole windows at once); it is never
+        called in eval mode, nor when generating.
+        """
+        if self.cfg.dropout == 0:
+            return None
+        return history_keep_mask(
+            batch, frames, self.cfg.history, self.cfg.dropout, generator, rescale=self.cfg.dropout_rescale
+        )
 
     def forward(self, pose: Tensor, control: Tensor, generator: torch.Generator | None = None) -> Tensor:
         """Log-likelihood ``(B,)`` (nats) of frames ``tau .. T-1`` of ``pose`` ``(B, T, P)`` given ``control``

@@ -76,8 +76,8 @@ class ExperimentConfig(config.ProfileConfig):
     window: int = 96
     batch_size: int = 32
     lr: float = 3e-3
-    steps: int = 300
-    representation_steps: int = 80
+    steps: int = 200
+    representation_steps: int = 60
     denoiser_steps: int = 400
     denoiser_batch: int = 16
     denoiser_lr: float = 1e-3

@@ -405,13 +405,19 @@ class MotionCellModel(nn.Module):
 
     @torch.no_grad()
     def generate(
-        self, action: Tensor, body: Tensor, n_frames: int, generator: torch.Generator | None = None
+        self,
+        action: Tensor,
+        body: Tensor,
+        n_frames: int,
+        generator: torch.Generator | None = None,
+        temperature: float = 1.0,
     ) -> Tensor:
         """Sample pose vectors ``(B, n_frames, 90)`` for attributes ``(B,)``, any ``n_frames >= 1``.
 
-        The same ``generator`` state gives bitwise-identical samples.
+        The same ``generator`` state gives bitwise-identical samples. ``temperature`` scales the prior's
+        standard deviation (1: the model's prior, 0: every word's prior mean).
         """
-        return self.rollout(action, body, n_frames, generator)
+        return self.rollout(action, body, n_frames, generator, temperature=temperature)
 
     def rollout(
         self,
@@ -420,14 +426,16 @@ class MotionCellModel(nn.Module):
         n_frames: int,
         generator: torch.Generator | None = None,
         truncate: bool = False,
+        temperature: float = 1.0,
     ) -> Tensor:
         """:meth:`generate` with gradients (for losses on samples).
 
         With ``truncate`` the recurrent state is detached after every word, so gradients reach each word's
         prior, decoder and word features but not the earlier words through the state (truncated
-        back-propagation through time).
+        back-propagation through time). ``temperature`` scales the prior's standard deviation.
         """
         check_scalar(n_frames, "n_frames", "MotionCellModel.generate", kind=numbers.Integral, minimum=1)
+        check_scalar(temperature, "temperature", "MotionCellModel.generate", minimum=0.0)
         cell = self.cell
         control = cell.control(action, body)
         layers = cell.initial_state(action, body, generator)
@@ -435,7 +443,8 @@ class MotionCellModel(nn.Module):
         for _ in range(math.ceil(n_frames / self.cfg.word_length)):
             state = cell.state(layers)
             mu, logvar = cell.prior(state, control)
-            features = cell.latent_feature(reparameterize(mu, logvar, generator))
+            z = reparameterize(mu, logvar, generator)
+            features = cell.latent_feature(z if temperature == 1.0 else mu + temperature * (z - mu))
             word, _ = self.decode_words(cell.decode(features, state, control)[:, None])
             words.append(word)
             layers = cell.transition(layers, self.encode_words(word)[:, 0], features, control)

@@ -27,10 +27,12 @@ import numbers
 from collections.abc import Iterator
 from dataclasses import dataclass
 
+import numpy as np
 import torch
 from torch import Tensor
 
 from motionlab.data.augment import rotate_yaw
+from motionlab.data.cmu_mocap import MocapClips, face_x, random_windows
 from motionlab.data.representations import RootStart, from_odmo, heading_yaw, to_odmo
 from motionlab.data.store import MotionSet
 from motionlab.validation import check_scalar, check_tensor
@@ -193,3 +195,31 @@ class BalancedBatches:
         for b in range(n_batches):
             index = torch.cat([m[b * k : (b + 1) * k] for m in shuffled])
             yield self.features[index], self.labels[index]
+
+
+def prepare_real(
+    clips: MocapClips, window: int = 100, frame_stride: int = 2, draws: int = 4, seed: int = 0
+) -> ODMOData:
+    """ODMO features of real clips (:class:`~motionlab.data.cmu_mocap.MocapClips`, 20 joints): ``draws``
+    random ``window``-frame windows of every clip (ODMO's protocol: shorter clips padded with their last
+    frame), each turned to face +x at its first frame, every ``frame_stride``-th frame kept.
+
+    ODMO draws a fresh window of every clip each epoch; ``draws`` fixed draws per clip stand in for that
+    (the batches then cycle through them). The data has no style labels: ``mode`` and ``body`` are zeros.
+    The floor clearance is measured on the clips as given (level their floors first,
+    :func:`~motionlab.data.cmu_mocap.level_floor`).
+    """
+    where = "prepare_real"
+    for name, value in (("window", window), ("frame_stride", frame_stride), ("draws", draws)):
+        check_scalar(value, name, where, kind=numbers.Integral, minimum=1)
+    if window < 2 * frame_stride:
+        raise ValueError(f"{where}: windows of {window} frames are too short for frame_stride {frame_stride}")
+    windows = [random_windows(clips, window, np.random.default_rng([seed, d])) for d in range(draws)]
+    first_pose = np.stack([p[w.start[i]] for w in windows for i, p in enumerate(clips.positions)])
+    positions = torch.as_tensor(np.concatenate([face_x(w.positions) for w in windows]), dtype=torch.float32)
+    features = to_odmo(positions)[:, ::frame_stride].contiguous()
+    action = torch.as_tensor(np.concatenate([w.action for w in windows]), dtype=torch.int64)
+    zeros = torch.zeros_like(action)
+    return ODMOData(
+        features.float(), action, zeros, zeros, frame_stride, float(first_pose[:, 1:, 2].min(axis=1).mean())
+    )

@@ -161,7 +161,7 @@ class ExperimentConfig(config.ProfileConfig):
             trajevae=TrajeVAEConfig(n_frames=60, width=32, latent_dim=8, dct_components=8, heads=2),
             gru=RecurrentConfig(n_frames=60, hidden=64),
             cvae_rnn=RecurrentConfig(n_frames=60, hidden=48, latent_dim=16),
-            train=_train_config(steps=400, batch_size=32, checkpoint_every=100),
+            train=_train_config(steps=300, batch_size=32, checkpoint_every=100),
             n_eval_windows=48,
         )
 

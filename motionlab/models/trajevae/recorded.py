@@ -1,8 +1,8 @@
 """Recorded results of runs too long for chapter 07's time budget, with their provenance.
 
 :data:`SCHEDULE_CHECK_RECORDED` holds :func:`~motionlab.models.trajevae.experiment.schedule_check` in the full
-profile (``ExperimentConfig.full()``) for the chapter's schedule and one four times longer, with either
-reconstruction term; the chapter shows them next to its own run's numbers. Rerun the function to refresh them.
+profile (``ExperimentConfig.full()``'s model and data) for 400 and 1,600 steps, with either reconstruction
+term; the chapter shows them next to its own run's numbers. Rerun the function to refresh them.
 """
 
 from __future__ import annotations

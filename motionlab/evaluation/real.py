@@ -1,0 +1,336 @@
+"""The evaluator of real motion: Action2Motion's classifier on CMU windows, and ODMO's Table 2 protocol.
+
+**The classifier** (ODMO's supplement, Table S3, "same as Action2Motion"): two GRU layers of 128 units over
+the frames, the last hidden state through a fully connected layer with tanh to a 30-d feature vector (what
+FID, Diversity and Multimodality are computed on), then a fully connected layer to the 7 classes. Its input
+is the xyz of the 20 joints per frame (60 numbers), standardised per channel. Every window is first put in
+one canonical place (:func:`canonical`): its first root at the origin (as Action2Motion and ODMO do) and its
+first frame facing +x (as ODMO's reference code does with its clips), so that the classifier judges the
+motion, not where or which way it was captured. It is trained on random 100-frame windows of the training
+clips, a fresh window of every clip each epoch (:class:`WindowBatches`).
+
+**Frame rate.** The clips are about 12 fps; a 100-frame window is about 8 s. The classifier may read every
+``frame_stride``-th frame of a window (the course's full profile reads 6 fps, half the cost of a GRU step;
+``frame_stride=1`` is the paper's).
+
+**Table 2** (:func:`table2_row`): each of ``n_sets`` repeats draws a set of ``n`` clips (400 in the paper)
+with the classes in proportion to the data (stratified), a reference set of ``n`` random windows of the
+training clips drawn the same way, and computes accuracy, FID (against the reference set), Diversity (200
+pairs) and Multimodality (20 pairs per class); each number is a mean with its 95 % interval over the sets.
+"""
+
+from __future__ import annotations
+
+import numbers
+from collections.abc import Callable, Iterator
+from dataclasses import asdict, dataclass
+from typing import NamedTuple
+
+import numpy as np
+import torch
+import torch.nn.functional as F
+from torch import Tensor
+
+from motionlab.data.cmu_mocap import (
+    N_JOINTS,
+    MocapClips,
+    face_x,
+    first_root_at_origin,
+    level_floor,
+    load_cmu_mocap,
+    odmo_clips,
+    random_windows,
+    split_clips,
+    stratified_indices,
+)
+from motionlab.data.datasets import Standardizer
+from motionlab.evaluation.benchmark import feature_metrics
+from motionlab.evaluation.evaluator import Evaluator, data_fingerprint
+from motionlab.metrics import Interval, mean_ci
+from motionlab.models.classifiers import ClassifierConfig, MotionClassifier
+from motionlab.train import TrainConfig, TrainResult, is_cached, train_or_load
+from motionlab.validation import check_scalar
+
+#: Columns of Table 2 that this protocol measures, in the paper's order.
+TABLE2_METRICS = ("accuracy", "fid", "diversity", "multimodality")
+
+#: ODMO's Table 2 (CMU MoCap): ``{row: {metric: (mean, 95 % half-width)}}``, accuracy in per cent.
+PAPER_TABLE2: dict[str, dict[str, tuple[float, float]]] = {
+    "real": {
+        "accuracy": (98.54, 0.14),
+        "fid": (0.02, 0.00),
+        "diversity": (6.57, 0.11),
+        "multimodality": (2.17, 0.08),
+    },
+    "ODMO": {
+        "accuracy": (93.51, 0.04),
+        "fid": (0.34, 0.03),
+        "diversity": (6.56, 0.07),
+        "multimodality": (2.49, 0.06),
+    },
+    "-r_e": {
+        "accuracy": (86.58, 0.39),
+        "fid": (0.99, 0.07),
+        "diversity": (6.31, 0.08),
+        "multimodality": (2.89, 0.12),
+    },
+    "-L_es": {
+        "accuracy": (69.90, 2.8),
+        "fid": (2.01, 0.24),
+        "diversity": (6.10, 0.11),
+        "multimodality": (3.65, 0.14),
+    },
+}
+
+IN_FEATURES = 3 * N_JOINTS
+"""Classifier input per frame: the xyz of the 20 joints."""
+
+
+class RealBenchmark(NamedTuple):
+    """ODMO's MoCap benchmark split for the course: training and held-out test clips (7 classes, floors
+    levelled)."""
+
+    train: MocapClips
+    test: MocapClips
+
+
+def load_real_benchmark(n_clips: int | None = None, test_share: float = 0.2, seed: int = 0) -> RealBenchmark:
+    """The 970 benchmark clips (:func:`~motionlab.data.cmu_mocap.odmo_clips`), every floor levelled, split
+    stratified into train and test (:func:`~motionlab.data.cmu_mocap.split_clips`). ``n_clips`` keeps a
+    stratified subset first (the quick profile's few dozen clips)."""
+    clips = odmo_clips(load_cmu_mocap())
+    if n_clips is not None:
+        check_scalar(
+            n_clips,
+            "n_clips",
+            "load_real_benchmark",
+            kind=numbers.Integral,
+            minimum=4 * len(clips.action_names),
+        )
+        clips = clips.subset(np.sort(stratified_indices(clips.action, n_clips, seed)))
+    return RealBenchmark(*split_clips(clips.map(level_floor), test_share, seed))
+
+
+def canonical(positions: Tensor | np.ndarray) -> np.ndarray:
+    """Windows ``(N, T, 20, 3)`` with their first root at the origin and their first frame facing +x
+    (float64)."""
+    return face_x(first_root_at_origin(np.asarray(positions, dtype=np.float64)))
+
+
+@dataclass(frozen=True)
+class RealEvaluatorConfig:
+    """How the real-data classifier is built and trained.
+
+    Attributes:
+        window: frames per window (ODMO: 100). frame_stride: the classifier reads every ``frame_stride``-th
+            frame of a window (1 is the paper's).
+        steps, batch_size, lr: AdamW training; hidden: GRU width (Action2Motion: 128); feature_dim: the
+            feature layer (30); seed: initialisation, windows and batch order.
+    """
+
+    window: int = 100
+    frame_stride: int = 2
+    steps: int = 300
+    batch_size: int = 64
+    lr: float = 2e-3
+    hidden: int = 128
+    feature_dim: int = 30
+    seed: int = 0
+
+    def __post_init__(self) -> None:
+        where = "RealEvaluatorConfig"
+        for name in ("window", "frame_stride", "steps", "batch_size", "hidden", "feature_dim"):
+            check_scalar(getattr(self, name), name, where, kind=numbers.Integral, minimum=1)
+        check_scalar(self.seed, "seed", where, kind=numbers.Integral, minimum=0)
+        check_scalar(self.lr, "lr", where, minimum=0, include_minimum=False)
+        if self.frame_stride >= self.window:
+            raise ValueError(f"{where}: frame_stride {self.frame_stride} leaves one frame of {self.window}")
+
+
+class XYZEvaluator(Evaluator):
+    """The real-data :class:`~motionlab.evaluation.evaluator.Evaluator`: reads windows ``(N, T, 20, 3)``
+    (metres, z up, anywhere, any heading), puts them in :func:`canonical` place, keeps every
+    ``frame_stride``-th frame and standardises the xyz."""
+
+    def __init__(self, classifier: MotionClassifier, standardizer: Standardizer, frame_stride: int) -> None:
+        super().__init__(classifier, standardizer)
+        self.frame_stride = frame_stride
+
+    def inputs(self, positions: Tensor | np.ndarray) -> Tensor:
+        """Standardised classifier input ``(N, ceil(T / frame_stride), 60)``."""
+        array = np.asarray(positions)
+        if array.ndim != 4 or array.shape[2:] != (N_JOINTS, 3):
+            raise ValueError(f"XYZEvaluator: positions must be (N, T, {N_JOINTS}, 3), got {array.shape}")
+        frames = torch.as_tensor(canonical(array)[:, :: self.frame_stride], dtype=torch.float32)
+        return self.standardizer.transform(frames.flatten(2))
+
+
+class WindowBatches:
+    """A batch source of ``(inputs (B, T', 60), {"action": (B,)})``: every epoch cuts a fresh random window
+    of every clip (:func:`~motionlab.data.cmu_mocap.random_windows`), shuffles them and deals them out."""
+
+    def __init__(self, clips: MocapClips, evaluator: XYZEvaluator, window: int) -> None:
+        self.clips, self.evaluator, self.window = clips, evaluator, window
+
+    def __call__(self, epoch: int, generator: torch.Generator, batch_size: int) -> Iterator[tuple]:
+        windows = random_windows(self.clips, self.window, np.random.default_rng(generator.initial_seed()))
+        inputs = self.evaluator.inputs(windows.positions)
+        action = torch.as_tensor(windows.action)
+        order = torch.randperm(len(action), generator=generator)
+        for begin in range(0, len(order) - batch_size + 1, batch_size):
+            index = order[begin : begin + batch_size]
+            yield inputs[index], {"action": action[index]}
+
+
+def _cross_entropy(
+    model: XYZEvaluator, batch: tuple, step: int, coeffs: dict[str, float]
+) -> dict[str, Tensor]:
+    inputs, labels = batch
+    loss = F.cross_entropy(model.classifier(inputs)["action"], labels["action"])
+    return {"loss": loss, "ce_action": loss}
+
+
+def clips_fingerprint(clips: MocapClips) -> dict[str, str]:
+    """What identifies a set of clips in a checkpoint cache key (positions and labels)."""
+    return {
+        "positions": data_fingerprint(np.concatenate([p.reshape(-1) for p in clips.positions])),
+        "action": data_fingerprint(clips.action.astype(np.float32)),
+        "lengths": data_fingerprint(clips.lengths.astype(np.float32)),
+    }
+
+
+@dataclass(frozen=True, eq=False)
+class RealEvaluatorRun:
+    """The training of the real-data evaluator on ``clips`` (a :class:`~motionlab.train.many.Run`)."""
+
+    clips: MocapClips
+    cfg: RealEvaluatorConfig
+
+    def _identity(self) -> tuple[str, dict, TrainConfig, dict]:
+        classifier = ClassifierConfig(
+            "gru",
+            IN_FEATURES,
+            {"action": len(self.clips.action_names)},
+            self.cfg.hidden,
+            self.cfg.feature_dim,
+        )
+        training = TrainConfig(
+            steps=self.cfg.steps,
+            batch_size=min(self.cfg.batch_size, self.clips.n_clips),
+            lr=self.cfg.lr,
+            grad_clip=1.0,
+            seed=self.cfg.seed,
+            checkpoint_every=None,
+        )
+        model = {"evaluator": asdict(self.cfg), "classifier": classifier}
+        return "evaluator_real", model, training, clips_fingerprint(self.clips)
+
+    def is_cached(self) -> bool:
+        return is_cached(*self._identity())
+
+    def train(self, progress: bool | None = None) -> tuple[XYZEvaluator, TrainResult]:
+        name, model_config, training, data_config = self._identity()
+        torch.manual_seed(self.cfg.seed)
+        standardizer = Standardizer(IN_FEATURES)
+        evaluator = XYZEvaluator(
+            MotionClassifier(model_config["classifier"]), standardizer, self.cfg.frame_stride
+        )
+        first = random_windows(self.clips, self.cfg.window, self.cfg.seed).positions
+        standardizer.fit(
+            torch.as_tensor(canonical(first)[:, :: self.cfg.frame_stride], dtype=torch.float32).flatten(2)
+        )
+        result = train_or_load(
+            name,
+            model_config,
+            evaluator,
+            _cross_entropy,
+            WindowBatches(self.clips, evaluator, self.cfg.window),
+            training,
+            data_config=data_config,
+            progress=progress,
+        )
+        evaluator.requires_grad_(False)
+        return evaluator.eval(), result
+
+
+# ----------------------------------------------------------------------------------------------------
+# Table 2
+
+#: A sample set: ``draw(rng) -> (positions (n, T, 20, 3), action (n,))``.
+Draw = Callable[[np.random.Generator], tuple[Tensor | np.ndarray, np.ndarray]]
+
+
+@dataclass(frozen=True, eq=False)
+class Protocol:
+    """ODMO's evaluation protocol on MoCap, with its reference sets drawn and featurised once.
+
+    Attributes:
+        reference: the training clips (the classes of every sample set are stratified as theirs).
+        reference_features: ``n_sets`` tensors ``(n, 30)``: the evaluator's features of a fresh stratified
+            set of ``n`` random training windows per sample set (FID's reference).
+        n: clips per sample set (the paper: 400); window: frames per clip (100); seed: seeds every draw.
+    """
+
+    reference: MocapClips
+    reference_features: tuple[Tensor, ...]
+    n: int
+    window: int
+    seed: int
+
+    @classmethod
+    def build(
+        cls,
+        evaluator: Evaluator,
+        reference: MocapClips,
+        n: int = 400,
+        n_sets: int = 10,
+        window: int = 100,
+        seed: int = 0,
+    ) -> Protocol:
+        """Draw and featurise the ``n_sets`` reference sets (set ``r`` from the seed ``[seed, r, 0]``)."""
+        for name, value in (("n", n), ("window", window)):
+            check_scalar(value, name, "Protocol.build", kind=numbers.Integral, minimum=1)
+        check_scalar(n_sets, "n_sets", "Protocol.build", kind=numbers.Integral, minimum=2)
+        features = tuple(
+            evaluator.features(draw_real(np.random.default_rng([seed, r, 0]), reference, n, window)[0])
+            for r in range(n_sets)
+        )
+        return cls(reference, features, n, window, seed)
+
+    @property
+    def n_sets(self) -> int:
+        """Sample sets per row."""
+        return len(self.reference_features)
+
+    def stratified_actions(self, rng: np.random.Generator) -> np.ndarray:
+        """The classes ``(n,)`` of one sample set, in proportion to the reference clips."""
+        return self.reference.action[stratified_indices(self.reference.action, self.n, rng)]
+
+
+def draw_real(
+    rng: np.random.Generator, clips: MocapClips, n: int, window: int = 100
+) -> tuple[np.ndarray, np.ndarray]:
+    """A sample set of real motion: ``n`` clips drawn stratified from ``clips``, a random window of each."""
+    windows = random_windows(clips.subset(stratified_indices(clips.action, n, rng)), window, rng)
+    return windows.positions, windows.action
+
+
+def table2_row(evaluator: Evaluator, protocol: Protocol, draw: Draw) -> dict[str, Interval]:
+    """One row of Table 2: ``{metric: Interval}`` (accuracy as a fraction) over ``protocol.n_sets`` sets.
+
+    Set ``r`` is ``draw(rng)`` with ``rng`` seeded ``[seed, r, 1]``, compared with reference set ``r`` (FID);
+    the same ``rng`` then draws the Diversity and Multimodality pairs.
+    """
+    rows = []
+    for r, reference in enumerate(protocol.reference_features):
+        rng = np.random.default_rng([protocol.seed, r, 1])
+        positions, action = draw(rng)
+        features, probs = evaluator.features_and_probs(positions, "action")
+        rows.append(feature_metrics(features, probs, np.asarray(action), reference, rng))
+    return {name: interval([row[name] for row in rows]) for name in TABLE2_METRICS}
+
+
+def interval(values: list[float]) -> Interval:
+    """Mean and 95 % interval half-width of ``values`` as an :class:`~motionlab.metrics.Interval`."""
+    mean, half_width = mean_ci(values)
+    return Interval(mean, half_width, tuple(float(v) for v in values), 0.95)

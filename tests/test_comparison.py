@@ -1,0 +1,39 @@
+"""The common benchmark's pieces: resampling in time and per-clip APD, against numpy and
+motionlab.metrics.apd."""
+
+import numpy as np
+import pytest
+import torch
+
+from motionlab.evaluation.comparison import FRAMES, measured_part, per_clip_apd, resample
+from motionlab.metrics import apd
+
+
+def test_resample_interpolates_linearly_in_time():
+    rng = np.random.default_rng(0)
+    clips = torch.as_tensor(rng.normal(size=(2, 60, 3, 3)))
+    out = resample(clips, 15, 30)
+    assert out.shape == (2, 119, 3, 3)
+    t_out = np.arange(119) / 30
+    want = np.interp(t_out, np.arange(60) / 15, clips[1, :, 2, 0].numpy())
+    np.testing.assert_allclose(out[1, :, 2, 0].numpy(), want, atol=1e-12)
+    assert torch.equal(resample(clips, 30, 30), clips)
+    with pytest.raises(ValueError, match="resample"):
+        resample(clips, 0, 30)
+
+
+def test_per_clip_apd_matches_apd_of_each_clips_samples():
+    g = torch.Generator().manual_seed(1)
+    sets = [torch.randn(4, 5, 22, 3, generator=g) for _ in range(3)]
+    got = per_clip_apd(sets)
+    want = [apd(torch.stack([s[i] for s in sets])) for i in range(4)]
+    np.testing.assert_allclose(got, want, rtol=1e-6)
+
+
+def test_measured_part_keeps_the_last_frames():
+    clips = torch.arange(2 * 120 * 22 * 3, dtype=torch.float64).reshape(2, 120, 22, 3)
+    part = measured_part(clips)
+    assert part.shape == (2, FRAMES, 22, 3) and part.dtype == torch.float32
+    assert torch.equal(part[:, -1], clips[:, -1].float())
+    with pytest.raises(ValueError, match="at least"):
+        measured_part(clips[:, :10])
