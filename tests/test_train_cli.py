@@ -72,7 +72,7 @@ def test_every_family_trains_and_is_measured_in_the_quick_config(family, tmp_pat
         (["vae", "--set", "lr=-1"], "invalid configuration"),
         (["odmo", "--set", "model=3"], "is a nested config"),
         (["odmo", "--data", "/no/such/folder"], "neither a data set of odmo"),
-        (["odmo", "--data", "cmu"], "not available for odmo"),
+        (["odmo", "--data", ".", "--config", "quick"], "not on a folder"),
         (["vae", "--data", "."], "not on a folder"),
         (["vae", "--steps", "0"], "expected a positive integer, got 0"),
         (["vae", "--run", "gan", "--config", "quick"], "vae has the runs"),

@@ -67,8 +67,7 @@ def _help_epilog() -> str:
     for family in FAMILIES.values():
         lines.append(f"  {family.name:12s} chapter {family.chapter}, run {family.default_run!r}")
         for name, dataset in family.datasets.items():
-            note = "" if dataset.load is not None else f" [not available: {dataset.unavailable}]"
-            lines.append(f"      --data {name:10s} {dataset.description}{note}")
+            lines.append(f"      --data {name:10s} {dataset.description}")
     lines += [
         "",
         "configs: quick (the tests' sizes: seconds), full (the chapter's reported runs), long (longer and",
@@ -177,10 +176,8 @@ def set_field(cfg: Any, key: str, text: str) -> Any:
 
 def build_config(family: Family, dataset: DataSet, args: argparse.Namespace, run: str) -> Any:
     """The family's ExperimentConfig of ``--config`` for ``dataset``, ``--set`` and ``--steps`` applied."""
-    cfg = family.config(args.config)
+    cfg = family.config(args.config) if dataset.config is None else dataset.config(args.config)
     try:
-        if dataset.configure is not None:
-            cfg = dataset.configure(cfg)
         for item in args.set:
             key, sep, text = item.partition("=")
             if not sep or not key:
@@ -218,9 +215,6 @@ def choose_data(family: Family, value: str | None) -> tuple[str, Path | None]:
         except (FileNotFoundError, ValueError) as error:
             raise UsageError(f"--data {value}: {error}") from None
         name = readers[0]
-    dataset = family.datasets[name]
-    if dataset.load is None:
-        raise UsageError(f"--data {name}: not available for {family.name}: {dataset.unavailable}")
     return name, path
 
 
@@ -322,7 +316,7 @@ def train_command(args: argparse.Namespace) -> dict[str, Any]:
     config.setup(seed=0)
     rank, world_size, device = start_processes(device)
     data = dataset.load(cfg) if data_path is None else dataset.load(cfg, data_path)
-    runs = family.runs(cfg, data)
+    runs = (dataset.runs or family.runs)(cfg, data)
     if run_name not in runs:
         raise UsageError(f"--run {run_name}: {family.name} has the runs {', '.join(map(repr, runs))}")
     run = runs[run_name]

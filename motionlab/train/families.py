@@ -28,22 +28,20 @@ class DataSet:
 
     Attributes:
         description: one line for ``--help``.
-        load: ``load(cfg) -> prepared data`` (what the family's runs and evaluation take); ``None`` while the
-            family cannot prepare it yet (``unavailable`` says why).
-        unavailable: the one-line reason shown when ``load`` is ``None``.
+        load: ``load(cfg) -> prepared data`` (what the family's runs and evaluation take).
         evaluate: ``evaluate(cfg, data, run_name, model)`` for this data set, when it differs from the
             family's (``None``: the family's).
         reads_folder: ``load`` reads the folder of clips given as ``--data PATH`` (``load(cfg, path)``).
-        configure: ``configure(cfg) -> cfg``, the family's config adapted to this data (e.g. its class and
-            joint counts), applied before ``--set`` and ``--steps``; ``None``: the config as it is.
+        config: ``config(profile) -> cfg``, the experiment config for this data (``None``: the family's).
+        runs: ``runs(cfg, data) -> {name: Run}`` for this data (``None``: the family's).
     """
 
     description: str
-    load: Callable[..., Any] | None
-    unavailable: str = ""
+    load: Callable[..., Any]
     evaluate: Callable[[Any, Any, str, nn.Module], dict[str, Any]] | None = None
     reads_folder: bool = False
-    configure: Callable[[Any], Any] | None = None
+    config: Callable[[str], Any] | None = None
+    runs: Callable[[Any, Any], dict[str, Any]] | None = None
 
 
 @dataclass(frozen=True)
@@ -264,6 +262,50 @@ def _trajevae_evaluate(cfg: Any, data: Any, run: str, model: nn.Module) -> dict[
     }
 
 
+# --- chapter 10: ODMO on the CMU motion capture ------------------------------------------------------------
+@dataclass(frozen=True)
+class _RealODMOData:
+    train: Any
+    evaluator: Any
+    protocol: Any
+
+
+def _odmo_cmu_config(profile: str) -> Any:
+    from motionlab.models.odmo.experiment import RealExperimentConfig
+
+    return getattr(RealExperimentConfig, profile)()
+
+
+def _odmo_cmu(cfg: Any) -> _RealODMOData:
+    """Chapter 10's data: the CMU clips (floors levelled, stratified split), ODMO's windows of the training
+    clips, the real-data evaluator (chapter 10's sizes) and Table 2's protocol."""
+    from motionlab import config
+    from motionlab.evaluation import real
+    from motionlab.models.odmo.data import prepare_real
+
+    bench = real.load_real_benchmark(cfg.n_clips)
+    evaluator_cfg = real.RealEvaluatorConfig(
+        steps=config.choose(quick=20, full=250), hidden=config.choose(quick=32, full=128)
+    )
+    evaluator, _ = real.RealEvaluatorRun(bench.train, evaluator_cfg).train(progress=False)
+    protocol = real.Protocol.build(evaluator, bench.train, cfg.n_per_set, cfg.n_sets, cfg.window)
+    train = prepare_real(bench.train, cfg.window, cfg.frame_stride, cfg.draws, cfg.seed)
+    return _RealODMOData(train, evaluator, protocol)
+
+
+def _odmo_cmu_runs(cfg: Any, data: _RealODMOData) -> dict[str, Any]:
+    from motionlab.models.odmo.experiment import real_runs
+
+    return real_runs(cfg, data.train)
+
+
+def _odmo_cmu_evaluate(cfg: Any, data: _RealODMOData, run: str, model: nn.Module) -> dict[str, Any]:
+    """Chapter 10's Table 2 row of the variant (accuracy, FID, diversity, multimodality)."""
+    from motionlab.models.odmo.experiment import measure_real
+
+    return {"table2": jsonable(measure_real(run, model, data.train, data.evaluator, data.protocol, cfg).row)}
+
+
 # --- chapter 08: ODMO ---------------------------------------------------------------------------------------
 @dataclass(frozen=True)
 class _ODMOData:
@@ -364,14 +406,13 @@ FAMILIES: dict[str, Family] = {
         _odmo_evaluate,
         {
             "benchmark": DataSet(BENCHMARK, _odmo_benchmark),
-            # ODMO on the CMU MoCap data (motionlab.data.cmu_mocap): once motionlab.models.odmo prepares
-            # and evaluates it, set load (``load(cfg, path=None) -> data`` with ``data.train`` an ODMOData;
-            # path: --data FOLDER), evaluate, and configure (the config for its classes and joints).
             "cmu": DataSet(
-                "the CMU MoCap clips of data_real/ (Action2Motion's selection), or a --data FOLDER of them",
-                None,
-                "ODMO's preparation of the CMU data is not in motionlab.models.odmo yet",
-                reads_folder=True,
+                "chapter 10: the CMU MoCap clips of data_real/ (Action2Motion's 7 classes; "
+                "RealExperimentConfig)",
+                _odmo_cmu,
+                evaluate=_odmo_cmu_evaluate,
+                config=_odmo_cmu_config,
+                runs=_odmo_cmu_runs,
             ),
         },
     ),
