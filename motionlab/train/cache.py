@@ -21,6 +21,7 @@ from torch import nn
 
 from motionlab.checkpoints import checkpoint_path, config_dict, load_checkpoint, save_checkpoint
 from motionlab.train.batches import BatchSource
+from motionlab.train.execution import current as current_execution
 from motionlab.train.history import History
 from motionlab.train.loop import Callback, LossFn, TrainResult, train
 from motionlab.train.state import ResumeFile
@@ -120,6 +121,9 @@ def train_or_load(
         model.eval()
         return cached
     resume = ResumeFile(resume_path(name, identity), identity)
+    execution = current_execution()
+    if not execution.resume and execution.is_main:
+        resume.remove()  # the training command without --resume: start afresh
     result = train(
         model,
         loss_fn,
@@ -131,6 +135,8 @@ def train_or_load(
         resume=resume,
         desc=name,
     )
+    if not execution.is_main:  # data-parallel training: the first process writes the cache entry
+        return result
     path = save_checkpoint(
         name, identity, model, extra={"history": result.history.to_dict(), "metrics": result.metrics}
     )

@@ -27,6 +27,11 @@ training stops at a step boundary: on Ctrl-C (held until the current step ends, 
 :class:`~motionlab.train.state.DeferredInterrupt`) and on an exception from a callback or from validation.
 The next call with the same run identity continues from it and ends with the same weights, bitwise, as an
 uninterrupted run. An exception inside a step (for instance from ``loss_fn``) leaves the last periodic state.
+
+Where it runs: the :class:`~motionlab.train.execution.Execution` in effect (set by the training command with
+:func:`~motionlab.train.execution.executing`) chooses the device, mixed precision on CUDA and data-parallel
+processes; only the first process shows progress and writes the resumable state. The default, one CPU process,
+leaves every step exactly as described above.
 """
 
 from __future__ import annotations
@@ -36,7 +41,7 @@ import math
 import time
 import warnings
 from collections.abc import Callable, Iterable
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
@@ -48,7 +53,9 @@ from tqdm.auto import tqdm
 
 from motionlab import config
 from motionlab.checkpoints import state_dict_mismatch
-from motionlab.train.batches import BatchSource, check_source, epoch_batches
+from motionlab.train.batches import BatchSource, check_source, epoch_batches, epoch_seed
+from motionlab.train.execution import Execution, data_parallel, local_batch, mean_over_processes
+from motionlab.train.execution import current as current_execution
 from motionlab.train.history import History
 from motionlab.train.state import DeferredInterrupt, ResumeFile, rng_isolated, rng_state, set_rng_state
 from motionlab.train.train_config import TrainConfig
@@ -57,6 +64,9 @@ LossFn = Callable[[nn.Module, Any, int, dict[str, float]], dict[str, Tensor]]
 Callback = Callable[[int, nn.Module, History], None]
 
 TRAIN_STREAM, VALIDATION_STREAM = 0, 1
+
+#: The seed stream of the data-parallel processes after the first (their own random draws in the loss).
+PROCESS_STREAM = 2
 
 
 class NonFiniteLossError(RuntimeError):
@@ -140,6 +150,7 @@ class _Trainer:
     val_data: BatchSource | None
     callbacks: tuple[Callback, ...]
     resume: ResumeFile | None
+    execution: Execution = field(default_factory=Execution)
     position: _Position = field(default_factory=_Position)
     history: History = field(default_factory=History)
     seconds_before: float = 0.0
@@ -147,12 +158,17 @@ class _Trainer:
     saved_step: int = -1
     params: list[nn.Parameter] = field(init=False)
     optimizer: torch.optim.AdamW = field(init=False)
+    parallel_loss: nn.Module | None = field(init=False, default=None)
 
     def __post_init__(self) -> None:
+        if self.execution.device.type != "cpu":
+            self.model.to(self.execution.device)
         self.params = [p for p in self.model.parameters() if p.requires_grad]
         if not self.params:
             raise ValueError("the model has no trainable parameters")
         self.optimizer = self._new_optimizer()
+        if self.execution.distributed:
+            self.parallel_loss = data_parallel(self.model, self.loss_fn, self.execution)
 
     def _new_optimizer(self) -> torch.optim.AdamW:
         return torch.optim.AdamW(
@@ -201,7 +217,7 @@ class _Trainer:
         return True
 
     def save(self) -> None:
-        if self.resume is not None and self.saved_step != self.position.step:
+        if self.resume is not None and self.execution.is_main and self.saved_step != self.position.step:
             self.resume.save(self.state())
             self.saved_step = self.position.step
 
@@ -221,7 +237,12 @@ class _Trainer:
             group["lr"] = lr
         coeffs = self.coefficients(step)
         self.optimizer.zero_grad(set_to_none=True)
-        out = self.loss_fn(self.model, batch, step, coeffs)
+        batch = local_batch(batch, self.execution)
+        with self.execution.autocast:
+            if self.parallel_loss is not None:
+                out = self.parallel_loss(batch, step, coeffs)
+            else:
+                out = self.loss_fn(self.model, batch, step, coeffs)
         terms = loss_terms(out, step)
         if not out["loss"].requires_grad:
             raise ValueError(f"loss at step {step} does not depend on any trainable parameter")
@@ -236,6 +257,8 @@ class _Trainer:
         if self.cfg.grad_clip is not None:
             clip_grads_with_norm_(self.params, self.cfg.grad_clip, total_norm)
         self.optimizer.step()
+        if self.execution.distributed:  # the history holds the global batch's terms
+            terms = dict(zip(terms, mean_over_processes(list(terms.values()), self.execution)))
         self.history.record_step(step, self.position.epoch, terms, coeffs, lr, grad_norm)
         self.position.step += 1
         self.position.batch_index += 1
@@ -251,6 +274,7 @@ class _Trainer:
                 for batch in epoch_batches(
                     self.val_data, self.cfg.seed, 0, self.cfg.batch_size, VALIDATION_STREAM
                 ):
+                    batch = local_batch(batch, replace(self.execution, rank=0, world_size=1))
                     for name, value in loss_terms(
                         self.loss_fn(self.model, batch, step, coeffs), step, "validation"
                     ).items():
@@ -317,10 +341,14 @@ class _Trainer:
     def run(self, progress: bool, desc: str) -> TrainResult:
         with rng_isolated(), DeferredInterrupt() as interrupt:
             self.started = time.perf_counter()
-            saved = self.resume.load() if self.resume is not None else None
+            saved = self.resume.load() if self.resume is not None and self.execution.resume else None
             resumed = saved is not None and self.restore(saved)
             if not resumed:
                 config.seed_everything(self.cfg.seed)
+            if self.execution.rank > 0:  # its own draws in the loss (noise), reproducible per step
+                torch.manual_seed(
+                    epoch_seed(self.cfg.seed, self.position.step, PROCESS_STREAM + self.execution.rank)
+                )
             self.saved_step = self.position.step if resumed else -1
             resumed_from = self.position.step if resumed else None
             self.model.train()
@@ -338,6 +366,8 @@ class _Trainer:
             ):
                 self.validate()
         self.model.eval()
+        if self.execution.device.type != "cpu":
+            self.model.to("cpu")
         metrics: dict[str, float] = {
             "steps": float(self.position.step),
             "train_seconds": self.seconds_before + time.perf_counter() - self.started,
@@ -391,5 +421,10 @@ def train(
     check_source(data, cfg.batch_size, "data")
     if val_data is not None:
         check_source(val_data, cfg.batch_size, "val_data")
-    trainer = _Trainer(model, loss_fn, data, cfg, val_data, tuple(callbacks), resume)
-    return trainer.run(progress=not config.is_quick() if progress is None else bool(progress), desc=desc)
+    execution = current_execution()
+    if execution.checkpoint_every is not None:
+        cfg = replace(cfg, checkpoint_every=execution.checkpoint_every)
+    callbacks = (*callbacks, *execution.callbacks)
+    trainer = _Trainer(model, loss_fn, data, cfg, val_data, tuple(callbacks), resume, execution)
+    show = not config.is_quick() if progress is None else bool(progress)
+    return trainer.run(progress=show and execution.is_main, desc=desc)

@@ -158,6 +158,20 @@ class ExperimentConfig(config.ProfileConfig):
             bench_batch=8,
         )
 
+    @classmethod
+    def long(cls) -> ExperimentConfig:
+        """A longer, larger run for the training command (``python -m motionlab.train moglow --config long``):
+        20 times the full profile's steps (MoGlow 10,000, the baseline 6,000, the fixed-length Glow 6,000) and
+        twice MoGlow's LSTM and conditioning widths (128); data and evaluation as in :meth:`full`."""
+        return replace(
+            cls(),
+            moglow_hidden=128,
+            cond_features=128,
+            moglow_train_steps=10_000,
+            baseline_train_steps=6_000,
+            glow_train_steps=6_000,
+        )
+
     def moglow(self, dropout: float, rescale: bool = True) -> MoGlowConfig:
         """The chapter's MoGlow with history dropout ``dropout`` (kept poses rescaled unless ``rescale`` is
         false)."""

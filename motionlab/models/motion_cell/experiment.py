@@ -144,6 +144,14 @@ class ExperimentConfig(config.ProfileConfig):
         """The reported models (the defaults)."""
         return cls()
 
+    @classmethod
+    def long(cls) -> ExperimentConfig:
+        """A longer, larger run for the training command (``python -m motionlab.train motion_cell --config
+        long``): the Motion Cell at :class:`MotionCellConfig`'s own sizes (hidden 128, words of 64), 20 times
+        the full profile's steps (6,000; the output heads 1,600); the same denoiser and evaluation as
+        :meth:`full`."""
+        return cls(motion_cell=MotionCellConfig(), steps=6_000, representation_steps=1_600)
+
 
 def learning_rate_decay(steps: int) -> LinearRamp:
     """The learning-rate factor of every run: 1 for the first 60% of the steps, then linear down to 0.1."""

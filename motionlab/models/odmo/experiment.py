@@ -152,6 +152,13 @@ class ExperimentConfig(config.ProfileConfig):
             n_end_points=3,
         )
 
+    @classmethod
+    def long(cls) -> ExperimentConfig:
+        """A longer, larger run for the training command (``python -m motionlab.train odmo --config long``):
+        20 times the full profile's steps (6,000) and generators of the paper's width (128 LSTM units, one
+        layer where the paper has two); the same sample sets as :meth:`full`."""
+        return cls(model=ODMOConfig(trajectory_hidden=128, motion_hidden=128), steps=6_000)
+
     def train_config(self) -> TrainConfig:
         """Every variant's :class:`~motionlab.train.TrainConfig`, with the teacher-forcing schedule."""
         ramp = LinearRamp(start=0, length=self.steps, begin=1.0, end=self.teacher_forcing_end)

@@ -165,6 +165,24 @@ class ExperimentConfig(config.ProfileConfig):
             n_eval_windows=48,
         )
 
+    @classmethod
+    def long(cls) -> ExperimentConfig:
+        """A longer, larger run for the training command (``python -m motionlab.train trajevae --config
+        long``): 20 times the full profile's steps (8,000, batches of 64), TrajeVAE twice as wide (64, latent
+        16, 16 DCT components, 4 heads) and the baselines too; the same test windows as :meth:`full`."""
+        return cls(
+            trajevae=TrajeVAEConfig(n_frames=60, width=64, latent_dim=16, dct_components=16, heads=4),
+            gru=RecurrentConfig(n_frames=60, hidden=128),
+            cvae_rnn=RecurrentConfig(n_frames=60, hidden=96, latent_dim=16),
+            train=_train_config(steps=8_000, batch_size=64, checkpoint_every=500),
+            n_eval_windows=48,
+        )
+
+    def with_train_steps(self, steps: int) -> ExperimentConfig:
+        """This config with every run trained for ``steps`` steps (the chapter's schedule, stretched)."""
+        check_scalar(steps, "steps", "ExperimentConfig.with_train_steps", kind=numbers.Integral, minimum=1)
+        return replace(self, train=_train_config(steps, self.train.batch_size, self.train.checkpoint_every))
+
 
 def ladder(full: TrajeVAEConfig) -> dict[str, TrajeVAEConfig]:
     """The five rungs ``{name: config}`` of Table 4 built from ``full`` (architecture and loss weight shared).

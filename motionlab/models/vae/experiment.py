@@ -102,6 +102,13 @@ class ExperimentConfig(config.ProfileConfig):
             n_repeats=3,
         )
 
+    @classmethod
+    def long(cls) -> ExperimentConfig:
+        """A longer, larger run for the training command (``python -m motionlab.train vae --config long``):
+        20 times the full profile's steps (16,000 for the pose models, 12,000 for the clip CVAEs) and twice
+        their width (256); data and evaluation as in :meth:`full`."""
+        return cls(pose_hidden=256, pose_steps=16_000, clip_hidden=256, clip_steps=12_000)
+
     def pose_model(self, variational: bool = True, prior_var: float = 1.0) -> VAEConfig:
         """An unconditional pose (V)AE on 64-number pose vectors; ``prior_var`` is sigma_p^2."""
         check_scalar(

@@ -1,0 +1,420 @@
+"""``python -m motionlab.train FAMILY ...``: train one run of a chapter's model family, longer or elsewhere.
+
+The command trains a chapter's run (``--run``, default the chapter's main model) from the chapter's own
+``ExperimentConfig`` (``--config quick|full|long``, changed by ``--set key=value`` and ``--steps``), through
+the course's one training loop and its checkpoint cache, then measures the model as the chapter does. It
+writes into ``--out``: ``run.json`` (what was trained, how, how long), ``history.json`` (the loss history),
+``evaluation.json`` (the chapter's measurements) and ``checkpoints/<name>-<hash>.pt`` (the cache entry).
+
+Devices and processes: ``--device auto`` takes CUDA when there is one (bf16 mixed precision where the GPU
+supports it); ``torchrun --nproc-per-node N -m motionlab.train ...`` trains data-parallel
+(:mod:`motionlab.train.execution`; gloo on the CPU, nccl on CUDA), the first process logging and writing.
+
+Bad arguments end the command with one line on stderr and exit code 2.
+"""
+
+from __future__ import annotations
+
+import argparse
+import dataclasses
+import json
+import os
+import shutil
+import sys
+import time
+import typing
+from collections.abc import Sequence
+from pathlib import Path
+from typing import Any
+
+from motionlab.train.families import FAMILIES, DataSet, Family, jsonable
+
+CONFIGS = ("quick", "full", "long")
+PROG = "python -m motionlab.train"
+
+
+class UsageError(Exception):
+    """A bad argument: reported in one line, exit code 2."""
+
+
+class _Parser(argparse.ArgumentParser):
+    def error(self, message: str) -> typing.NoReturn:
+        raise UsageError(message)
+
+
+def _positive(text: str) -> int:
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a positive integer, got {text!r}") from None
+    if value <= 0:
+        raise argparse.ArgumentTypeError(f"expected a positive integer, got {value}")
+    return value
+
+
+def _non_negative(text: str) -> int:
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected an integer >= 0, got {text!r}") from None
+    if value < 0:
+        raise argparse.ArgumentTypeError(f"expected an integer >= 0, got {value}")
+    return value
+
+
+def _help_epilog() -> str:
+    lines = ["families (chapter, default --run) and their data sets (--data; the first is the default):"]
+    for family in FAMILIES.values():
+        lines.append(f"  {family.name:12s} chapter {family.chapter}, run {family.default_run!r}")
+        for name, dataset in family.datasets.items():
+            lines.append(f"      --data {name:10s} {dataset.description}")
+    lines += [
+        "",
+        "configs: quick (the tests' sizes: seconds), full (the chapter's reported runs), long (longer and",
+        "  larger: see each family's ExperimentConfig.long()).",
+        "",
+        "--data PATH: a folder of clips (.npy positions (T, J, 3), .bvh) for a data set that reads folders.",
+        "The model goes into the course's checkpoint cache ($MOTIONLAB_BUILD/checkpoints, default build/),",
+        "where the chapter looks for it, and a copy into --out (README: 'Training longer or on your own",
+        "data').",
+    ]
+    return "\n".join(lines)
+
+
+def parser() -> argparse.ArgumentParser:
+    """The command's argument parser."""
+    p = _Parser(
+        prog=PROG,
+        description="Train one run of a chapter's model family and measure it as the chapter does.",
+        epilog=_help_epilog(),
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+    )
+    p.add_argument("family", choices=list(FAMILIES), metavar="FAMILY", help=", ".join(FAMILIES))
+    p.add_argument("--config", choices=CONFIGS, default="full", help="the experiment configuration (full)")
+    p.add_argument(
+        "--run",
+        "--run-name",
+        dest="run",
+        help="which of the chapter's runs (default: the chapter's main model); under torchrun write "
+        "--run-name, as torchrun reads --run as an abbreviation of its own --run-path",
+    )
+    p.add_argument(
+        "--set",
+        action="append",
+        default=[],
+        metavar="KEY=VALUE",
+        help="change a field of the ExperimentConfig (dotted for nested configs, e.g. model.code_dim=32)",
+    )
+    p.add_argument("--data", help="a data set of the family (see below) or a folder of clips")
+    p.add_argument("--steps", type=_positive, help="optimiser steps of the run (overrides the config)")
+    p.add_argument("--device", choices=("cpu", "cuda", "auto"), default="auto")
+    p.add_argument("--out", type=Path, help="output folder (default build/train/FAMILY-CONFIG-RUN)")
+    p.add_argument("--resume", action="store_true", help="continue an interrupted run of this configuration")
+    p.add_argument(
+        "--checkpoint-every",
+        type=_positive,
+        help="write the resumable state (weights, optimiser, RNG states) every N steps",
+    )
+    p.add_argument("--tensorboard", type=Path, metavar="DIR", help="also log the loss terms for TensorBoard")
+    p.add_argument("--seed", type=_non_negative, help="seed of the initial weights and the batches")
+    p.add_argument(
+        "--skip-evaluation", action="store_true", help="train only (no evaluation.json; e.g. to time a run)"
+    )
+    return p
+
+
+# --- --set key=value ---------------------------------------------------------------------------------------
+def _convert(text: str, current: Any, key: str) -> Any:
+    """``text`` as a value of the type of ``current`` (the field's present value)."""
+    try:
+        if isinstance(current, bool):
+            if text.lower() in ("true", "1", "yes"):
+                return True
+            if text.lower() in ("false", "0", "no"):
+                return False
+            raise ValueError
+        if isinstance(current, int):
+            return int(text)
+        if isinstance(current, float):
+            return float(text)
+        if isinstance(current, tuple):
+            parts = [part.strip() for part in text.split(",") if part.strip()]
+            return tuple(_convert(part, current[0], key) if current else part for part in parts)
+        if current is None:
+            return None if text.lower() == "none" else json.loads(text)
+        if isinstance(current, str):
+            return text
+    except (ValueError, json.JSONDecodeError):
+        raise UsageError(
+            f"--set {key}={text}: expected a value of type {type(current).__name__}"
+            + (" (comma-separated)" if isinstance(current, tuple) else "")
+        ) from None
+    raise UsageError(
+        f"--set {key}: a field of type {type(current).__name__} cannot be set from the command line"
+    )
+
+
+def set_field(cfg: Any, key: str, text: str) -> Any:
+    """``cfg`` (a frozen dataclass) with the dotted field ``key`` set from ``text``."""
+    head, _, rest = key.partition(".")
+    names = [f.name for f in dataclasses.fields(cfg)]
+    if head not in names:
+        raise UsageError(
+            f"--set {key}: {type(cfg).__name__} has no field {head!r} (fields: {', '.join(names)})"
+        )
+    current = getattr(cfg, head)
+    if rest:
+        if not dataclasses.is_dataclass(current):
+            raise UsageError(f"--set {key}: {head!r} is not a nested config")
+        value = set_field(current, rest, text)
+    elif dataclasses.is_dataclass(current):
+        raise UsageError(f"--set {key}: {head!r} is a nested config; set one of its fields ({head}.NAME=...)")
+    else:
+        value = _convert(text, current, key)
+    return dataclasses.replace(cfg, **{head: value})
+
+
+def build_config(family: Family, dataset: DataSet, args: argparse.Namespace, run: str) -> Any:
+    """The family's ExperimentConfig of ``--config`` for ``dataset``, ``--set`` and ``--steps`` applied."""
+    cfg = family.config(args.config) if dataset.config is None else dataset.config(args.config)
+    try:
+        for item in args.set:
+            key, sep, text = item.partition("=")
+            if not sep or not key:
+                raise UsageError(f"--set expects KEY=VALUE, got {item!r}")
+            cfg = set_field(cfg, key.strip(), text.strip())
+        if args.steps is not None:
+            cfg = family.steps(cfg, run, args.steps)
+    except (ValueError, TypeError) as error:  # the config's own checks
+        raise UsageError(f"invalid configuration: {error}") from None
+    return cfg
+
+
+# --- data, device, processes -------------------------------------------------------------------------------
+def choose_data(family: Family, value: str | None) -> tuple[str, Path | None]:
+    """The data set's name and, for ``--data PATH``, the folder (checked: it exists and holds clips)."""
+    names = list(family.datasets)
+    if value is None or value in family.datasets:
+        name = value or names[0]
+        path = None
+    else:
+        readers = [name for name, dataset in family.datasets.items() if dataset.reads_folder]
+        path = Path(value)
+        if not path.exists():
+            raise UsageError(
+                f"--data {value}: neither a data set of {family.name} ({', '.join(names)}) nor a path"
+            )
+        if not readers:
+            raise UsageError(
+                f"--data {value}: {family.name} trains on its data sets ({', '.join(names)}), not on a folder"
+            )
+        from motionlab.data.streaming import clip_files
+
+        try:
+            clip_files(path)
+        except (FileNotFoundError, ValueError) as error:
+            raise UsageError(f"--data {value}: {error}") from None
+        name = readers[0]
+    return name, path
+
+
+def choose_device(name: str) -> Any:
+    import torch
+
+    if name == "auto":
+        return torch.device("cuda" if torch.cuda.is_available() else "cpu")
+    if name == "cuda" and not torch.cuda.is_available():
+        raise UsageError("--device cuda: no CUDA device is available (torch.cuda.is_available() is False)")
+    return torch.device(name)
+
+
+def start_processes(device: Any) -> tuple[int, int, Any]:
+    """``(rank, world_size, device)``: under torchrun (``WORLD_SIZE`` > 1) the process group is initialised,
+    gloo on the CPU and nccl on CUDA (one GPU per process, ``LOCAL_RANK``)."""
+    import torch
+    import torch.distributed as dist
+
+    world_size = int(os.environ.get("WORLD_SIZE", "1"))
+    if world_size <= 1:
+        return 0, 1, device
+    if device.type == "cuda":
+        device = torch.device("cuda", int(os.environ.get("LOCAL_RANK", "0")))
+        torch.cuda.set_device(device)
+    dist.init_process_group("nccl" if device.type == "cuda" else "gloo")
+    return dist.get_rank(), world_size, device
+
+
+# --- progress ----------------------------------------------------------------------------------------------
+class LogLines:
+    """Plain progress lines (for a log file rather than a terminal): step, loss, steps/s and ETA."""
+
+    def __init__(self, total: int | None, every: int, stream: Any = sys.stderr) -> None:
+        self.total, self.every, self.stream = total, max(1, every), stream
+        self.started = time.perf_counter()
+        self.first: int | None = None
+
+    def __call__(self, step: int, model: Any, history: Any) -> None:
+        if self.first is None:
+            self.first, self.started = step - 1, time.perf_counter()
+        if step % self.every and step != self.total:
+            return
+        rate = (step - self.first) / max(time.perf_counter() - self.started, 1e-9)
+        eta = f", ETA {(self.total - step) / rate:.0f} s" if self.total and rate > 0 else ""
+        loss = history.terms["loss"][-1]
+        of = f"/{self.total}" if self.total else ""
+        print(f"step {step}{of}  loss {loss:.5g}  {rate:.2f} steps/s{eta}", file=self.stream, flush=True)
+
+
+class TensorBoardLog:
+    """Every loss term, coefficient and the learning rate of every step, for TensorBoard."""
+
+    def __init__(self, folder: Path) -> None:
+        try:
+            from torch.utils.tensorboard import SummaryWriter
+        except ImportError:
+            raise UsageError(
+                "--tensorboard needs the tensorboard package: pip install 'motionlab[tensorboard]'"
+            ) from None
+        self.writer = SummaryWriter(log_dir=str(folder))
+
+    def __call__(self, step: int, model: Any, history: Any) -> None:
+        for name, values in history.terms.items():
+            self.writer.add_scalar(f"loss/{name}", values[-1], step)
+        for name, values in history.coeffs.items():
+            self.writer.add_scalar(f"coefficient/{name}", values[-1], step)
+        self.writer.add_scalar("lr", history.lr[-1], step)
+
+    def close(self) -> None:
+        self.writer.close()
+
+
+# --- the command -------------------------------------------------------------------------------------------
+def _slug(text: str) -> str:
+    return "".join(ch if ch.isalnum() else "_" for ch in text.lower()).strip("_") or "run"
+
+
+def _write_json(path: Path, payload: Any) -> None:
+    path.write_text(json.dumps(jsonable(payload), indent=2, allow_nan=True) + "\n")
+
+
+def train_command(args: argparse.Namespace) -> dict[str, Any]:
+    """Train and measure as ``args`` say; returns what ``run.json`` holds (``{}`` on the other processes)."""
+    os.environ["MOTIONLAB_PROFILE"] = "quick" if args.config == "quick" else "full"
+    family = FAMILIES[args.family]
+    run_name = args.run or family.default_run
+    data_name, data_path = choose_data(family, args.data)
+    device = choose_device(args.device)
+    dataset = family.datasets[data_name]
+    cfg = build_config(family, dataset, args, run_name)
+    tensorboard = TensorBoardLog(args.tensorboard) if args.tensorboard else None
+
+    import torch
+
+    from motionlab import config
+    from motionlab.train.execution import Execution, executing
+
+    config.setup(seed=0)
+    rank, world_size, device = start_processes(device)
+    data = dataset.load(cfg) if data_path is None else dataset.load(cfg, data_path)
+    runs = (dataset.runs or family.runs)(cfg, data)
+    if run_name not in runs:
+        raise UsageError(f"--run {run_name}: {family.name} has the runs {', '.join(map(repr, runs))}")
+    run = runs[run_name]
+    training = getattr(run, family.train_field)
+    if args.seed is not None:
+        training = dataclasses.replace(training, seed=args.seed)
+        run = dataclasses.replace(run, **{family.train_field: training})
+    out = args.out or config.build_dir() / "train" / f"{family.name}-{args.config}-{_slug(run_name)}"
+    main = rank == 0
+    interactive = main and sys.stderr.isatty()
+    callbacks: list[Any] = []
+    if main and not interactive:
+        callbacks.append(LogLines(training.steps, every=max(1, (training.steps or 100) // 20)))
+    if main and tensorboard is not None:
+        callbacks.append(tensorboard)
+    execution = Execution(
+        device=device,
+        mixed_precision=device.type == "cuda" and torch.cuda.is_bf16_supported(),
+        rank=rank,
+        world_size=world_size,
+        callbacks=tuple(callbacks),
+        checkpoint_every=args.checkpoint_every,
+        resume=args.resume,
+    )
+    if main:
+        print(
+            f"{family.name}: run {run_name!r}, config {args.config}, data {data_name}, "
+            f"{training.steps} steps of batch {training.batch_size}, device {device}"
+            + (f", {world_size} processes" if world_size > 1 else "")
+            + (", bf16 autocast" if execution.mixed_precision else ""),
+            file=sys.stderr,
+            flush=True,
+        )
+    started = time.perf_counter()
+    with executing(execution):
+        model, result = run.train(progress=interactive)
+    seconds = time.perf_counter() - started
+    if tensorboard is not None:
+        tensorboard.close()
+    if not main:
+        return {}
+    out.mkdir(parents=True, exist_ok=True)
+    checkpoint = None
+    if result.path is not None:
+        (out / "checkpoints").mkdir(exist_ok=True)
+        checkpoint = out / "checkpoints" / result.path.name
+        shutil.copy2(result.path, checkpoint)
+    _write_json(out / "history.json", result.history.to_dict())
+    evaluation_seconds = None
+    if not args.skip_evaluation:
+        evaluate = dataset.evaluate or family.evaluate
+        evaluation_started = time.perf_counter()
+        _write_json(out / "evaluation.json", evaluate(cfg, data, run_name, model))
+        evaluation_seconds = time.perf_counter() - evaluation_started
+    steps = int(result.metrics["steps"])
+    summary = {
+        "family": family.name,
+        "chapter": family.chapter,
+        "run": run_name,
+        "config_profile": args.config,
+        "data": data_name if data_path is None else str(data_path),
+        "experiment_config": cfg,
+        "train_config": training.identity(),
+        "device": str(device),
+        "processes": world_size,
+        "mixed_precision": execution.mixed_precision,
+        "loaded_from_cache": result.loaded_from_cache,
+        "resumed_from_step": result.resumed_from_step,
+        "steps": steps,
+        "train_seconds": result.metrics["train_seconds"],
+        "steps_per_second": steps / result.metrics["train_seconds"] if not result.loaded_from_cache else None,
+        "wall_seconds": seconds,
+        "evaluation_seconds": evaluation_seconds,
+        "final_metrics": result.metrics,
+        "cache_entry": None if result.path is None else str(result.path),
+        "checkpoint": None if checkpoint is None else str(checkpoint),
+    }
+    _write_json(out / "run.json", summary)
+    how = "loaded from the checkpoint cache" if result.loaded_from_cache else f"trained in {seconds:.1f} s"
+    print(f"{family.name} {run_name!r}: {how}; results in {out}", file=sys.stderr, flush=True)
+    return summary
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """The command; returns its exit code (2 for bad arguments)."""
+    try:
+        args = parser().parse_args(argv)
+        train_command(args)
+    except UsageError as error:
+        print(f"{PROG}: error: {error}", file=sys.stderr)
+        return 2
+    finally:
+        _end_processes()
+    return 0
+
+
+def _end_processes() -> None:
+    import torch.distributed as dist
+
+    if dist.is_available() and dist.is_initialized():
+        dist.destroy_process_group()
