@@ -1,5 +1,5 @@
-"""Chapter 10's exercise: the solution passes the bone-length checker, and the checker names typical
-mistakes."""
+"""Chapter 10's exercises: the solutions pass the mirror and bone-length checkers, and the checkers name
+typical mistakes."""
 
 from __future__ import annotations
 
@@ -8,16 +8,20 @@ import importlib.util
 import numpy as np
 import pytest
 
-from motionlab.exercises import check_bone_length_variation
+from motionlab.exercises import check_bone_length_variation, check_mirror
 from motionlab.paths import REPO_ROOT
 
 
-def _solution():
+def _solutions():
     path = REPO_ROOT / "notebooks" / "solutions" / "10_real_motion_capture.py"
     spec = importlib.util.spec_from_file_location("solutions_10", path)
     module = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(module)
-    return module.my_bone_length_variation
+    return module
+
+
+def _solution():
+    return _solutions().my_bone_length_variation
 
 
 def _lengths(positions, parents):
@@ -55,4 +59,30 @@ def test_an_unfinished_function_is_not_done() -> None:
 )
 def test_the_checker_names_the_mistake(wrong, says: str) -> None:
     result = check_bone_length_variation(wrong)
+    assert result.status == "wrong" and says in result.message, result
+
+
+def test_the_mirror_solution_passes_and_an_unfinished_one_is_not_done() -> None:
+    result = check_mirror(_solutions().my_mirror)
+    assert result.passed, result
+
+    def unfinished(positions, mirror):
+        raise NotImplementedError("later")
+
+    assert check_mirror(unfinished).status == "not done"
+
+
+@pytest.mark.parametrize(
+    "wrong, says",
+    [
+        (lambda x, m: x * np.array([1.0, -1.0, 1.0]), "swap left and right too"),
+        (lambda x, m: x[:, list(m)], "reflect the positions too"),
+        (lambda x, m: (x * np.array([-1.0, 1.0, 1.0]))[:, list(m)], "reflect across the x-z plane"),
+        (lambda x, m: (x * np.array([1.0, 1.0, -1.0]))[:, list(m)], "not z"),
+        (lambda x, m: (x * np.array([1.0, -1.0, 1.0]))[:, list(m)][:, :-1], "of the input's shape"),
+        (lambda x, m: list(x), "NumPy array"),
+    ],
+)
+def test_the_mirror_checker_names_the_mistake(wrong, says: str) -> None:
+    result = check_mirror(wrong)
     assert result.status == "wrong" and says in result.message, result

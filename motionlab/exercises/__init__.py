@@ -23,7 +23,7 @@ from motionlab.exercises.flows import check_affine_forward, check_affine_inverse
 from motionlab.exercises.hierarchy import check_impact_weights, check_subtree_reach
 from motionlab.exercises.kinematics import check_chain_positions
 from motionlab.exercises.metrics import check_apd, check_fid
-from motionlab.exercises.real import check_bone_length_variation
+from motionlab.exercises.real import check_bone_length_variation, check_mirror
 from motionlab.exercises.rotations import check_quat_mul, check_slerp
 from motionlab.exercises.sequences import check_contrastive_loss, check_dct_matrix, check_given_trajectories
 from motionlab.exercises.skating import check_foot_skating
@@ -45,6 +45,7 @@ __all__ = [
     "check_given_trajectories",
     "check_impact_weights",
     "check_keep_mask",
+    "check_mirror",
     "check_quat_mul",
     "check_reparameterize",
     "check_sample_loop",

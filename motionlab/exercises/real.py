@@ -1,5 +1,6 @@
-"""Chapter 10's exercise: the bone-length variation of a recorded clip, checked against
-:func:`motionlab.metrics.realism.bone_length_variation`."""
+"""Chapter 10's exercises: the left/right mirror image of a recorded pose, checked against
+:func:`motionlab.data.augment.mirror_positions` with :data:`motionlab.data.cmu_mocap.MIRROR`; and the
+bone-length variation of a clip, checked against :func:`motionlab.metrics.realism.bone_length_variation`."""
 
 from __future__ import annotations
 
@@ -8,19 +9,21 @@ from collections.abc import Callable
 import numpy as np
 import torch
 
-from motionlab.data.cmu_mocap import PARENTS
+from motionlab.data.augment import mirror_positions
+from motionlab.data.cmu_mocap import MIRROR, PARENTS
 from motionlab.exercises.checking import CheckResult, Diagnosis, close, run_checks
 from motionlab.metrics.physical import bone_lengths
 from motionlab.metrics.realism import bone_length_variation
 
 BoneLengthVariation = Callable[[np.ndarray, tuple[int, ...]], np.ndarray]
+Mirror = Callable[[np.ndarray, tuple[int, ...]], np.ndarray]
 
 
-def _as_array(value: object) -> np.ndarray:
+def _as_array(value: object, name: str = "my_bone_length_variation") -> np.ndarray:
     if isinstance(value, torch.Tensor):
         value = value.detach().numpy()
     if not isinstance(value, np.ndarray):
-        raise Diagnosis(f"my_bone_length_variation should return a NumPy array, got {type(value).__name__}")
+        raise Diagnosis(f"{name} should return a NumPy array, got {type(value).__name__}")
     return value.astype(np.float64)
 
 
@@ -90,4 +93,41 @@ def check_bone_length_variation(fn: BoneLengthVariation) -> CheckResult:
         fn,
         [_variation_values, _rigid_is_zero],
         "matches the package's bone-length variation, and a rigid moving body gives 0",
+    )
+
+
+def _mirror_values(fn: Mirror) -> None:
+    clip = _clip(2, n_frames=5)
+    got = _as_array(fn(clip.copy(), tuple(MIRROR)), "my_mirror")
+    want = mirror_positions(torch.from_numpy(clip), torch.tensor(MIRROR)).numpy()
+    if got.shape != want.shape:
+        raise Diagnosis(f"return positions of the input's shape {want.shape}, got {got.shape}")
+    if np.allclose(got, want, atol=1e-12):
+        return
+    reflect = {axis: clip * np.where(np.arange(3) == axis, -1.0, 1.0) for axis in range(3)}
+    for wrong, text in (
+        (reflect[1], "swap left and right too: joint j of the mirror image is joint MIRROR[j] reflected"),
+        (clip[:, list(MIRROR)], "reflect the positions too (y -> -y), not only swap left and right"),
+        (reflect[0][:, list(MIRROR)], "reflect across the x-z plane (y -> -y): the character faces +x"),
+        (reflect[2][:, list(MIRROR)], "reflect y (sideways), not z: a mirror image keeps the floor below"),
+    ):
+        if wrong.shape == got.shape and np.allclose(got, wrong, atol=1e-12):
+            raise Diagnosis(text)
+    raise Diagnosis("the values are wrong: reflect y -> -y, then take joint MIRROR[j] as the new joint j")
+
+
+def _mirror_twice_is_identity(fn: Mirror) -> None:
+    clip = _clip(3, n_frames=4)
+    twice = _as_array(fn(_as_array(fn(clip.copy(), tuple(MIRROR)), "my_mirror"), tuple(MIRROR)), "my_mirror")
+    if not np.allclose(twice, clip, atol=1e-12):
+        raise Diagnosis("mirroring twice must give the clip back")
+
+
+def check_mirror(fn: Mirror) -> CheckResult:
+    """Check ``fn(positions (T, J, 3), mirror (J,)) -> (T, J, 3)``: the left/right mirror image."""
+    return run_checks(
+        "mirror",
+        fn,
+        [_mirror_values, _mirror_twice_is_identity],
+        "matches the package's mirror image, and mirroring twice gives the clip back",
     )

@@ -1,4 +1,4 @@
-"""Worked solution to chapter 10's "your turn" exercise (checked by tests/test_exercises_real.py)."""
+"""Worked solutions to chapter 10's "your turn" exercises (checked by tests/test_exercises_real.py)."""
 
 from __future__ import annotations
 
@@ -11,3 +11,9 @@ def my_bone_length_variation(positions: np.ndarray, parents) -> np.ndarray:
     children = np.flatnonzero(parents >= 0)
     lengths = np.linalg.norm(positions[:, children] - positions[:, parents[children]], axis=-1)  # (T, J - 1)
     return lengths.std(axis=0) / lengths.mean(axis=0)
+
+
+def my_mirror(positions: np.ndarray, mirror) -> np.ndarray:
+    """Left/right mirror image of positions (T, J, 3): reflect y -> -y, then joint j is joint mirror[j]."""
+    reflected = positions * np.array([1.0, -1.0, 1.0])
+    return reflected[:, list(mirror)]
