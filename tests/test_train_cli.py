@@ -7,6 +7,7 @@ import subprocess
 import sys
 from pathlib import Path
 
+import numpy as np
 import pytest
 import torch
 
@@ -72,7 +73,8 @@ def test_every_family_trains_and_is_measured_in_the_quick_config(family, tmp_pat
         (["vae", "--set", "lr=-1"], "invalid configuration"),
         (["odmo", "--set", "model=3"], "is a nested config"),
         (["odmo", "--data", "/no/such/folder"], "neither a data set of odmo"),
-        (["odmo", "--data", ".", "--config", "quick"], "not on a folder"),
+        (["odmo", "--data", ".", "--config", "quick"], "holds neither"),
+        (["moglow", "--data", ".", "--config", "quick"], "not on a folder"),
         (["vae", "--data", "."], "not on a folder"),
         (["vae", "--steps", "0"], "expected a positive integer, got 0"),
         (["vae", "--run", "gan", "--config", "quick"], "vae has the runs"),
@@ -83,6 +85,33 @@ def test_bad_arguments_get_one_line_and_exit_code_2(argv, message, monkeypatch, 
     assert main(argv) == 2
     err = capsys.readouterr().err
     assert message in err and err.count("\n") == 1 and "Traceback" not in err
+
+
+def test_odmo_trains_on_a_downloaded_action2motion_folder(tmp_path, monkeypatch):
+    """``--data FOLDER``: ODMO on clips in Action2Motion's layout (``pose_clip.csv`` and ``.npy`` files in
+    CMU units, y up), as a user downloads them."""
+    monkeypatch.setenv("MOTIONLAB_PROFILE", "quick")
+    monkeypatch.setenv("MOTIONLAB_BUILD", str(fresh_build(tmp_path / "build")))
+    from motionlab.data import cmu_mocap as cm
+
+    generator = torch.Generator().manual_seed(0)
+    folder = tmp_path / "a2m"
+    (folder / "mocap_3djoints").mkdir(parents=True)
+    rows = []
+    for action in range(len(cm.ACTION_NAMES)):
+        for k in range(18):  # enough clips per class for the quick config's stratified 112
+            name = f"{action:02d}_{k:02d}"
+            clip = torch.randn(30, cm.N_JOINTS, 3, generator=generator) + torch.tensor([0.0, 16.0, 0.0])
+            np.save(folder / "mocap_3djoints" / f"{name}.npy", clip.numpy().astype(np.float32))
+            rows.append(f"{name},{action}")
+    (folder / "pose_clip.csv").write_text("\n".join(["motion,action_type", *rows]) + "\n")
+    out = tmp_path / "out"
+    argv = ["odmo", "--data", str(folder), "--config", "quick", "--steps", "2", "--out", str(out)]
+    assert main([*argv, "--skip-evaluation"]) == 0
+    run = json.loads((out / "run.json").read_text())
+    assert run["data"] == str(folder) and run["steps"] == 2
+    (folder / "pose_clip.csv").write_text("motion,action_type\n00_00,Yoga\n")  # a label ODMO's set lacks
+    assert main(argv) == 2
 
 
 def test_help_lists_families_configs_and_data_sets(capsys):

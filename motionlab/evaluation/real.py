@@ -24,6 +24,7 @@ from __future__ import annotations
 import numbers
 from collections.abc import Callable, Iterator
 from dataclasses import asdict, dataclass
+from pathlib import Path
 from typing import NamedTuple
 
 import numpy as np
@@ -94,11 +95,15 @@ class RealBenchmark(NamedTuple):
     test: MocapClips
 
 
-def load_real_benchmark(n_clips: int | None = None, test_share: float = 0.2, seed: int = 0) -> RealBenchmark:
+def load_real_benchmark(
+    n_clips: int | None = None, test_share: float = 0.2, seed: int = 0, source: str | Path | None = None
+) -> RealBenchmark:
     """The 970 benchmark clips (:func:`~motionlab.data.cmu_mocap.odmo_clips`), every floor levelled, split
     stratified into train and test (:func:`~motionlab.data.cmu_mocap.split_clips`). ``n_clips`` keeps a
-    stratified subset first (the quick profile's few dozen clips)."""
-    clips = odmo_clips(load_cmu_mocap())
+    stratified subset first (the quick profile's few dozen clips). ``source`` is what
+    :func:`~motionlab.data.cmu_mocap.load_cmu_mocap` reads (``None``: the compact copy in ``data_real/``; or
+    a downloaded Action2Motion folder with its ``pose_clip.csv``)."""
+    clips = odmo_clips(load_cmu_mocap(source))
     if n_clips is not None:
         check_scalar(
             n_clips,

@@ -315,7 +315,13 @@ def train_command(args: argparse.Namespace) -> dict[str, Any]:
 
     config.setup(seed=0)
     rank, world_size, device = start_processes(device)
-    data = dataset.load(cfg) if data_path is None else dataset.load(cfg, data_path)
+    if data_path is None:
+        data = dataset.load(cfg)
+    else:
+        try:
+            data = dataset.load(cfg, data_path)
+        except (FileNotFoundError, ValueError) as error:  # a folder the data set cannot read: say why
+            raise UsageError(f"--data {data_path}: {error}") from None
     runs = (dataset.runs or family.runs)(cfg, data)
     if run_name not in runs:
         raise UsageError(f"--run {run_name}: {family.name} has the runs {', '.join(map(repr, runs))}")

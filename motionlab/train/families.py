@@ -17,6 +17,7 @@ import dataclasses
 import importlib
 from collections.abc import Callable
 from dataclasses import dataclass, field, replace
+from pathlib import Path
 from typing import Any
 
 from torch import nn
@@ -276,14 +277,15 @@ def _odmo_cmu_config(profile: str) -> Any:
     return getattr(RealExperimentConfig, profile)()
 
 
-def _odmo_cmu(cfg: Any) -> _RealODMOData:
+def _odmo_cmu(cfg: Any, folder: Path | None = None) -> _RealODMOData:
     """Chapter 10's data: the CMU clips (floors levelled, stratified split), ODMO's windows of the training
-    clips, the real-data evaluator (chapter 10's sizes) and Table 2's protocol."""
+    clips, the real-data evaluator (chapter 10's sizes) and Table 2's protocol. ``folder``: a downloaded
+    Action2Motion folder (``pose_clip.csv`` and one ``.npy`` per clip) instead of the compact copy."""
     from motionlab import config
     from motionlab.evaluation import real
     from motionlab.models.odmo.data import prepare_real
 
-    bench = real.load_real_benchmark(cfg.n_clips)
+    bench = real.load_real_benchmark(cfg.n_clips, source=folder)
     evaluator_cfg = real.RealEvaluatorConfig(
         steps=config.choose(quick=20, full=250), hidden=config.choose(quick=32, full=128)
     )
@@ -408,9 +410,10 @@ FAMILIES: dict[str, Family] = {
             "benchmark": DataSet(BENCHMARK, _odmo_benchmark),
             "cmu": DataSet(
                 "chapter 10: the CMU MoCap clips of data_real/ (Action2Motion's 7 classes; "
-                "RealExperimentConfig)",
+                "RealExperimentConfig); --data FOLDER reads a downloaded Action2Motion folder instead",
                 _odmo_cmu,
                 evaluate=_odmo_cmu_evaluate,
+                reads_folder=True,
                 config=_odmo_cmu_config,
                 runs=_odmo_cmu_runs,
             ),
