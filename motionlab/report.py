@@ -58,8 +58,9 @@ INTRO = (
     "(rotations, skeletons and motion data, variational autoencoders); chapters 04–08 reproduce four papers "
     "on one synthetic motion-capture benchmark — the Motion Cell (Ghorbani et al. 2020), MoGlow (Henter et "
     "al. 2019), TrajeVAE (Kania et al. 2021) and ODMO (Lu et al. 2022) — and check their claims on our data; "
-    "chapter 09 teaches how such models are judged and puts all four on one benchmark. Every number below "
-    "was measured by this build."
+    "chapter 09 teaches how such models are judged and puts all four on one benchmark; chapter 10 carries "
+    "ODMO and MoGlow over to real motion capture (CMU, ODMO's Table 2 protocol). Every number below was "
+    "measured by this build."
 )
 
 _STYLE = """
