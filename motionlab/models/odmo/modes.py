@@ -209,9 +209,10 @@ def _mode_set(
 def _check_codes(
     codes: np.ndarray, action: np.ndarray, end_points: np.ndarray, n_classes: int, func: str
 ) -> tuple:
-    codes = np.asarray(codes, dtype=np.float64)
-    action = np.asarray(action, dtype=np.int64)
-    end_points = np.asarray(end_points, dtype=np.float64)
+    # copies: a ModeSet owns its arrays (a NumPy view of a caller's tensor would change with the tensor)
+    codes = np.array(codes, dtype=np.float64)
+    action = np.array(action, dtype=np.int64)
+    end_points = np.array(end_points, dtype=np.float64)
     if codes.ndim != 2 or action.shape != codes.shape[:1] or end_points.shape != (codes.shape[0], 3):
         raise ValueError(
             f"{func}: need codes (N, D), action (N,) and end_points (N, 3), got {codes.shape}, "
