@@ -4,7 +4,14 @@ import numpy as np
 import pytest
 import torch
 
-from motionlab.metrics import FOOT_JOINTS, bone_length_drift, ground_penetration, jerk
+from motionlab.metrics import (
+    FOOT_JOINTS,
+    bone_length_drift,
+    ground_penetration,
+    jerk,
+    periodic_speed_power,
+    speed_spectrum,
+)
 from motionlab.skeleton import PARENTS
 
 FPS = 30.0
@@ -60,3 +67,44 @@ def test_bad_inputs_are_named():
         jerk(np.zeros((5, 22, 3)), fps=0)
     with pytest.raises(ValueError, match="bone_length_drift"):
         bone_length_drift(np.zeros((1, 22, 3)), PARENTS)
+
+
+def test_periodic_speed_power_of_a_staircase_and_of_steady_motion():
+    steps = np.zeros((2, 31, 1, 3))
+    steps[:, :, 0, 0] = 0.03 * (np.arange(31) // 3)  # 3 cm every 3 frames: speed 0.9 m/s once per word
+    # centred speed per 3 samples: (-0.3, -0.3, 0.6) m/s; its period-3 coefficient has modulus 0.9 per word,
+    # 9 over the 10 words of the 30 samples: power 81 / 30
+    assert periodic_speed_power(steps, 3) == pytest.approx(81 / 30, rel=1e-9)
+    steady = np.zeros((31, 2, 3))
+    steady[:, :, 1] = 0.01 * np.arange(31)[:, None]
+    assert periodic_speed_power(steady, 3) == pytest.approx(0.0, abs=1e-12)
+    slow = np.zeros((31, 1, 3))
+    slow[:, 0, 0] = 0.1 * np.sin(2 * np.pi * np.arange(31) / 30)  # one cycle per clip: no 10 Hz content
+    assert periodic_speed_power(slow, 3) < 1e-3 * periodic_speed_power(steps, 3)
+
+
+def test_periodic_speed_power_rejects_bad_periods_and_short_clips():
+    motion = np.zeros((31, 2, 3))
+    with pytest.raises(ValueError, match="period"):
+        periodic_speed_power(motion, 1)
+    with pytest.raises(ValueError, match="whole number of frames"):
+        periodic_speed_power(motion, 2.5)
+    with pytest.raises(ValueError, match="at least 7 frames"):
+        periodic_speed_power(motion[:6], 3)
+
+
+def test_speed_spectrum_puts_a_speed_oscillation_at_its_frequency_and_keeps_its_variance():
+    frames = np.arange(61)
+    motion = np.zeros((3, 61, 2, 3))
+    motion[..., 0] = (0.02 * frames + 0.002 * np.sin(2 * np.pi * 6 * frames / 30) / (2 * np.pi * 6 / 30))[
+        None, :, None
+    ]  # speed ~ 0.6 m/s plus a 6 Hz oscillation
+    frequencies, power = speed_spectrum(motion, fps=30.0)
+    assert frequencies.shape == power.shape == (31,)
+    assert frequencies[np.argmax(power)] == pytest.approx(6.0)
+    speed = np.abs(np.diff(motion[0, :, 0, 0])) * 30.0
+    # Parseval: the full spectrum (the one-sided one with its inner bins twice) sums to n times the variance
+    total = power[0] + 2 * power[1:-1].sum() + power[-1]
+    assert total == pytest.approx(60 * speed.var(), rel=1e-9)
+    with pytest.raises(ValueError, match="n_samples"):
+        speed_spectrum(motion, n_samples=61)

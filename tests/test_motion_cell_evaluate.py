@@ -205,3 +205,35 @@ def test_difference_interval_is_welchs():
     assert E.difference_interval([1.0, 1.0], [1.0, 1.0]) == (0.0, 0.0, 0.0)
     with pytest.raises(ValueError, match="difference_interval"):
         E.difference_interval([1.0], [1.0, 2.0])
+
+
+def _standing(n_clips: int, n_frames: int) -> torch.Tensor:
+    """Clips ``(n_clips, n_frames, 22, 3)`` of the average skeleton standing still."""
+    rest = torch.tensor(average_skeleton().rest_positions(), dtype=torch.float32) + torch.tensor([0, 0, 0.9])
+    return rest.expand(n_clips, n_frames, 22, 3).clone()
+
+
+def test_speed_by_phase_splits_boundary_steps_from_steps_inside_words():
+    stairs = _standing(2, 40)
+    stairs[..., 1:, 2] += (torch.arange(40) // 3).float()[None, :, None] * 0.03  # all but the root step up
+    phases = E.speed_by_phase(stairs, 3, first=20)
+    assert phases[1] == phases[2] == 0  # inside a word: still
+    assert phases[0] > 0.5  # across a boundary: 3 cm in 1/30 s for 21 of the 22 joints
+    assert phases[0].item() == pytest.approx(0.03 * 30 * 21 / 22, rel=1e-4)
+
+
+def test_event_strength_finds_the_busiest_half_second_wherever_it_is():
+    names = ["walk", "jump", "lift", "kick"]
+    still = _standing(3, 60)
+    early, late = still.clone(), still.clone()
+    bump = 0.2 * torch.sin(torch.linspace(0, torch.pi, 15))[:, None]
+    early[:, 5:20, 1:, 2] += bump  # the same movement, at two times
+    late[:, 40:55, 1:, 2] += bump
+    jumps = torch.ones(3, dtype=torch.long)
+    a, b = E.event_strength(early, jumps, names), E.event_strength(late, jumps, names)
+    assert a == pytest.approx(b, rel=1e-5) and a > 0.1
+    assert E.event_strength(still, jumps, names) == 0.0
+    with pytest.raises(ValueError, match="non-periodic"):
+        E.event_strength(early, torch.zeros(3, dtype=torch.long), names)
+    with pytest.raises(ValueError, match="shorter than the window"):
+        E.event_strength(early[:, :10], jumps, names)

@@ -44,7 +44,7 @@ def test_quick_full_and_current_profiles():
 def test_every_run_is_named_and_table_rows_share_one_budget():
     cfg = ExperimentConfig.quick()
     all_runs = _runs()
-    assert len(all_runs) == 9 and next(iter(all_runs)) == "sl"
+    assert len(all_runs) == 11 and next(iter(all_runs)) == "mcell_long"
     assert set(TABLE) < set(all_runs)
     budgets = {
         (
@@ -57,9 +57,13 @@ def test_every_run_is_named_and_table_rows_share_one_budget():
         if name in TABLE
     }
     assert len(budgets) == 1
-    outputs = [run for name, run in all_runs.items() if name not in TABLE]
+    outputs = [run for name, run in all_runs.items() if name.startswith("output_")]
     assert {run.train_config.steps for run in outputs} == {cfg.representation_steps}
-    assert len({run.name for run in all_runs.values()}) == 9
+    longer = {name: all_runs[name] for name in ("mcell_long", "erd_long")}
+    assert {run.train_config.steps for run in longer.values()} == {cfg.collapse_steps}
+    assert longer["mcell_long"].model == all_runs["mcell"].model  # the same models, trained longer
+    assert longer["erd_long"].model == all_runs["erd"].model
+    assert len({run.name for run in all_runs.values()}) == 11
 
 
 def test_runs_are_picklable():
@@ -131,4 +135,4 @@ def test_cut_windows_and_rotation_error():
 
 def test_only_the_variants_with_a_classifier_loss_need_the_evaluator():
     needing = {name for name, run in _runs().items() if run.uses_classifier}
-    assert needing == {"mcell", "nl", "sl"}
+    assert needing == {"mcell", "mcell_long", "nl", "sl"}

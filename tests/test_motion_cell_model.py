@@ -8,6 +8,7 @@ import torch
 from test_motion_cell_common import batch, motion_cell, perturb
 
 from motionlab.models.motion_cell.model import InitialState, MotionCellConfig, bounded_logvar
+from motionlab.models.motion_cell.smoothing import smooth_word_boundaries
 
 
 def _quaternion_norms(model, poses):
@@ -122,9 +123,19 @@ def test_a_longer_generation_starts_with_the_shorter_one():
     model = motion_cell()
     perturb(model.word_decoder.net[-1].weight, 0.1)
     action, body = torch.tensor([1]), torch.tensor([0])
-    short = model.generate(action, body, 9, torch.Generator().manual_seed(2))
-    long = model.generate(action, body, 60, torch.Generator().manual_seed(2))
+    short = model.generate(action, body, 9, torch.Generator().manual_seed(2), smooth=False)
+    long = model.generate(action, body, 60, torch.Generator().manual_seed(2), smooth=False)
     torch.testing.assert_close(long[:, :9], short)
+
+
+def test_generate_smooths_the_decoded_words_by_default():
+    model = motion_cell()
+    perturb(model.word_decoder.net[-1].weight, 0.1)
+    action, body = torch.tensor([1, 4]), torch.tensor([0, 1])
+    decoded = model.generate(action, body, 30, torch.Generator().manual_seed(2), smooth=False)
+    generated = model.generate(action, body, 30, torch.Generator().manual_seed(2))
+    assert torch.equal(generated, smooth_word_boundaries(decoded, model.cfg.word_length))
+    assert not torch.equal(generated, decoded)
 
 
 @pytest.mark.parametrize("output,params", [("quaternion", 4), ("matrix", 9), ("axis_angle", 3)])

@@ -10,8 +10,8 @@ module                 metrics
                        :func:`mmfde`, :func:`end_point_error`,
                        :func:`end_point_mse`
 :mod:`.physical`       :func:`foot_skating`, :func:`infer_foot_contacts`, :func:`ground_penetration`,
-                       :func:`jerk`, :func:`bone_lengths`, :func:`bone_length_error`,
-                       :func:`bone_length_drift`
+                       :func:`jerk`, :func:`speed_spectrum`, :func:`periodic_speed_power`,
+                       :func:`bone_lengths`, :func:`bone_length_error`, :func:`bone_length_drift`
 :mod:`.modes`          :func:`mode_homogeneity`, :func:`mode_purity`, :func:`adjusted_rand_index`,
                        :func:`contingency_table`
 :mod:`.intervals`      :func:`mean_ci`, :func:`repeat_metric`, :class:`Interval`
@@ -44,6 +44,8 @@ from motionlab.metrics.physical import (
     ground_penetration,
     infer_foot_contacts,
     jerk,
+    periodic_speed_power,
+    speed_spectrum,
 )
 from motionlab.metrics.trajectory import (
     end_point_error,
@@ -88,7 +90,9 @@ __all__ = [
     "multimodal_ground_truth",
     "multimodality",
     "n_apd",
+    "periodic_speed_power",
     "recognition_accuracy",
     "repeat_metric",
     "repeat_seed",
+    "speed_spectrum",
 ]

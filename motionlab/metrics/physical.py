@@ -18,6 +18,12 @@ frames and feet; a body that stands on the floor gives 0.
 differences times ``fps³``). Real motion is smooth; a generator that adds frame-to-frame noise has a large
 jerk even when each pose looks right.
 
+**Speed spectrum**: the power spectrum of the joint-speed signal (mean over joints of each joint's speed,
+one value per frame interval) after removing each clip's mean speed: the squared modulus of each Fourier
+coefficient divided by the number of samples, averaged over clips (m²/s²). **Periodic speed power** is its
+value at one frequency, ``fps / period``: a generator that steps every ``period`` frames puts a line there,
+where real motion has almost nothing. Compare it as a ratio to real clips'.
+
 **Bone-length drift**: the standard deviation over frames of each bone's length, averaged over bones and
 clips (m). It needs no reference skeleton: a model that outputs joint rotations and applies forward
 kinematics gives exactly 0; a model that outputs joint positions lets bones stretch and shrink.
@@ -227,6 +233,53 @@ def jerk(positions: ArrayLike, *, fps: float = 30.0) -> float:
     x = _positions(positions, func, min_frames=4)
     rate = float(check_scalar(fps, "fps", func, minimum=0, include_minimum=False))
     return float(np.linalg.norm(np.diff(x, n=3, axis=-3), axis=-1).mean() * rate**3)
+
+
+def speed_spectrum(
+    positions: ArrayLike, *, fps: float = 30.0, n_samples: int | None = None
+) -> tuple[np.ndarray, np.ndarray]:
+    """Power spectrum of the joint-speed signal, mean over clips: frequencies (Hz) and power (m²/s²).
+
+    The speed signal of a clip is the mean over joints of each joint's speed, one value per frame interval
+    ``(T - 1,)``; its last ``n_samples`` values (default: all), minus their mean, are Fourier transformed,
+    and the power is ``|coefficient|² / n_samples``.
+
+    Args:
+        positions: joint positions ``(..., T, J, 3)``.
+        fps: frame rate.
+        n_samples: how many of the last speed values to use (at least 2, at most ``T - 1``).
+
+    Returns:
+        ``(frequencies, power)``, both ``(n_samples // 2 + 1,)``.
+    """
+    func = "speed_spectrum"
+    x = _positions(positions, func, min_frames=3)
+    rate = float(check_scalar(fps, "fps", func, minimum=0, include_minimum=False))
+    speed = np.linalg.norm(np.diff(x, axis=-3), axis=-1).mean(axis=-1) * rate  # (..., T - 1)
+    n = speed.shape[-1] if n_samples is None else n_samples
+    check_scalar(n, "n_samples", func, minimum=2, maximum=speed.shape[-1])
+    signal = speed[..., -n:] - speed[..., -n:].mean(axis=-1, keepdims=True)
+    power = np.abs(np.fft.rfft(signal, axis=-1)) ** 2 / n
+    return np.fft.rfftfreq(n, 1.0 / rate), power.reshape(-1, power.shape[-1]).mean(axis=0)
+
+
+def periodic_speed_power(positions: ArrayLike, period: int, *, fps: float = 30.0) -> float:
+    """Power (m²/s²) of the joint-speed signal at the frequency ``fps / period`` (:func:`speed_spectrum`).
+
+    Args:
+        positions: joint positions ``(..., T, J, 3)`` with ``T > 2 * period``.
+        period: the period in frames (an integer ``>= 2``); the speed signal is cut to its last
+            ``period * floor((T - 1) / period)`` samples, so the frequency falls on a Fourier bin.
+        fps: frame rate.
+    """
+    func = "periodic_speed_power"
+    n_period = int(check_scalar(period, "period", func, minimum=2))
+    if n_period != period:
+        raise ValueError(f"{func}: period must be a whole number of frames, got {period!r}")
+    x = _positions(positions, func, min_frames=2 * n_period + 1)
+    n_words = (x.shape[-3] - 1) // n_period
+    _, power = speed_spectrum(x, fps=fps, n_samples=n_period * n_words)
+    return float(power[n_words])
 
 
 def bone_length_drift(positions: ArrayLike, parents: ArrayLike | Sequence[int]) -> float:

@@ -293,6 +293,20 @@ def joint_speed(positions: Tensor | np.ndarray, fps: float = 30.0) -> Tensor:
     return torch.cat([speed[..., :1], speed], dim=-1)
 
 
+def speed_by_phase(
+    positions: Tensor | np.ndarray, period: int, first: int = DISCARDED_FRAMES, fps: float = 30.0
+) -> Tensor:
+    """Mean :func:`joint_speed` (m/s) of the frames ``t >= first`` grouped by ``t mod period``: ``(period,)``.
+
+    Frame ``t``'s speed is the move from frame ``t - 1`` to ``t``, so with motion words of ``period`` frames
+    entry 0 is the step across a word boundary and the others are the steps inside a word.
+    """
+    check_scalar(period, "period", "speed_by_phase", kind=numbers.Integral, minimum=1)
+    speed = joint_speed(positions, fps)[..., first:]
+    frames = torch.arange(first, first + speed.shape[-1])
+    return torch.stack([speed[..., frames % period == phase].mean() for phase in range(period)])
+
+
 def speed_curve(samples: SampleSet, action_names: Sequence[str], fps: float = 30.0) -> Tensor:
     """:func:`joint_speed` per frame ``(T,)``, averaged over the samples of the non-periodic actions."""
     mask = action_mask(samples.action, action_names)
@@ -312,6 +326,35 @@ def real_speed_level(
     if not bool(mask.any()):
         raise ValueError("real_speed_level: no clip of a non-periodic action")
     return float(joint_speed(torch.as_tensor(np.asarray(positions))[mask], fps).mean())
+
+
+#: Frames of the moving average in :func:`event_strength` (half a second at 30 fps).
+EVENT_WINDOW = 15
+
+
+def event_strength(
+    positions: Tensor | np.ndarray,
+    action: Tensor | np.ndarray,
+    action_names: Sequence[str],
+    window: int = EVENT_WINDOW,
+    fps: float = 30.0,
+) -> float:
+    """How hard the non-periodic clips move at their busiest (m/s): the mean over those clips of the
+    largest ``window``-frame moving average of :func:`joint_speed`.
+
+    A clip that performs its jump, lift or kick has one busy half second whenever it happens; a clip that
+    never gets going, or stands still, does not. Compare it as a ratio to real clips'.
+    """
+    check_scalar(window, "window", "event_strength", kind=numbers.Integral, minimum=1)
+    mask = action_mask(action, action_names)
+    if not bool(mask.any()):
+        raise ValueError("event_strength: no clip of a non-periodic action")
+    speed = joint_speed(torch.as_tensor(np.asarray(positions))[mask], fps)
+    if speed.shape[-1] < window:
+        raise ValueError(
+            f"event_strength: clips of {speed.shape[-1]} frames are shorter than the window ({window})"
+        )
+    return float(speed.unfold(-1, window, 1).mean(-1).max(-1).values.mean())
 
 
 def collapse_ratio(curve: Tensor, real_level: float, frames: tuple[int, int] = COLLAPSE_FRAMES) -> float:

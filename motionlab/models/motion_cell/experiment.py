@@ -58,7 +58,9 @@ class ExperimentConfig(config.ProfileConfig):
         motion_cell: the full model's architecture (ablations and baselines are derived from it).
         denoiser: the denoising autoencoder's architecture.
         window: training window in frames (a multiple of the word length); batch_size, lr: for every run.
-        steps: optimiser steps of every Table 2 model; representation_steps: of each output-head run.
+        steps: optimiser steps of every Table 2 model; representation_steps: of each output-head run;
+            collapse_steps: of the Motion Cell and ERD trained longer for the mean-collapse comparison
+            (``mcell_long``, ``erd_long``).
         denoiser_steps, denoiser_batch, denoiser_lr: the denoiser's training (windows of ``window`` frames);
             denoiser_copies: noisy copies of the validation split it sees.
         beta: lambda_KL after annealing (the paper: 1); classifier: lambda_CL after its ramp; word_drop:
@@ -78,6 +80,7 @@ class ExperimentConfig(config.ProfileConfig):
     lr: float = 3e-3
     steps: int = 200
     representation_steps: int = 60
+    collapse_steps: int = 1000
     denoiser_steps: int = 400
     denoiser_batch: int = 16
     denoiser_lr: float = 1e-3
@@ -105,7 +108,7 @@ class ExperimentConfig(config.ProfileConfig):
             "n_per_combination",
         ):
             check_scalar(getattr(self, name), name, where, kind=numbers.Integral, minimum=1)
-        for name in ("steps", "representation_steps"):  # the Motion Cell's schedules need 10 steps
+        for name in ("steps", "representation_steps", "collapse_steps"):  # the schedules need 10 steps
             check_scalar(getattr(self, name), name, where, kind=numbers.Integral, minimum=10)
         check_scalar(self.n_repeats, "n_repeats", where, kind=numbers.Integral, minimum=2)
         for name in ("lr", "denoiser_lr"):
@@ -132,6 +135,7 @@ class ExperimentConfig(config.ProfileConfig):
             batch_size=16,
             steps=12,
             representation_steps=10,
+            collapse_steps=16,
             denoiser_steps=10,
             denoiser_batch=8,
             denoiser_copies=1,
@@ -148,9 +152,11 @@ class ExperimentConfig(config.ProfileConfig):
     def long(cls) -> ExperimentConfig:
         """A longer, larger run for the training command (``python -m motionlab.train motion_cell --config
         long``): the Motion Cell at :class:`MotionCellConfig`'s own sizes (hidden 128, words of 64), 20 times
-        the full profile's steps (6,000; the output heads 1,600); the same denoiser and evaluation as
-        :meth:`full`."""
-        return cls(motion_cell=MotionCellConfig(), steps=6_000, representation_steps=1_600)
+        the full profile's steps (6,000; the output heads 1,600; the longer mean-collapse runs 10,000); the
+        same denoiser and evaluation as :meth:`full`."""
+        return cls(
+            motion_cell=MotionCellConfig(), steps=6_000, representation_steps=1_600, collapse_steps=10_000
+        )
 
 
 def learning_rate_decay(steps: int) -> LinearRamp:
@@ -258,8 +264,9 @@ class MotionCellRun:
 
 
 def runs(cfg: ExperimentConfig, data: PreparedData) -> dict[str, MotionCellRun]:
-    """The chapter's runs by name, the longest first: the Motion Cell and its ablations (SL, NL, NC), the
-    baselines, and the three output heads (``output_quaternion`` ...)."""
+    """The chapter's runs by name, the longest first: the Motion Cell and ERD trained ``collapse_steps``
+    (``mcell_long``, ``erd_long``), the Motion Cell and its ablations (SL, NL, NC), the baselines, and the
+    three output heads (``output_quaternion`` ...)."""
     mc, steps = cfg.motion_cell, cfg.steps
 
     def run(
@@ -275,11 +282,13 @@ def runs(cfg: ExperimentConfig, data: PreparedData) -> dict[str, MotionCellRun]:
         )
         return MotionCellRun(f"mcell_{name}", model, loss, train, data)
 
-    def variant(name: str, model: MotionCellConfig, loss: LossConfig, classifier: float) -> MotionCellRun:
+    def variant(
+        name: str, model: MotionCellConfig, loss: LossConfig, classifier: float, steps: int = steps
+    ) -> MotionCellRun:
         schedules = motion_cell_schedules(steps, cfg.beta, classifier, cfg.word_drop)
         return run(name, model, loss, steps, schedules)
 
-    def baseline(kind: str, schedules: dict) -> MotionCellRun:
+    def baseline(kind: str, schedules: dict, name: str | None = None, steps: int = steps) -> MotionCellRun:
         model = BaselineConfig(
             kind=kind,
             n_joints=mc.n_joints,
@@ -289,7 +298,11 @@ def runs(cfg: ExperimentConfig, data: PreparedData) -> dict[str, MotionCellRun]:
             n_actions=mc.n_actions,
             n_bodies=mc.n_bodies,
         )
-        return run(kind, model, LossConfig(), steps, schedules)
+        return run(name or kind, model, LossConfig(), steps, schedules)
+
+    def erd(steps: int, name: str = "erd") -> MotionCellRun:
+        noise = LinearRamp(0, int(0.6 * steps), 0.0, cfg.input_noise)
+        return baseline("erd", {"input_noise": noise}, name, steps)
 
     def output_head(kind: str) -> MotionCellRun:
         short = cfg.representation_steps
@@ -297,6 +310,8 @@ def runs(cfg: ExperimentConfig, data: PreparedData) -> dict[str, MotionCellRun]:
         return run(f"output_{kind}", replace(mc, output=kind), LossConfig(), short, schedules)
 
     return {
+        "mcell_long": variant("mcell_long", mc, LossConfig(), cfg.classifier, cfg.collapse_steps),
+        "erd_long": erd(cfg.collapse_steps, "erd_long"),
         "sl": variant("sl", replace(mc, word_length=1, word_layers=False), LossConfig(), cfg.classifier),
         "mcell": variant("mcell", mc, LossConfig(), cfg.classifier),
         "nl": variant("nl", mc, LossConfig(joint_weights="uniform"), cfg.classifier),
@@ -304,7 +319,7 @@ def runs(cfg: ExperimentConfig, data: PreparedData) -> dict[str, MotionCellRun]:
         "quaternet": baseline(
             "quaternet", {"sampling": LinearRamp(int(0.1 * steps), int(0.5 * steps), 0.0, cfg.sampling)}
         ),
-        "erd": baseline("erd", {"input_noise": LinearRamp(0, int(0.6 * steps), 0.0, cfg.input_noise)}),
+        "erd": erd(steps),
         **{f"output_{kind}": output_head(kind) for kind in OUTPUT_KINDS},
     }
 

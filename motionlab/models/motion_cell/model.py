@@ -27,7 +27,7 @@ posterior, teacher-forced, with *scheduled motion-word dropping* (§4.2, strateg
 that step, ``w~_t`` (decoded from the posterior latent), takes its place, as it does at generation time
 (eq. 13). The posterior always sees the real word. Generation (:meth:`MotionCellModel.generate`) draws the
 initial state and then, word after word, a latent from the prior, decodes it, and feeds the generated word
-back; it runs for any number of frames.
+back; it runs for any number of frames, and smooths the steps between words (:mod:`.smoothing`, ours).
 """
 
 from __future__ import annotations
@@ -44,6 +44,7 @@ from torch import Tensor, nn
 from motionlab.models.gaussian import reparameterize
 from motionlab.models.motion_cell.data import PoseCodec, pose_dim
 from motionlab.models.motion_cell.heads import OUTPUT_KINDS, OutputHead, assemble_pose, split_raw_pose
+from motionlab.models.motion_cell.smoothing import smooth_word_boundaries
 from motionlab.validation import check_choice, check_scalar, check_tensor
 
 
@@ -411,13 +412,17 @@ class MotionCellModel(nn.Module):
         n_frames: int,
         generator: torch.Generator | None = None,
         temperature: float = 1.0,
+        smooth: bool = True,
     ) -> Tensor:
         """Sample pose vectors ``(B, n_frames, 90)`` for attributes ``(B,)``, any ``n_frames >= 1``.
 
         The same ``generator`` state gives bitwise-identical samples. ``temperature`` scales the prior's
-        standard deviation (1: the model's prior, 0: every word's prior mean).
+        standard deviation (1: the model's prior, 0: every word's prior mean). ``smooth`` passes the clips
+        through :func:`~.smoothing.smooth_word_boundaries` (ours; ``False``: the words as decoded, as in the
+        paper).
         """
-        return self.rollout(action, body, n_frames, generator, temperature=temperature)
+        poses = self.rollout(action, body, n_frames, generator, temperature=temperature)
+        return smooth_word_boundaries(poses, self.cfg.word_length) if smooth else poses
 
     def rollout(
         self,

@@ -1,0 +1,99 @@
+"""Smoothing the boundaries between generated motion words (ours; the paper has no such step).
+
+Each motion word is decoded from its own latent on its own, so each word carries its own small error. The
+errors of neighbouring words are unrelated, so the pose *steps* at every word boundary: a generated clip is
+a staircase with one step every ``l`` frames, while the ``l - 1`` moves inside a word are too small. Its
+joint speed ripples at ``fps / l`` (10 Hz for the paper's ``l = 3`` at 30 fps) and its jerk is many times
+real motion's. The paper's denoising autoencoder cleans the *training* data and does not see this (chapter
+04 measures it on generated clips).
+
+:func:`smooth_word_boundaries` takes generated pose vectors ``(B, T, 90)`` and
+
+1. makes the quaternions continuous in time (``q`` and ``-q`` are the same rotation; differences are taken
+   between neighbours on the same hemisphere);
+2. finds the excess step at every boundary frame ``s = n l``: the step ``x_s - x_{s-1}`` minus the mean of
+   the steps on either side, ``j_s = d_s - (d_{s-1} + d_{s+1}) / 2`` with ``d_k = x_k - x_{k-1}``;
+3. spreads that excess over the ``2 l - 1`` steps around the boundary with the triangular weights of two
+   ``l``-frame boxes (``[1, 2, 3, 2, 1] / 9`` for ``l = 3``), keeping the total displacement, and integrates
+   the steps back into poses (what the words do between boundaries is kept);
+4. averages every ``l`` consecutive frames (a centred moving average: its frequency response is zero at
+   ``fps / l`` and its multiples, where the boundary steps repeat);
+5. renormalises the quaternions.
+
+Everything is in pose-vector space (unit quaternions and standardised root channels); the same input
+gives bitwise the same output.
+"""
+
+from __future__ import annotations
+
+import numbers
+
+import torch
+import torch.nn.functional as F
+from torch import Tensor
+
+from motionlab.models.motion_cell.data import ROOT_DIM
+from motionlab.validation import check_scalar, check_tensor
+
+
+def continuous_signs(quaternions: Tensor) -> Tensor:
+    """``quaternions`` ``(B, T, K, 4)`` with signs flipped along ``T`` so that neighbours have a dot product
+    ``>= 0`` (the same rotations)."""
+    dots = (quaternions[:, 1:] * quaternions[:, :-1]).sum(-1, keepdim=True)
+    flips = torch.where(dots < 0, -1.0, 1.0).cumprod(dim=1)
+    return torch.cat([quaternions[:, :1], quaternions[:, 1:] * flips], dim=1)
+
+
+def triangle_weights(length: int) -> Tensor:
+    """The ``2 length - 1`` weights of two ``length``-frame boxes convolved (sum 1), ``(2 length - 1,)``."""
+    box = torch.full((1, 1, length), 1.0 / length)
+    return F.conv1d(box, box, padding=length - 1).flatten()
+
+
+def spread_boundary_steps(x: Tensor, word_length: int) -> Tensor:
+    """Signals ``(B, T, D)`` whose excess step at each word boundary is spread over its neighbours.
+
+    Boundaries closer than ``word_length`` frames to either end are left as they are.
+    """
+    steps = x[:, 1:] - x[:, :-1]  # steps[:, k - 1] = x_k - x_{k-1}
+    n_steps, reach = steps.shape[1], word_length - 1
+    excess = torch.zeros_like(steps)
+    for s in range(word_length, x.shape[1], word_length):
+        k = s - 1  # the index of the boundary step x_s - x_{s-1}
+        if k - reach >= 0 and k + reach <= n_steps - 1:
+            excess[:, k] = steps[:, k] - 0.5 * (steps[:, k - 1] + steps[:, k + 1])
+    batch, _, channels = x.shape
+    flat = excess.transpose(1, 2).reshape(batch * channels, 1, n_steps)
+    spread = F.conv1d(flat, triangle_weights(word_length).view(1, 1, -1), padding=reach)
+    spread = spread.reshape(batch, channels, n_steps).transpose(1, 2)
+    return torch.cat([x[:, :1], x[:, :1] + (steps - excess + spread).cumsum(dim=1)], dim=1)
+
+
+def moving_average(x: Tensor, width: int) -> Tensor:
+    """The mean of ``width`` consecutive frames ``(B, T, D)`` (centred; the end frames are repeated)."""
+    before, after = (width - 1) // 2, width // 2
+    padded = torch.cat([x[:, :1].expand(-1, before, -1), x, x[:, -1:].expand(-1, after, -1)], dim=1)
+    return padded.unfold(1, width, 1).mean(dim=-1)
+
+
+def smooth_word_boundaries(poses: Tensor, word_length: int) -> Tensor:
+    """Generated pose vectors ``(B, T, (J - 1) * 4 + 6)`` with the word-boundary steps smoothed away.
+
+    See the module notes for the five steps. ``word_length`` 1 (no words) returns ``poses`` unchanged, as
+    does a clip shorter than three words.
+    """
+    check_tensor(poses, "poses", "smooth_word_boundaries", ndim=3)
+    check_scalar(word_length, "word_length", "smooth_word_boundaries", kind=numbers.Integral, minimum=1)
+    if (poses.shape[-1] - ROOT_DIM) % 4 or poses.shape[-1] <= ROOT_DIM:
+        raise ValueError(
+            f"smooth_word_boundaries: poses must be (B, T, (J - 1) * 4 + {ROOT_DIM}), "
+            f"got {tuple(poses.shape)}"
+        )
+    if word_length == 1 or poses.shape[1] < 3 * word_length:
+        return poses
+    quaternions = continuous_signs(poses[..., :-ROOT_DIM].unflatten(-1, (-1, 4)))
+    x = torch.cat([quaternions.flatten(-2), poses[..., -ROOT_DIM:]], dim=-1)
+    x = moving_average(spread_boundary_steps(x, word_length), word_length)
+    quaternions = x[..., :-ROOT_DIM].unflatten(-1, (-1, 4))
+    quaternions = quaternions / quaternions.norm(dim=-1, keepdim=True)
+    return torch.cat([quaternions.flatten(-2), x[..., -ROOT_DIM:]], dim=-1)
