@@ -58,6 +58,11 @@ def fail(message: str) -> None:
     raise RuntimeError(message)
 
 
+def add_one_in_place(values: torch.Tensor) -> torch.Tensor:
+    values += 1
+    return values
+
+
 def tiny_model() -> nn.Module:
     torch.manual_seed(0)
     return nn.Sequential(nn.Linear(4, 8), nn.Tanh(), nn.Linear(8, 4))
@@ -177,3 +182,13 @@ def test_build_seeded_depends_on_the_seed_alone_and_leaves_the_callers_rng() -> 
     second = build_seeded(lambda: nn.Linear(3, 2), 7)
     assert torch.equal(first.weight, second.weight) and torch.equal(first.bias, second.bias)
     assert not torch.equal(first.weight, build_seeded(lambda: nn.Linear(3, 2), 8).weight)
+
+
+def test_workers_get_copies_of_tensors_and_return_copies():
+    # the pool's own queues would move a tensor's storage into shared memory: a worker writing into its
+    # argument would then change the caller's tensor
+    first, second = torch.zeros(5), torch.arange(5.0)
+    results = run_in_workers(add_one_in_place, [(first,), (second,)])
+    assert torch.equal(first, torch.zeros(5)) and torch.equal(second, torch.arange(5.0))
+    assert torch.equal(results[0], torch.ones(5)) and torch.equal(results[1], torch.arange(1.0, 6.0))
+    assert not results[0].is_shared()

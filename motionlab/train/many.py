@@ -24,7 +24,7 @@ from typing import Any, Generic, Protocol, TypeVar
 from torch import nn
 
 from motionlab.train.loop import TrainResult
-from motionlab.train.parallel import run_chains, shared_pool, submit
+from motionlab.train.parallel import outcome, run_chains, shared_pool, submit
 
 M = TypeVar("M")
 
@@ -85,7 +85,7 @@ def _load_all(
 class PendingTraining:
     """Runs that :func:`start_training` handed to the workers; :meth:`result` waits for them."""
 
-    def __init__(self, runs: Mapping[str, Run], futures: dict[str, Future[float]]) -> None:
+    def __init__(self, runs: Mapping[str, Run], futures: dict[str, Future[bytes]]) -> None:
         self._runs = dict(runs)
         self._futures = futures
 
@@ -95,7 +95,7 @@ class PendingTraining:
 
     def result(self, progress: bool | None = None) -> dict[str, Trained]:
         """Wait for the workers (raising the first failed run's exception), then load every model here."""
-        seconds = {name: future.result() for name, future in self._futures.items()}
+        seconds = {name: outcome(future) for name, future in self._futures.items()}
         return _load_all(self._runs, seconds, {}, progress)
 
 

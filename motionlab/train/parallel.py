@@ -16,6 +16,7 @@ import atexit
 import multiprocessing
 import numbers
 import os
+import pickle
 import signal
 import threading
 import time
@@ -36,14 +37,15 @@ _ENV_PREFIX = "MOTIONLAB_"
 _shared_pools: dict[int, ProcessPoolExecutor] = {}
 
 
-def _in_worker(function: Callable[..., R], arguments: tuple[Any, ...], environment: dict[str, str]) -> R:
+def _in_worker(function: Callable[..., Any], arguments: bytes, environment: dict[str, str]) -> bytes:
     """Body of a worker call: the caller's package settings, the course's thread count and seeds, then
-    ``function(*arguments)`` (so a call does not depend on what the worker ran before)."""
+    ``function(*arguments)`` (so a call does not depend on what the worker ran before). Arguments and result
+    travel as plain pickles (:func:`submit`)."""
     for name in [name for name in os.environ if name.startswith(_ENV_PREFIX)]:
         del os.environ[name]
     os.environ.update(environment)
     config.setup(seed=0)
-    return function(*arguments)
+    return pickle.dumps(function(*pickle.loads(arguments)), protocol=pickle.HIGHEST_PROTOCOL)
 
 
 def _package_environment() -> dict[str, str]:
@@ -115,13 +117,22 @@ def _drop_broken_pool(processes: int) -> None:
 atexit.register(close_shared_pools)
 
 
-def submit(pool: ProcessPoolExecutor, function: Callable[..., R], *arguments: Any) -> Future[R]:
+def submit(pool: ProcessPoolExecutor, function: Callable[..., Any], *arguments: Any) -> Future[bytes]:
     """Run ``function(*arguments)`` in ``pool`` after the course's set-up (the caller's ``MOTIONLAB_*``
-    settings, one thread, seed 0), as a fresh worker would.
+    settings, one thread, seed 0), as a fresh worker would; :func:`outcome` of the future is its result.
 
-    ``function`` must be importable (a module-level function) and the arguments picklable.
+    ``function`` must be importable (a module-level function) and the arguments picklable. Arguments and
+    result are copied as plain pickles: the pool's own queues would pass tensors through torch's
+    shared-memory reductions, which move a tensor's storage into shared memory, so a worker that changed
+    an argument in place would change the caller's tensor too.
     """
-    return pool.submit(_in_worker, function, arguments, _package_environment())
+    payload = pickle.dumps(arguments, protocol=pickle.HIGHEST_PROTOCOL)
+    return pool.submit(_in_worker, function, payload, _package_environment())
+
+
+def outcome(future: Future[bytes]) -> Any:
+    """The result of a call started with :func:`submit` (waits; raises the call's exception)."""
+    return pickle.loads(future.result())
 
 
 def run_in_workers(
@@ -183,7 +194,7 @@ def run_chains(chains: Sequence[Sequence[Step]], processes: int = 2) -> list[lis
                     for waiting in running:  # nothing new starts; the calls already running finish
                         waiting.cancel()
                 elif not failed:
-                    results[chain][index] = future.result()
+                    results[chain][index] = outcome(future)
                     if index + 1 < len(chains[chain]):
                         start(chain, index + 1)
     except BaseException:  # e.g. Ctrl-C while waiting: leave nothing queued in the shared pool
