@@ -7,9 +7,9 @@ import pytest
 import torch
 
 from motionlab.models.odmo.data import BalancedBatches
-from motionlab.models.odmo.experiment import VARIANTS, variant_config
+from motionlab.models.odmo.experiment import VARIANTS, chapter_model, variant_config
 from motionlab.models.odmo.losses import joint_objective, sequence_error
-from motionlab.models.odmo.model import ODMO, ODMOConfig, accumulate, class_code_condition
+from motionlab.models.odmo.model import ODMO, ODMOConfig, accumulate, class_code_condition, heading_frame
 from motionlab.train import Constant, TrainConfig, train
 
 TINY = ODMOConfig(
@@ -50,7 +50,7 @@ def test_config_sizes_and_validation():
 
 
 def test_variants_change_only_their_switches():
-    base = ODMOConfig()
+    base = chapter_model()
     for name, changes in VARIANTS.items():
         cfg = variant_config(name, base)
         differing = {f.name for f in dataclasses.fields(cfg) if getattr(cfg, f.name) != getattr(base, f.name)}
@@ -83,6 +83,55 @@ def test_shapes_of_every_network():
     motion, trajectory = model.generate(mu, action, features[:, -1, -3:])
     assert motion.shape == features.shape and trajectory.shape == (6, TINY.n_frames, 3)
     assert torch.allclose(trajectory[:, 0], torch.zeros(6, 3), atol=1e-5)  # in metres, from the origin
+
+
+def test_config_checks_the_encoder_frame_decoder_input_and_hips():
+    with pytest.raises(ValueError, match="encoder_frame"):
+        ODMOConfig(encoder_frame="body")
+    with pytest.raises(ValueError, match="decoder_trajectory"):
+        ODMOConfig(decoder_trajectory="never")
+    for hips in ((0, 2), (1, 1), (1, 22), [1, 2]):
+        with pytest.raises(ValueError, match="hips"):
+            ODMOConfig(hips=hips)
+
+
+def test_heading_frame_turns_every_frame_to_face_x():
+    # two frames of a 3-joint body (root, left hip, right hip) facing +y, then -x
+    lmp = torch.tensor([[[-0.1, 0.0, 0.2, 0.1, 0.0, 0.2], [0.0, -0.1, -0.3, 0.0, 0.1, -0.3]]])
+    expected = torch.tensor([[[0.0, 0.1, 0.2, 0.0, -0.1, 0.2], [0.0, 0.1, -0.3, 0.0, -0.1, -0.3]]])
+    assert torch.allclose(heading_frame(lmp, (1, 2)), expected, atol=1e-6)
+    # a turn of the whole clip about the vertical changes nothing
+    turned = lmp.unflatten(-1, (-1, 3)).clone()
+    angle = torch.tensor(0.7)
+    x, y = turned[..., 0].clone(), turned[..., 1].clone()
+    turned[..., 0], turned[..., 1] = x * angle.cos() - y * angle.sin(), x * angle.sin() + y * angle.cos()
+    assert torch.allclose(heading_frame(turned.flatten(-2), (1, 2)), expected, atol=1e-6)
+
+
+def test_decoder_reads_the_trajectory_at_every_frame_when_asked():
+    code, action = torch.randn(2, TINY.code_dim), torch.tensor([0, 1])
+    trajectory = torch.randn(2, TINY.n_frames, 3)
+    later = trajectory.clone()
+    later[:, -1] += 1.0  # the last frame of the trajectory: only the every-frame input reads it at step T - 1
+    for how in ("initial_state", "every_frame"):
+        generator = tiny_model(dataclasses.replace(TINY, decoder_trajectory=how)).eval().motion_generator
+        extra = 3 if how == "every_frame" else 0
+        assert generator.condition_embed.in_features == TINY.condition_dim + 1 + extra
+        a, b = generator(trajectory, code, action), generator(later, code, action)
+        assert a.shape == (2, TINY.n_frames, TINY.feature_dim) and not torch.allclose(a[:, -1], b[:, -1])
+
+
+def test_encoder_reads_the_lmp_in_the_axes_of_its_frame():
+    features, _ = clips()
+    turned = features.clone()
+    joints = turned[..., :-3].unflatten(-1, (-1, 3))
+    x, y = joints[..., 0].clone(), joints[..., 1].clone()
+    joints[..., 0], joints[..., 1] = -y, x  # every frame of every clip turned by 90 degrees
+    turned[..., :-3] = joints.flatten(-2)
+    world = tiny_model().eval()
+    heading = tiny_model(dataclasses.replace(TINY, encoder_frame="heading")).eval()
+    assert not torch.allclose(world.encode(features)[0], world.encode(turned)[0])
+    assert torch.allclose(heading.encode(features)[0], heading.encode(turned)[0], atol=1e-5)
 
 
 def test_end_point_switch_removes_the_end_point_input():

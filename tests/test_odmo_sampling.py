@@ -19,7 +19,14 @@ from motionlab.data.synthetic import generate
 from motionlab.metrics import end_point_mse, mode_homogeneity
 from motionlab.models.odmo import evaluate, sampling
 from motionlab.models.odmo.data import ODMOData
-from motionlab.models.odmo.experiment import VARIANTS, ExperimentConfig, measure_variant, runs, train_all
+from motionlab.models.odmo.experiment import (
+    VARIANTS,
+    ExperimentConfig,
+    chapter_model,
+    measure_variant,
+    runs,
+    train_all,
+)
 from motionlab.models.odmo.model import ODMO, ODMOConfig
 from motionlab.models.odmo.modes import discover_modes
 from motionlab.models.odmo.sampling import ODMOSampler, encode_clips
@@ -223,7 +230,8 @@ def test_measure_variant_follows_the_config(data, sampler):
 def test_experiment_config_profiles_and_runs(data, monkeypatch):
     quick, full = ExperimentConfig.quick(), ExperimentConfig.full()
     assert (quick.steps, quick.batch_size, full.steps, full.batch_size) == (4, 30, 300, 60)
-    assert full.model == ODMOConfig() and quick.model.motion_hidden == 16
+    assert full.model == chapter_model() and quick.model.motion_hidden == 16
+    assert (full.model.encoder_frame, full.model.decoder_trajectory) == ("heading", "every_frame")
     monkeypatch.setenv("MOTIONLAB_PROFILE", "quick")
     assert ExperimentConfig.current() == quick
     monkeypatch.setenv("MOTIONLAB_PROFILE", "full")

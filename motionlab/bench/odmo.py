@@ -1,6 +1,6 @@
 """ODMO's generation speed: code -> trajectory -> motion -> 30 fps joint positions, at batch 1 and batched.
 
-The networks have the chapter's sizes (:class:`~motionlab.models.odmo.model.ODMOConfig` defaults, 40 model
+The networks are the chapter's (:func:`~motionlab.models.odmo.experiment.chapter_model`, 40 model
 frames at 10 fps, upsampled to a 4-second clip of 120 frames). Weights are untrained: the speed does not
 depend on them.
 """
@@ -12,7 +12,8 @@ import torch
 from motionlab import config
 from motionlab.bench._timing import generator_speed
 from motionlab.models.odmo.data import to_positions
-from motionlab.models.odmo.model import ODMO, ODMOConfig
+from motionlab.models.odmo.experiment import chapter_model
+from motionlab.models.odmo.model import ODMO
 
 FPS = 30
 FRAME_STRIDE = 3
@@ -23,7 +24,7 @@ def generation_speed() -> dict:
     """``rtf_b1_1thread`` (target >= 100), ``seconds_b1`` and ``frames_per_second_batched``."""
     config.set_threads(1)
     torch.manual_seed(0)
-    cfg = ODMOConfig(n_frames=SECONDS * FPS // FRAME_STRIDE)
+    cfg = chapter_model(n_frames=SECONDS * FPS // FRAME_STRIDE)
     model = ODMO(cfg).fit_standardizer(torch.randn(8, cfg.n_frames, cfg.feature_dim)).eval()
 
     def generate(batch_size: int) -> torch.Tensor:

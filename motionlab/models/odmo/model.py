@@ -14,7 +14,11 @@ by frame; its outputs, averaged over the frames, go through two fully connected 
 PReLU to ``(μ, log s²)``. The reference implementation reads the LSTM's last hidden state instead of the
 average. On our clips the last state forgets what happened mid-clip: with it, a linear probe could not tell
 a front kick's code from a side kick's (48 % on two balanced classes), and with the average it could
-(100 %), with the same training.
+(100 %), with the same training. The paper's LMP is in world axes (the axes of the clip's first frame here);
+with ``encoder_frame="heading"`` (ours) every frame is first turned about the vertical by its own heading,
+read from the hips (:func:`heading_frame`), so a walk that curves left and one that curves right look alike
+to the encoder; without it the mixtures of chapter 08 split the walks and jogs by the direction of their
+turn instead of their style.
 
 **Trajectory generator.** It feeds the condition, the end point ``r_e`` (zeros in the ``-r_e`` ablation)
 and the frame's time ``t / (T - 1)`` to an LSTM at every frame, maps each output to a velocity and adds the
@@ -23,13 +27,15 @@ reads its velocities in units of each trajectory channel's standard deviation.
 
 **Motion generator.** A trajectory encoder (an LSTM over the trajectory generator's output, during
 training and sampling alike) hands its last hidden and cell states to an autoregressive LSTM decoder as
-its initial state, which is how the trajectory steers the motion. The decoder writes the full motion frame
-by frame, local movement profile and root trajectory together (``3 (J - 1) + 3`` channels): at frame ``t``
-its input is the previous frame, the condition and the time ``t / T``. In training the previous frame is the
-real one with probability ``teacher_forcing`` (drawn for each clip and frame), the decoder's own output
-otherwise; the chapter decays the probability from 1 to 0.3 over training (see :mod:`.experiment`), so the
-decoder learns to continue its own output, which is all it has when sampling (probability 0). Frame 0
-starts from a zero frame.
+its initial state, which is how the trajectory steers the motion (the paper's design). The decoder writes
+the full motion frame by frame, local movement profile and root trajectory together (``3 (J - 1) + 3``
+channels): at frame ``t`` its input is the previous frame, the condition and the time ``t / T``, and with
+``decoder_trajectory="every_frame"`` (ours) also the trajectory's frame ``t``: through the initial state
+alone, chapter 08's decoder let its root end where the code's own clip ended, whatever end point the
+trajectory generator had been given. In training the previous frame is the real one with probability
+``teacher_forcing`` (drawn for each clip and frame), the decoder's own output otherwise; the chapter decays
+the probability from 1 to 0.3 over training (see :mod:`.experiment`), so the decoder learns to continue its
+own output, which is all it has when sampling (probability 0). Frame 0 starts from a zero frame.
 """
 
 from __future__ import annotations
@@ -43,6 +49,7 @@ import torch.nn.functional as F
 from torch import Tensor, nn
 
 from motionlab.data.datasets import Standardizer
+from motionlab.data.representations import rotate_xy
 from motionlab.models.gaussian import reparameterize
 from motionlab.validation import check_choice, check_scalar, check_tensor
 
@@ -56,11 +63,27 @@ from motionlab.validation import check_choice, check_scalar, check_tensor
 PriorTerm = Literal["covariance", "covariance_and_mean", "standard"]
 PRIOR_TERMS: tuple[str, ...] = ("covariance", "covariance_and_mean", "standard")
 
+#: The axes of the local movement profile the LMP encoder reads: ``"world"`` the paper's (joints minus the
+#: root, in the axes of the clip's first frame), ``"heading"`` ours: every frame turned about the vertical by
+#: its own heading (read from the hips, :func:`heading_frame`), so that a walk that turns reads like one that
+#: goes straight.
+EncoderFrame = Literal["world", "heading"]
+ENCODER_FRAMES: tuple[str, ...] = ("world", "heading")
+
+#: How the motion generator's decoder reads the trajectory: ``"initial_state"`` the paper's (the trajectory
+#: encoder's last state starts the decoder), ``"every_frame"`` ours: that, and the trajectory's frame ``t``
+#: beside the previous frame in the decoder's input at step ``t``.
+DecoderTrajectory = Literal["initial_state", "every_frame"]
+DECODER_TRAJECTORIES: tuple[str, ...] = ("initial_state", "every_frame")
+
 
 @dataclass(frozen=True)
 class ODMOConfig:
-    """Sizes and objective of one ODMO model. The defaults are the chapter's ODMO: the paper's eq. 1 with
-    the reference implementation's same-class slack, at the sizes the full profile trains.
+    """Sizes and objective of one ODMO model. The defaults are the paper's design (eq. 1 with the reference
+    implementation's same-class slack, the encoder reading the LMP in world axes, the decoder reading the
+    trajectory through its initial state) at the sizes the full profile trains; chapter 08's ODMO turns on
+    two changes of ours (:func:`~.experiment.chapter_model`: ``encoder_frame="heading"``,
+    ``decoder_trajectory="every_frame"``).
 
     The chapter's ODMO, the extension with a prior on ``μ``, the ablations of Table 2 and the standard-VAE
     baseline differ only in fields of this config (:data:`~.experiment.VARIANTS`), never in code.
@@ -87,6 +110,10 @@ class ODMOConfig:
         use_end_point: feed the end point ``r_e`` to the trajectory generator (off: ``-r_e``).
         use_consistency: the consistency loss between the two trajectories (off: ``-L_cons``).
         use_trajectory_loss: the trajectory loss (off together with the consistency loss: ``-L_traj``).
+        encoder_frame: the axes of the local movement profile the encoder reads, see :data:`EncoderFrame`.
+        hips: the (left, right) hip joints whose horizontal vector gives a frame's heading (``"heading"``
+            encoder frame; the default is the course skeleton's).
+        decoder_trajectory: how the decoder reads the trajectory, see :data:`DecoderTrajectory`.
         contrastive_weight, prior_weight: weights of the two embedding terms in the joint objective. The
             prior's 0.5 is the reference implementation's balance (it adds KL(N(0, s²) || N(0, σ²)), half of
             eq. 1's covariance terms), which fits our reconstruction terms, averaged over channels like the
@@ -109,6 +136,9 @@ class ODMOConfig:
     use_end_point: bool = True
     use_consistency: bool = True
     use_trajectory_loss: bool = True
+    encoder_frame: EncoderFrame = "world"
+    hips: tuple[int, int] = (1, 2)
+    decoder_trajectory: DecoderTrajectory = "initial_state"
     contrastive_weight: float = 1.0
     prior_weight: float = 0.5
 
@@ -131,6 +161,18 @@ class ODMOConfig:
         for name in ("same_class_slack", "contrastive_weight", "prior_weight"):
             check_scalar(getattr(self, name), name, where, minimum=0)
         check_choice(self.prior, "prior", where, PRIOR_TERMS)
+        check_choice(self.encoder_frame, "encoder_frame", where, ENCODER_FRAMES)
+        check_choice(self.decoder_trajectory, "decoder_trajectory", where, DECODER_TRAJECTORIES)
+        if (
+            not isinstance(self.hips, tuple)
+            or len(self.hips) != 2
+            or not all(isinstance(j, numbers.Integral) and 1 <= j < self.n_joints for j in self.hips)
+            or self.hips[0] == self.hips[1]
+        ):
+            raise ValueError(
+                f"{where}: hips must be a tuple of two different non-root joints in [1, {self.n_joints}), "
+                f"got {self.hips!r}"
+            )
         for name in ("use_contrastive", "use_end_point", "use_consistency", "use_trajectory_loss"):
             if not isinstance(getattr(self, name), bool):
                 raise TypeError(f"{where}: {name} must be True or False, got {getattr(self, name)!r}")
@@ -180,6 +222,19 @@ def accumulate(velocity: Tensor) -> Tensor:
     origin, frame ``t`` the sum of the first ``t`` velocities."""
     check_tensor(velocity, "velocity", "accumulate", ndim=3, finite=False)
     return torch.cat([torch.zeros_like(velocity[:, :1]), torch.cumsum(velocity, dim=1)], dim=1)
+
+
+def heading_frame(lmp: Tensor, hips: tuple[int, int]) -> Tensor:
+    """Local movement profiles ``(B, T, 3 (J - 1))`` (metres) with every frame turned about the vertical so
+    that the body faces +x: the heading of a frame is perpendicular to the horizontal vector from the right
+    hip to the left hip (``hips``: their joint indices, the root being joint 0)."""
+    check_tensor(lmp, "lmp", "heading_frame", ndim=3)
+    joints = lmp.unflatten(-1, (-1, 3))
+    left, right = joints[..., hips[0] - 1, :2], joints[..., hips[1] - 1, :2]
+    across = left - right  # points to the body's left: (0, w) when it faces +x
+    yaw = torch.atan2(-across[..., 0], across[..., 1])
+    turned = rotate_xy(joints[..., :2], -yaw[..., None])
+    return torch.cat([turned, joints[..., 2:]], dim=-1).flatten(-2)
 
 
 class LMPEncoder(nn.Module):
@@ -256,7 +311,8 @@ class MotionGenerator(nn.Module):
         # the decoder's input embedding PReLU(W [previous frame; condition; time] + b), split in two linear
         # maps so that the part that does not change from frame to frame is computed once per clip
         self.previous_embed = nn.Linear(cfg.feature_dim, hidden, bias=False)
-        self.condition_embed = nn.Linear(cfg.condition_dim + 1, hidden)
+        per_frame_trajectory = 3 if cfg.decoder_trajectory == "every_frame" else 0
+        self.condition_embed = nn.Linear(cfg.condition_dim + 1 + per_frame_trajectory, hidden)
         self.embed_activation = nn.PReLU()
         self.decoder = nn.LSTMCell(hidden, hidden)
         self.out = nn.Linear(hidden, cfg.feature_dim)
@@ -291,15 +347,13 @@ class MotionGenerator(nn.Module):
         h, c = h[0], c[0]
         condition = class_code_condition(code, action, cfg.n_classes)
         time = torch.arange(cfg.n_frames, dtype=code.dtype) / cfg.n_frames
-        per_frame = self.condition_embed(
-            torch.cat(
-                [
-                    condition[:, None, :].expand(-1, cfg.n_frames, -1),
-                    time[None, :, None].expand(batch, -1, 1),
-                ],
-                dim=-1,
-            )
-        )
+        inputs = [
+            condition[:, None, :].expand(-1, cfg.n_frames, -1),
+            time[None, :, None].expand(batch, -1, 1),
+        ]
+        if cfg.decoder_trajectory == "every_frame":
+            inputs.append(trajectory)
+        per_frame = self.condition_embed(torch.cat(inputs, dim=-1))
         previous = code.new_zeros(batch, cfg.feature_dim)
         frames = []
         for t in range(cfg.n_frames):
@@ -354,10 +408,16 @@ class ODMO(nn.Module):
         """``μ`` and ``log s²`` ``(B, D)`` of clips ``(B, T, F)`` in metres (only the local movement profile
         is read)."""
         self._check_features(features, "ODMO.encode")
-        return self._encode(self.standardizer.transform(features))
+        return self._encode(features)
 
-    def _encode(self, standardized: Tensor) -> tuple[Tensor, Tensor]:
-        return self.encoder(standardized[..., : self.cfg.lmp_dim])
+    def _encode(self, features: Tensor) -> tuple[Tensor, Tensor]:
+        """The encoder on clips ``(B, T, F)`` in metres: their local movement profile, in the axes of
+        ``cfg.encoder_frame``, standardised with the LMP channels' statistics."""
+        lmp = features[..., : self.cfg.lmp_dim]
+        if self.cfg.encoder_frame == "heading":
+            lmp = heading_frame(lmp, self.cfg.hips)
+        mean, std = self.standardizer.mean[: self.cfg.lmp_dim], self.standardizer.std[: self.cfg.lmp_dim]
+        return self.encoder((lmp - mean.to(lmp)) / std.to(lmp))
 
     def decode(
         self,
@@ -382,7 +442,7 @@ class ODMO(nn.Module):
         """Encode clips ``(B, T, F)`` (metres) of actions ``(B,)``, draw their codes and reconstruct them."""
         self._check_features(features, "ODMO.forward")
         standardized = self.standardizer.transform(features)
-        mu, logvar = self._encode(standardized)
+        mu, logvar = self._encode(features)
         code = reparameterize(mu, logvar)
         trajectory, motion = self.decode(code, action, features[:, -1, -3:], standardized, teacher_forcing)
         return ODMOOutput(mu, logvar, code, trajectory, motion)
