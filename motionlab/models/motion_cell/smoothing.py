@@ -57,11 +57,10 @@ def spread_boundary_steps(x: Tensor, word_length: int) -> Tensor:
     """
     steps = x[:, 1:] - x[:, :-1]  # steps[:, k - 1] = x_k - x_{k-1}
     n_steps, reach = steps.shape[1], word_length - 1
+    boundary = torch.arange(word_length - 1, n_steps, word_length)  # the steps x_s - x_{s-1}, s = n l
+    boundary = boundary[(boundary >= reach) & (boundary + reach <= n_steps - 1)]
     excess = torch.zeros_like(steps)
-    for s in range(word_length, x.shape[1], word_length):
-        k = s - 1  # the index of the boundary step x_s - x_{s-1}
-        if k - reach >= 0 and k + reach <= n_steps - 1:
-            excess[:, k] = steps[:, k] - 0.5 * (steps[:, k - 1] + steps[:, k + 1])
+    excess[:, boundary] = steps[:, boundary] - 0.5 * (steps[:, boundary - 1] + steps[:, boundary + 1])
     batch, _, channels = x.shape
     flat = excess.transpose(1, 2).reshape(batch * channels, 1, n_steps)
     spread = F.conv1d(flat, triangle_weights(word_length).view(1, 1, -1), padding=reach)
