@@ -7,7 +7,7 @@ import pytest
 import torch
 
 from motionlab.models.motion_cell.smoothing import (
-    continuous_signs,
+    continuous_poses,
     moving_average,
     smooth_word_boundaries,
     spread_boundary_steps,
@@ -67,7 +67,8 @@ def test_signs_are_made_continuous_before_averaging():
     quaternions = _about_x(torch.full((1, 12, 1), 0.3))
     flipped = quaternions.clone()
     flipped[:, 5:] *= -1  # the same rotations, the other hemisphere from frame 5 on
-    torch.testing.assert_close(continuous_signs(flipped), quaternions)
+    root = torch.zeros(1, 12, ROOT)
+    torch.testing.assert_close(continuous_poses(_poses(flipped, root)), _poses(quaternions, root))
     smoothed = smooth_word_boundaries(_poses(flipped, torch.zeros(1, 12, ROOT)), 3)
     q = smoothed[..., :-ROOT].unflatten(-1, (-1, 4))
     torch.testing.assert_close(q.norm(dim=-1), torch.ones(1, 12, 1))

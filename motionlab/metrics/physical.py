@@ -242,7 +242,8 @@ def speed_spectrum(
 
     The speed signal of a clip is the mean over joints of each joint's speed, one value per frame interval
     ``(T - 1,)``; its last ``n_samples`` values (default: all), minus their mean, are Fourier transformed,
-    and the power is ``|coefficient|² / n_samples``.
+    and the power is ``|coefficient|² / n_samples``. (The spectrum of the velocity *vectors* of one clip,
+    windowed, is :func:`motionlab.metrics.realism.velocity_spectrum`; a step that repeats shows in the speed.)
 
     Args:
         positions: joint positions ``(..., T, J, 3)``.

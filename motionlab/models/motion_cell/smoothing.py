@@ -9,8 +9,8 @@ real motion's. The paper's denoising autoencoder cleans the *training* data and 
 
 :func:`smooth_word_boundaries` takes generated pose vectors ``(B, T, 90)`` and
 
-1. makes the quaternions continuous in time (``q`` and ``-q`` are the same rotation; differences are taken
-   between neighbours on the same hemisphere);
+1. makes the quaternions continuous in time (:func:`continuous_poses`: ``q`` and ``-q`` are the same
+   rotation; differences are taken between neighbours on the same hemisphere);
 2. finds the excess step at every boundary frame ``s = n l``: the step ``x_s - x_{s-1}`` minus the mean of
    the steps on either side, ``j_s = d_s - (d_{s-1} + d_{s+1}) / 2`` with ``d_k = x_k - x_{k-1}``;
 3. spreads that excess over the ``2 l - 1`` steps around the boundary with the triangular weights of two
@@ -18,7 +18,7 @@ real motion's. The paper's denoising autoencoder cleans the *training* data and 
    the steps back into poses (what the words do between boundaries is kept);
 4. averages every ``l`` consecutive frames (a centred moving average: its frequency response is zero at
    ``fps / l`` and its multiples, where the boundary steps repeat);
-5. renormalises the quaternions.
+5. renormalises the quaternions (:func:`unit_poses`).
 
 Everything is in pose-vector space (unit quaternions and standardised root channels); the same input
 gives bitwise the same output.
@@ -32,16 +32,31 @@ import torch
 import torch.nn.functional as F
 from torch import Tensor
 
+from motionlab.data.rig import continuous_quaternions
+from motionlab.geometry import quat_normalize
 from motionlab.models.motion_cell.data import ROOT_DIM
+from motionlab.models.motion_cell.heads import assemble_pose
 from motionlab.validation import check_scalar, check_tensor
 
 
-def continuous_signs(quaternions: Tensor) -> Tensor:
-    """``quaternions`` ``(B, T, K, 4)`` with signs flipped along ``T`` so that neighbours have a dot product
-    ``>= 0`` (the same rotations)."""
-    dots = (quaternions[:, 1:] * quaternions[:, :-1]).sum(-1, keepdim=True)
-    flips = torch.where(dots < 0, -1.0, 1.0).cumprod(dim=1)
-    return torch.cat([quaternions[:, :1], quaternions[:, 1:] * flips], dim=1)
+def _split(poses: Tensor) -> tuple[Tensor, Tensor]:
+    """Quaternions ``(B, T, J - 1, 4)`` and root channels ``(B, T, 6)`` of pose vectors ``(B, T, 90)``."""
+    return poses[..., :-ROOT_DIM].unflatten(-1, (-1, 4)), poses[..., -ROOT_DIM:]
+
+
+def continuous_poses(poses: Tensor) -> Tensor:
+    """Pose vectors ``(B, T, 90)`` whose quaternions have their signs flipped along ``T`` so that neighbours
+    have a dot product ``>= 0`` (the same rotations; :func:`~motionlab.data.rig.continuous_quaternions`, so
+    no gradient flows)."""
+    quaternions, root = _split(poses)
+    flipped = continuous_quaternions(quaternions.detach().cpu().numpy(), time_axis=1)
+    return assemble_pose(torch.as_tensor(flipped, dtype=poses.dtype, device=poses.device), root)
+
+
+def unit_poses(x: Tensor) -> Tensor:
+    """Pose vectors ``(B, T, 90)`` with every quaternion normalised to unit length."""
+    quaternions, root = _split(x)
+    return assemble_pose(quat_normalize(quaternions), root)
 
 
 def triangle_weights(length: int) -> Tensor:
@@ -90,9 +105,5 @@ def smooth_word_boundaries(poses: Tensor, word_length: int) -> Tensor:
         )
     if word_length == 1 or poses.shape[1] < 3 * word_length:
         return poses
-    quaternions = continuous_signs(poses[..., :-ROOT_DIM].unflatten(-1, (-1, 4)))
-    x = torch.cat([quaternions.flatten(-2), poses[..., -ROOT_DIM:]], dim=-1)
-    x = moving_average(spread_boundary_steps(x, word_length), word_length)
-    quaternions = x[..., :-ROOT_DIM].unflatten(-1, (-1, 4))
-    quaternions = quaternions / quaternions.norm(dim=-1, keepdim=True)
-    return torch.cat([quaternions.flatten(-2), x[..., -ROOT_DIM:]], dim=-1)
+    spread = spread_boundary_steps(continuous_poses(poses), word_length)
+    return unit_poses(moving_average(spread, word_length))
