@@ -1,7 +1,7 @@
 # motionlab: two commands do everything (`make course`, `make test`); `make bench` measures speed.
 # Each target bootstraps .venv (editable install with pinned dependencies) when it is missing or
 # when pyproject.toml changed since the last install. `make test` and `make course` keep their output in
-# build/logs/<target>-<time>.log (the newest ten of each; motionlab/runlog.py).
+# build/logs/<target>-<time>.log (the newest ten of each; motionlab/course/logs.py).
 PYTHON ?= python3
 VENV   := .venv
 BIN    := $(VENV)/bin
@@ -17,12 +17,12 @@ $(STAMP): pyproject.toml
 	@touch $@
 
 course: $(STAMP)
-	MOTIONLAB_PROFILE=full $(BIN)/python -m motionlab.runlog course -- \
+	MOTIONLAB_PROFILE=full $(BIN)/python -m motionlab.course.logs course -- \
 		$(BIN)/python -m motionlab.course
 
 # The formatter and the linter (ruff, settings in pyproject.toml) first, then the tests and notebooks.
 test: $(STAMP)
-	MOTIONLAB_PROFILE=quick $(BIN)/python -m motionlab.runlog test -- sh -c '\
+	MOTIONLAB_PROFILE=quick $(BIN)/python -m motionlab.course.logs test -- sh -c '\
 		$(BIN)/ruff format --check . && $(BIN)/ruff check . && \
 		$(BIN)/python -m pytest -n 2 --dist loadscope --nbval-sanitize-with tests/nbval_sanitize.cfg'
 

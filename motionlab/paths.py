@@ -1,5 +1,5 @@
-"""Where the course keeps what it writes; imports nothing heavy, so light commands (:mod:`motionlab.runlog`)
-can use it too."""
+"""Where the course keeps what it writes; imports nothing heavy, so light commands
+(:mod:`motionlab.course.logs`) can use it too."""
 
 from __future__ import annotations
 

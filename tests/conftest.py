@@ -19,7 +19,7 @@ def pytest_runtest_setup(item) -> None:
     the cell within two minutes, naming it (nbval then stops the kernel, and the chapter's later cells fail
     at once)."""
     if type(item).__name__ == "IPyNbCell":
-        from motionlab.course import cell_limits
+        from motionlab.course.run import cell_limits
 
         item.config.option.nbval_cell_timeout = cell_limits(Path(str(item.fspath)).stem).cell_seconds
 

@@ -5,7 +5,7 @@ import json
 import nbformat
 import pytest
 
-from motionlab import course
+from motionlab.course import run as course
 
 
 def _notebook(tmp_path, name, source):
@@ -28,7 +28,7 @@ def test_build_runs_chapters_and_writes_report(tmp_path, build):
     _notebook(
         tmp_path,
         "01_ok",
-        "from motionlab.results import Chapter\n"
+        "from motionlab.course.results import Chapter\n"
         "c = Chapter('01_ok')\nc.metric('x.value', 2.5)\n"
         "c.claim('01.small', 2.5, 3.0, '<', 'value is small')\nprint('done')",
     )

@@ -9,8 +9,8 @@ from pathlib import Path
 import nbformat
 import pytest
 
-from motionlab import course
-from motionlab.execution import CellLimits, KernelNotAnswering, execute_notebook
+from motionlab.course import run as course
+from motionlab.course.kernel import CellLimits, KernelNotAnswering, execute_notebook
 
 #: Makes the kernel drop the reply of every execute request from this one on (as a lost reply would look).
 DROP_REPLIES = """\

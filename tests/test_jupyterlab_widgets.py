@@ -16,7 +16,7 @@ from pathlib import Path
 
 import pytest
 
-from motionlab.browser_check import browser_available, chromium
+from motionlab.course.browser import browser_available, chromium
 from motionlab.paths import REPO_ROOT
 
 pytestmark = pytest.mark.skipif(

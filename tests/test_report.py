@@ -6,7 +6,13 @@ import re
 
 import nbformat
 
-from motionlab.report import ChapterStatus, chapter_intro, comparison_table, key_figure, write_front_page
+from motionlab.course.report import (
+    ChapterStatus,
+    chapter_intro,
+    comparison_table,
+    key_figure,
+    write_front_page,
+)
 
 PNG = base64.b64encode(
     bytes.fromhex(

@@ -11,10 +11,10 @@ from pathlib import Path
 import nbformat
 import pytest
 
-from motionlab.browser_check import browser_available, check_report
-from motionlab.course import export_html
-from motionlab.execution import CellLimits, execute_notebook
-from motionlab.report_assets import install_assets
+from motionlab.course.assets import install_assets
+from motionlab.course.browser import browser_available, check_report
+from motionlab.course.kernel import CellLimits, execute_notebook
+from motionlab.course.run import export_html
 
 pytestmark = pytest.mark.skipif(
     not browser_available() or shutil.which("npm") is None,

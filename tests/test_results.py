@@ -3,7 +3,7 @@ import math
 
 import pytest
 
-from motionlab.results import Chapter, ClaimFailed, load_results, results_path
+from motionlab.course.results import Chapter, ClaimFailed, load_results, results_path
 
 
 @pytest.fixture

@@ -8,8 +8,8 @@ from pathlib import Path
 import nbformat
 import pytest
 
-from motionlab import stress
-from motionlab.execution import CellLimits
+from motionlab.course import stress
+from motionlab.course.kernel import CellLimits
 
 
 def test_the_pattern_notebook_repeats_the_chapters_cell_patterns() -> None:

@@ -13,8 +13,8 @@ import torch
 
 from motionlab import config, paths
 from motionlab.train.cli import main
-from motionlab.train.execution import Execution, executing, local_batch, shard_indices
 from motionlab.train.families import FAMILIES
+from motionlab.train.runtime import Execution, executing, local_batch, shard_indices
 
 VENV_BIN = Path(sys.executable).parent
 

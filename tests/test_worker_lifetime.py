@@ -8,7 +8,7 @@ from pathlib import Path
 
 import nbformat
 
-from motionlab.execution import CellLimits, execute_notebook
+from motionlab.course.kernel import CellLimits, execute_notebook
 
 #: Starts the shared pool's workers and prints their pids and that of multiprocessing's resource tracker.
 _START_WORKERS = """\

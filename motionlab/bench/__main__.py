@@ -16,7 +16,7 @@ import sys
 import time
 from pathlib import Path
 
-from motionlab import cli, config
+from motionlab import arguments, config
 from motionlab.bench import ENTRIES
 
 PROG = "python -m motionlab.bench"
@@ -70,7 +70,7 @@ def main(argv: list[str] | None = None) -> int:
     )
     parser.add_argument(
         "--out",
-        type=cli.output_file,
+        type=arguments.output_file,
         metavar="FILE",
         help="report file (default build/bench.json); its directory must exist",
     )
@@ -79,7 +79,7 @@ def main(argv: list[str] | None = None) -> int:
     if unknown:  # not choices=names: Python 3.11 checks an empty nargs="*" list against the choices too
         parser.error(f"unknown entry {', '.join(map(repr, unknown))} (choose from {', '.join(names)})")
     selected = list(dict.fromkeys(args.entries)) or names
-    return cli.run(PROG, lambda: _run_entries(selected, args.out))
+    return arguments.run(PROG, lambda: _run_entries(selected, args.out))
 
 
 if __name__ == "__main__":

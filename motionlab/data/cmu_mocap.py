@@ -53,7 +53,7 @@ from pathlib import Path
 
 import numpy as np
 
-from motionlab import cli
+from motionlab import arguments
 from motionlab.data.bvh import CMU_SCALE
 from motionlab.paths import REPO_ROOT
 from motionlab.skeleton import Skeleton
@@ -789,7 +789,7 @@ def main(argv: list[str] | None = None) -> int:
         )
         return 0
 
-    return cli.run(prog, run)
+    return arguments.run(prog, run)
 
 
 if __name__ == "__main__":

@@ -36,7 +36,7 @@ from pathlib import Path
 
 import numpy as np
 
-from motionlab import cli, config, skeleton
+from motionlab import arguments, config, skeleton
 from motionlab.data import actions, body, curves, events, gait, gestures, rig, store, styles
 from motionlab.data.actions import ACTION_NAMES, CATALOGUE, MODE_ACTION, MODE_NAMES, MODE_STYLE
 from motionlab.data.body import BodyBatch, pose
@@ -205,21 +205,29 @@ def main(argv: list[str] | None = None) -> int:
         prog=prog, description="Write a synthetic motion-capture data set (.npz)."
     )
     parser.add_argument(
-        "--out", required=True, type=cli.output_file, help="output file (.npz); its directory must exist"
+        "--out",
+        required=True,
+        type=arguments.output_file,
+        help="output file (.npz); its directory must exist",
     )
-    parser.add_argument("--seed", required=True, type=cli.non_negative_int, help="non-negative integer seed")
     parser.add_argument(
-        "--n-per-mode", type=cli.positive_int, default=10, help="clips per style mode (12 modes; default 10)"
+        "--seed", required=True, type=arguments.non_negative_int, help="non-negative integer seed"
+    )
+    parser.add_argument(
+        "--n-per-mode",
+        type=arguments.positive_int,
+        default=10,
+        help="clips per style mode (12 modes; default 10)",
     )
     parser.add_argument(
         "--seconds",
-        type=cli.float_at_least(MIN_SECONDS),
+        type=arguments.float_at_least(MIN_SECONDS),
         default=4.0,
         help=f"clip length in seconds, at least {MIN_SECONDS:g} (default 4)",
     )
     parser.add_argument(
         "--fps",
-        type=cli.int_at_least(MIN_FPS),
+        type=arguments.int_at_least(MIN_FPS),
         default=30,
         help=f"frames per second, at least {MIN_FPS} (default 30)",
     )
@@ -230,10 +238,12 @@ def main(argv: list[str] | None = None) -> int:
         "--compress", action="store_true", help="write a compressed archive (slower, ~10%% smaller)"
     )
     parser.add_argument(
-        "--checksums", type=cli.output_file, help="also write the SHA-256 of every array to this JSON file"
+        "--checksums",
+        type=arguments.output_file,
+        help="also write the SHA-256 of every array to this JSON file",
     )
     args = parser.parse_args(argv)
-    return cli.run(prog, lambda: _write(args))
+    return arguments.run(prog, lambda: _write(args))
 
 
 if __name__ == "__main__":

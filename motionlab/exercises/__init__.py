@@ -13,7 +13,7 @@ Modules: :mod:`~motionlab.exercises.rotations` (chapter 01), :mod:`~motionlab.ex
 :mod:`~motionlab.exercises.skating` (chapter 02), :mod:`~motionlab.exercises.vae` (chapters 03 and 08),
 :mod:`~motionlab.exercises.hierarchy` (chapter 04), :mod:`~motionlab.exercises.flows` (chapter 05),
 :mod:`~motionlab.exercises.autoregressive` (chapter 06), :mod:`~motionlab.exercises.sequences` (chapters 07
-and 08), :mod:`~motionlab.exercises.metrics` (chapter 09), :mod:`~motionlab.exercises.real` (chapter 10);
+and 08), :mod:`~motionlab.exercises.metrics` (chapter 09), :mod:`~motionlab.exercises.mocap` (chapter 10);
 :mod:`~motionlab.exercises.checking` holds what they share.
 """
 
@@ -23,7 +23,7 @@ from motionlab.exercises.flows import check_affine_forward, check_affine_inverse
 from motionlab.exercises.hierarchy import check_impact_weights, check_subtree_reach
 from motionlab.exercises.kinematics import check_chain_positions
 from motionlab.exercises.metrics import check_apd, check_fid
-from motionlab.exercises.real import check_bone_length_variation, check_mirror
+from motionlab.exercises.mocap import check_bone_length_variation, check_mirror
 from motionlab.exercises.rotations import check_quat_mul, check_slerp
 from motionlab.exercises.sequences import check_contrastive_loss, check_dct_matrix, check_given_trajectories
 from motionlab.exercises.skating import check_foot_skating

@@ -13,7 +13,7 @@ Modules: :mod:`~motionlab.train.schedules` (schedules), :mod:`~motionlab.train.t
 (:class:`TrainConfig`), :mod:`~motionlab.train.batches` (batch sources and their seeded order),
 :mod:`~motionlab.train.loop` (:func:`train`), :mod:`~motionlab.train.state` (resumable state),
 :mod:`~motionlab.train.cache` (:func:`train_or_load`), :mod:`~motionlab.train.history` and
-:mod:`~motionlab.train.plot` (records and the figure), :mod:`~motionlab.train.execution` (device, mixed
+:mod:`~motionlab.train.plot` (records and the figure), :mod:`~motionlab.train.runtime` (device, mixed
 precision and data-parallel processes of a run). The training command ``python -m motionlab.train FAMILY``
 (:mod:`~motionlab.train.cli`) trains one run of a chapter's family (:mod:`~motionlab.train.families`).
 """

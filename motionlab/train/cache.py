@@ -21,9 +21,9 @@ from torch import nn
 
 from motionlab.checkpoints import checkpoint_path, config_dict, load_checkpoint, save_checkpoint
 from motionlab.train.batches import BatchSource
-from motionlab.train.execution import current as current_execution
 from motionlab.train.history import History
 from motionlab.train.loop import Callback, LossFn, TrainResult, train
+from motionlab.train.runtime import current as current_execution
 from motionlab.train.state import ResumeFile
 from motionlab.train.train_config import TrainConfig
 

@@ -8,7 +8,7 @@ writes into ``--out``: ``run.json`` (what was trained, how, how long), ``history
 
 Devices and processes: ``--device auto`` takes CUDA when there is one (bf16 mixed precision where the GPU
 supports it); ``torchrun --nproc-per-node N -m motionlab.train ...`` trains data-parallel
-(:mod:`motionlab.train.execution`; gloo on the CPU, nccl on CUDA), the first process logging and writing.
+(:mod:`motionlab.train.runtime`; gloo on the CPU, nccl on CUDA), the first process logging and writing.
 
 Bad arguments end the command with one line on stderr and exit code 2.
 """
@@ -311,7 +311,7 @@ def train_command(args: argparse.Namespace) -> dict[str, Any]:
     import torch
 
     from motionlab import config
-    from motionlab.train.execution import Execution, executing
+    from motionlab.train.runtime import Execution, executing
 
     config.setup(seed=0)
     rank, world_size, device = start_processes(device)

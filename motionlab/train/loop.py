@@ -28,8 +28,8 @@ training stops at a step boundary: on Ctrl-C (held until the current step ends, 
 The next call with the same run identity continues from it and ends with the same weights, bitwise, as an
 uninterrupted run. An exception inside a step (for instance from ``loss_fn``) leaves the last periodic state.
 
-Where it runs: the :class:`~motionlab.train.execution.Execution` in effect (set by the training command with
-:func:`~motionlab.train.execution.executing`) chooses the device, mixed precision on CUDA and data-parallel
+Where it runs: the :class:`~motionlab.train.runtime.Execution` in effect (set by the training command with
+:func:`~motionlab.train.runtime.executing`) chooses the device, mixed precision on CUDA and data-parallel
 processes; only the first process shows progress and writes the resumable state. The default, one CPU process,
 leaves every step exactly as described above.
 """
@@ -54,9 +54,9 @@ from tqdm.auto import tqdm
 from motionlab import config
 from motionlab.checkpoints import state_dict_mismatch
 from motionlab.train.batches import BatchSource, check_source, epoch_batches, epoch_seed
-from motionlab.train.execution import Execution, data_parallel, local_batch, mean_over_processes
-from motionlab.train.execution import current as current_execution
 from motionlab.train.history import History
+from motionlab.train.runtime import Execution, data_parallel, local_batch, mean_over_processes
+from motionlab.train.runtime import current as current_execution
 from motionlab.train.state import DeferredInterrupt, ResumeFile, rng_isolated, rng_state, set_rng_state
 from motionlab.train.train_config import TrainConfig
 

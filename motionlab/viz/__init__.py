@@ -18,7 +18,7 @@ pyplot never sees and return only the HTML, so nothing stays open.
 """
 
 from motionlab.viz.animation import animate, build_animation, compare_animation
-from motionlab.viz.paths import plot_root_paths
+from motionlab.viz.root_paths import plot_root_paths
 from motionlab.viz.source import show_source
 from motionlab.viz.stick_figure import GENERATED_COLOR, REAL_COLOR, Scene, StickFigure, filmstrip, plot_pose
 

@@ -24,7 +24,7 @@ from matplotlib.figure import Figure
 from mpl_toolkits.mplot3d import Axes3D
 
 from motionlab.validation import check_choice, check_scalar
-from motionlab.viz.inputs import ArrayLike, as_parents, as_sequence_list
+from motionlab.viz.checks import ArrayLike, as_parents, as_sequence_list
 from motionlab.viz.stick_figure import (
     GENERATED_COLOR,
     REAL_COLOR,

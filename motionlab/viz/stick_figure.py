@@ -21,7 +21,7 @@ from mpl_toolkits.mplot3d import Axes3D
 from mpl_toolkits.mplot3d.art3d import Line3D
 
 from motionlab.validation import check_scalar
-from motionlab.viz.inputs import ArrayLike, as_parents, as_pose, as_sequence
+from motionlab.viz.checks import ArrayLike, as_parents, as_pose, as_sequence
 
 #: Colours of the Motion Cell paper's comparison figure: real motion blue, generated motion orange.
 REAL_COLOR = "tab:blue"

@@ -11,9 +11,9 @@ Modules: :mod:`~.base` (the interface, :class:`FlowSequence`), :mod:`~.actnorm`,
 
 from motionlab.models.flows.actnorm import ActNorm
 from motionlab.models.flows.base import FlowLayer, FlowSequence, check_cond, check_sequence
+from motionlab.models.flows.baseline import DiagonalGaussian
 from motionlab.models.flows.checks import autograd_logdet, logdet_error, perturb_parameters_, roundtrip_error
 from motionlab.models.flows.coupling import AffineCoupling, affine_forward, affine_inverse
-from motionlab.models.flows.gaussian import DiagonalGaussian
 from motionlab.models.flows.glow import (
     Glow,
     GlowConfig,

@@ -9,7 +9,7 @@ import matplotlib.pyplot as plt
 from matplotlib.axes import Axes
 
 from motionlab.validation import check_scalar
-from motionlab.viz.inputs import ArrayLike, as_sequence_list
+from motionlab.viz.checks import ArrayLike, as_sequence_list
 
 
 def plot_root_paths(

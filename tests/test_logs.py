@@ -7,7 +7,7 @@ from pathlib import Path
 
 import pytest
 
-from motionlab import runlog
+from motionlab.course import logs as runlog
 
 
 def test_a_run_is_copied_to_the_terminal_and_to_a_log_with_its_exit_code(tmp_path: Path, capfd) -> None:

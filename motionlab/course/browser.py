@@ -8,7 +8,7 @@ and two screenshots taken half a second apart must differ.
 It needs Debian's ``chromium`` and ``chromium-driver`` (``apt-get install chromium chromium-driver``);
 :func:`browser_available` says whether they are there. Command line::
 
-    python -m motionlab.browser_check build/course          # every .html page of the report
+    python -m motionlab.course.browser build/course          # every .html page of the report
 """
 
 from __future__ import annotations
@@ -24,7 +24,7 @@ from contextlib import contextmanager
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from motionlab import cli
+from motionlab import arguments
 
 CHROMIUM = "/usr/bin/chromium"
 CHROMEDRIVER = "/usr/bin/chromedriver"
@@ -190,7 +190,10 @@ def check_report(report_dir: Path) -> list[PageReport]:
 
 def _main(directory: Path) -> int:
     if not browser_available():
-        print("browser_check: needs chromium and chromium-driver (apt-get install chromium chromium-driver)")
+        print(
+            "motionlab.course.browser: needs chromium and chromium-driver"
+            " (apt-get install chromium chromium-driver)"
+        )
         return 1
     reports = check_report(directory)
     for report in reports:
@@ -208,11 +211,13 @@ def _main(directory: Path) -> int:
 
 def main(argv: list[str] | None = None) -> int:
     """The command line; returns the exit status (1 when a page has problems)."""
-    prog = "python -m motionlab.browser_check"
+    prog = "python -m motionlab.course.browser"
     parser = argparse.ArgumentParser(prog=prog, description="Check the report's pages in headless Chromium.")
-    parser.add_argument("directory", type=cli.existing_directory, help="the report directory (build/course)")
+    parser.add_argument(
+        "directory", type=arguments.existing_directory, help="the report directory (build/course)"
+    )
     args = parser.parse_args(argv)
-    return cli.run(prog, lambda: _main(args.directory))
+    return arguments.run(prog, lambda: _main(args.directory))
 
 
 if __name__ == "__main__":

@@ -1,4 +1,4 @@
-"""Run a command and keep its output: ``python -m motionlab.runlog NAME -- COMMAND [ARGS...]``.
+"""Run a command and keep its output: ``python -m motionlab.course.logs NAME -- COMMAND [ARGS...]``.
 
 ``make test`` and ``make course`` go through this, so that a failure seen once can be read afterwards. The
 command's standard output and error go, merged and line by line, both to the terminal and to
@@ -79,7 +79,7 @@ def run_logged(name: str, command: list[str], directory: Path | None = None, kee
         except OSError as exc:
             message = f"cannot run {command[0]!r}: {exc.strerror or exc}"
             log.write(message + "\n")
-            print(f"runlog: {message}", file=sys.stderr)
+            print(f"motionlab.course.logs: {message}", file=sys.stderr)
             return 127
         assert process.stdout is not None
         try:
@@ -100,12 +100,12 @@ def run_logged(name: str, command: list[str], directory: Path | None = None, kee
 def main(argv: list[str] | None = None) -> int:
     argv = sys.argv[1:] if argv is None else argv
     if len(argv) < 3 or argv[1] != "--":
-        print("usage: python -m motionlab.runlog NAME -- COMMAND [ARGS...]", file=sys.stderr)
+        print("usage: python -m motionlab.course.logs NAME -- COMMAND [ARGS...]", file=sys.stderr)
         return 2
     try:
         return run_logged(argv[0], argv[2:])
     except ValueError as exc:
-        print(f"runlog: {exc}", file=sys.stderr)
+        print(f"motionlab.course.logs: {exc}", file=sys.stderr)
         return 2
 
 

@@ -1,7 +1,7 @@
 """The command lines refuse bad arguments with one line on stderr and exit status 2, never a traceback.
 
 ``python -m motionlab.data.synthetic`` and ``python -m motionlab.bench``, through the shared checks of
-:mod:`motionlab.cli`. Most cases call ``main(argv)`` in this process; a few run the real command.
+:mod:`motionlab.arguments`. Most cases call ``main(argv)`` in this process; a few run the real command.
 """
 
 from __future__ import annotations
@@ -15,7 +15,7 @@ from pathlib import Path
 
 import pytest
 
-from motionlab import cli
+from motionlab import arguments
 from motionlab.bench import __main__ as bench
 from motionlab.data import synthetic
 from motionlab.data.store import MotionSet
@@ -218,11 +218,11 @@ def test_run_reports_user_errors_on_one_line(capsys: pytest.CaptureFixture[str],
     def command() -> int:
         raise error
 
-    assert cli.run("prog", command) == 2
+    assert arguments.run("prog", command) == 2
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and err.startswith("prog: error: ") and "Traceback" not in err
 
 
 def test_run_lets_bugs_keep_their_traceback() -> None:
     with pytest.raises(KeyError):
-        cli.run("prog", lambda: {}["missing"])
+        arguments.run("prog", lambda: {}["missing"])

@@ -1,7 +1,7 @@
 """Executing a notebook headless, with a time limit per cell and a watch for a kernel that stops answering.
 
 :func:`execute_notebook` runs every code cell of a notebook in a fresh kernel (nbclient), as ``make course``
-and the stress harness (:mod:`motionlab.stress`) do. Two things can keep a cell from finishing:
+and the stress harness (:mod:`motionlab.course.stress`) do. Two things can keep a cell from finishing:
 
 * **The cell is slow**: it runs past its limit (:class:`CellLimits.cell_seconds`), which the course derives
   from the chapter's budget, so a cell that should take seconds never gets twenty minutes. This raises
@@ -17,8 +17,8 @@ In both cases the kernel is killed, not asked to shut down, and the executed par
 The client also polls its sockets in steps of :data:`POLL_SECONDS` rather than waiting once for a whole cell's
 limit. nbclient's own client waits in one poll, and in widget cells (where it also sends on the shell socket
 while it waits) its event loop sometimes misses ZeroMQ's edge-triggered wake-up: the reply then sits unread
-until the poll times out (measured with :mod:`motionlab.stress`; README, "Reliability"). Polling in steps
-turns that into a delay of at most a second (see :meth:`WatchedClient._async_poll_for_reply`).
+until the poll times out (measured with :mod:`motionlab.course.stress`; README, "Reliability"). Polling in
+steps turns that into a delay of at most a second (see :meth:`WatchedClient._async_poll_for_reply`).
 """
 
 from __future__ import annotations
@@ -265,7 +265,8 @@ def execute_notebook(
 
     Never raises for what happens inside the notebook: an error, a cell over its limit, a dead kernel or one
     that stopped answering are returned as :attr:`Execution.error` with the index of the cell. With ``stock``,
-    nbclient's own client executes (timed, :class:`TimedClient`; for comparison in :mod:`motionlab.stress`).
+    nbclient's own client executes (timed, :class:`TimedClient`; for comparison in
+    :mod:`motionlab.course.stress`).
     """
     options = dict(
         kernel_name="python3",

@@ -2,7 +2,7 @@
 
 A chapter opens a :class:`Chapter` once and records through it::
 
-    from motionlab.results import Chapter
+    from motionlab.course.results import Chapter
     chapter = Chapter("01_rotation_geometry")
     chapter.metric("geometry.scipy_max_err", err)
     chapter.claim("01.matches_scipy", value=err, threshold=1e-5, op="<=",

@@ -2,16 +2,16 @@
 
 For each ``notebooks/NN_name.ipynb`` in order: execute it headless in a fresh kernel (cwd ``notebooks/``,
 widget state stored in the notebook), record its wall time in ``results.json``, and write the executed
-notebook and an HTML rendering. Then write the front page ``index.html`` (:mod:`motionlab.report`): what
-the course is, the claims at a glance, chapter 09's comparison of the four generators, one card per chapter
-(summary, key figure, time against budget, claims) and every metric.
+notebook and an HTML rendering. Then write the front page ``index.html`` (:mod:`motionlab.course.report`):
+what the course is, the claims at a glance, chapter 09's comparison of the four generators, one card per
+chapter (summary, key figure, time against budget, claims) and every metric.
 
 A chapter that fails (an error, or a claim that stopped holding in the full profile) does not stop the
 build: the remaining chapters still run so the report shows everything, and the command exits non-zero.
 
 Each cell may run at most :data:`CELL_BUDGET_FACTOR` times its chapter's whole budget
 (:func:`cell_limits`); a cell past that fails its chapter. A kernel that stops answering (alive and idle,
-but a request never started or a finished cell's reply never came; see :mod:`motionlab.execution`) is
+but a request never started or a finished cell's reply never came; see :mod:`motionlab.course.kernel`) is
 killed within half a minute and the chapter is executed once more in a fresh kernel: trained models are
 cached, so a second execution costs little. The retry is recorded in ``results.json`` (the chapter's
 ``"retries"``) and shown in the report; a second hang fails the chapter with the cell and the diagnosis.
@@ -31,10 +31,10 @@ import nbformat
 from nbconvert import HTMLExporter
 
 from motionlab import config
-from motionlab.execution import CellLimits, execute_notebook, read_notebook
-from motionlab.report import ChapterStatus, write_front_page
-from motionlab.report_assets import install_assets, localize_page
-from motionlab.results import load_results, results_path, update_notebook
+from motionlab.course.assets import install_assets, localize_page
+from motionlab.course.kernel import CellLimits, execute_notebook, read_notebook
+from motionlab.course.report import ChapterStatus, write_front_page
+from motionlab.course.results import load_results, results_path, update_notebook
 
 #: Wall-clock budgets per chapter in seconds (design notes), as (full, quick).
 BUDGETS: dict[str, tuple[float, float]] = {
@@ -60,7 +60,7 @@ CELL_BUDGET_FACTOR = 3.0
 DEFAULT_CELL_SECONDS = 600.0
 
 #: How long a kernel may take to start a request or to send a finished cell's reply (seconds); see
-#: :class:`~motionlab.execution.CellLimits`.
+#: :class:`~motionlab.course.kernel.CellLimits`.
 ANSWER_SECONDS = 30.0
 
 #: How many times a chapter whose kernel stopped answering is executed again in a fresh kernel.
@@ -114,7 +114,7 @@ def _describe(error: BaseException, cell: int | None) -> str:
 
 def export_html(notebook: nbformat.NotebookNode, assets: dict[str, str] | None = None) -> str:
     """The HTML page of an executed notebook (nbconvert's JupyterLab template), pointing at the local
-    ``assets`` of :func:`~motionlab.report_assets.install_assets` (MathJax, require.js, the widget manager,
+    ``assets`` of :func:`~motionlab.course.assets.install_assets` (MathJax, require.js, the widget manager,
     Font Awesome) instead of their web addresses."""
     assets = assets or {}
     settings = {key: value for key, value in assets.items() if key.endswith("_url")}
@@ -151,7 +151,7 @@ def execute_chapter(path: Path, out_dir: Path, assets: dict[str, str] | None = N
 
 
 def write_index(out_dir: Path, runs: list[ChapterRun]) -> Path:
-    """Write the report's front page ``index.html`` (:mod:`motionlab.report`) from ``results.json``.
+    """Write the report's front page ``index.html`` (:mod:`motionlab.course.report`) from ``results.json``.
 
     It shows the chapters that ran now (``runs``) and, from earlier builds of the same profile, every other
     chapter whose executed notebook is in ``out_dir`` (its time from ``results.json``).
@@ -240,7 +240,3 @@ def main(argv: list[str] | None = None) -> int:
         print(f"[course] failed chapters: {', '.join(failed)}", file=sys.stderr)
         return 1
     return 0
-
-
-if __name__ == "__main__":
-    raise SystemExit(main())

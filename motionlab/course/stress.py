@@ -3,15 +3,15 @@
 A hang that strikes one cell in a few hundred is invisible in one build and costs a whole build when it
 strikes. This harness makes it measurable::
 
-    python -m motionlab.stress --runs 30                 # the course's chapters, quick profile, 30 times
-    python -m motionlab.stress --runs 200 --patterns     # a generated notebook of the chapters' cell patterns
+    python -m motionlab.course.stress --runs 30              # the course's chapters, quick profile, 30 times
+    python -m motionlab.course.stress --runs 200 --patterns  # a notebook of the chapters' cell patterns
 
-Every execution goes through :func:`motionlab.execution.execute_notebook` with the limits the course build
+Every execution goes through :func:`motionlab.course.kernel.execute_notebook` with the limits the course build
 uses, so a kernel that stops answering is detected within
-:attr:`~motionlab.execution.CellLimits.answer_seconds` and counted, with its diagnosis. One line per execution
-goes to the terminal; a JSON summary (versions of the kernel stack, executions, hangs, other failures, each
-hang's cell and diagnosis) goes to ``build/stress/<time>.json``. The exit code is 1 when any execution hung or
-failed.
+:attr:`~motionlab.course.kernel.CellLimits.answer_seconds` and counted, with its diagnosis. One line per
+execution goes to the terminal; a JSON summary (versions of the kernel stack, executions, hangs, other
+failures, each hang's cell and diagnosis) goes to ``build/stress/<time>.json``. The exit code is 1 when any
+execution hung or failed.
 
 The pattern notebook (:func:`pattern_notebook`) holds what the chapters do between their computations, many
 times over: short cells with text output, ipywidgets with their comm traffic (sliders moved from the kernel,
@@ -39,8 +39,9 @@ from nbclient.exceptions import CellTimeoutError
 from nbformat import NotebookNode
 
 from motionlab import config
-from motionlab.cli import positive_int
-from motionlab.execution import CellLimits, execute_notebook, read_notebook
+from motionlab.arguments import positive_int
+from motionlab.course.kernel import CellLimits, execute_notebook, read_notebook
+from motionlab.course.run import cell_limits, chapter_notebooks
 
 #: Packages whose versions decide how a kernel talks to its client (recorded in every summary).
 KERNEL_STACK = ("ipykernel", "jupyter_client", "pyzmq", "tornado", "nbclient", "ipywidgets", "comm")
@@ -54,7 +55,7 @@ from IPython.display import display
 from tqdm.auto import tqdm
 from motionlab import config
 from motionlab.skeleton import average_skeleton
-from motionlab.stress import noisy_work
+from motionlab.course.stress import noisy_work
 from motionlab.train.parallel import run_in_workers
 from motionlab.viz.animation import animate
 config.setup(0)
@@ -113,7 +114,7 @@ class StressSummary:
     client: str
     executions: int = 0
     cells: int = 0
-    #: Cells whose reply came long after the kernel said idle (see :class:`~motionlab.execution.TimedClient`).
+    #: Cells whose reply came long after the kernel said idle (:class:`~motionlab.course.kernel.TimedClient`).
     stalls: list[dict[str, Any]] = field(default_factory=list)
     hangs: list[dict[str, Any]] = field(default_factory=list)
     failures: list[dict[str, Any]] = field(default_factory=list)
@@ -189,7 +190,7 @@ def run_stress(
 
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(
-        prog="python -m motionlab.stress",
+        prog="python -m motionlab.course.stress",
         description=__doc__,
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
@@ -213,8 +214,6 @@ def main(argv: list[str] | None = None) -> int:
     )
     args = parser.parse_args(argv)
     os.environ.setdefault("MOTIONLAB_PROFILE", "quick")
-
-    from motionlab.course import cell_limits, chapter_notebooks
 
     stamp = time.strftime("%Y%m%d-%H%M%S")
     out = config.build_dir() / "stress" / f"{stamp}.json"
