@@ -1,5 +1,6 @@
-"""The training command ``python -m motionlab.train``: every family in the quick config, bad arguments, a
-2-process torchrun against one process with the same global batch, and resuming an interrupted run."""
+"""The training command ``python -m motionlab.apps.training``: every family in the quick config, bad
+arguments, a 2-process torchrun against one process with the same global batch, and resuming an interrupted
+run."""
 
 import json
 import os
@@ -12,9 +13,9 @@ import pytest
 import torch
 
 from motionlab import config, paths
-from motionlab.train.cli import main
+from motionlab.apps.families import FAMILIES
+from motionlab.apps.training import main
 from motionlab.train.execution import Execution, executing, local_batch, shard_indices
-from motionlab.train.families import FAMILIES
 
 VENV_BIN = Path(sys.executable).parent
 
@@ -154,7 +155,15 @@ def test_two_processes_under_torchrun_match_one_process_with_the_same_global_bat
     of the two gloo processes gets 32 samples of every batch, and the weights end where one process's do."""
     args = ["vae", "--config", "quick", "--run-name", "pose_ae", "--steps", "3", "--device", "cpu"]
     two = subprocess.Popen(
-        [str(VENV_BIN / "torchrun"), "--standalone", "--nproc-per-node", "2", "-m", "motionlab.train", *args]
+        [
+            str(VENV_BIN / "torchrun"),
+            "--standalone",
+            "--nproc-per-node",
+            "2",
+            "-m",
+            "motionlab.apps.training",
+            *args,
+        ]
         + ["--out", str(tmp_path / "two")],
         env=command_env(fresh_build(tmp_path / "build_two")),
         stdout=subprocess.DEVNULL,

@@ -1,6 +1,6 @@
 """The frozen evaluation classifiers every chapter measures its samples with.
 
-:func:`load_evaluator` trains a :class:`~motionlab.models.classifiers.MotionClassifier` on the training
+:func:`load_evaluator` trains a :class:`~motionlab.evaluation.classifiers.MotionClassifier` on the training
 split of the synthetic data set (through the one training loop, so it is cached and trained once), and
 wraps it with its input standardisation in an :class:`Evaluator` that takes global joint positions::
 
@@ -22,8 +22,8 @@ from torch import Tensor, nn
 
 from motionlab import config
 from motionlab.data.datasets import Standardizer
+from motionlab.evaluation.classifiers import HEADS, ClassifierConfig, MotionClassifier
 from motionlab.evaluation.inputs import EVAL_FEATURES, body_frame_features
-from motionlab.models.classifiers import HEADS, ClassifierConfig, MotionClassifier
 from motionlab.train import TrainConfig, TrainResult, is_cached, train_or_load
 
 #: Clips are evaluated in chunks of this many to bound memory.

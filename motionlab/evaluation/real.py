@@ -46,9 +46,9 @@ from motionlab.data.cmu_mocap import (
 )
 from motionlab.data.datasets import Standardizer
 from motionlab.evaluation.benchmark import feature_metrics
+from motionlab.evaluation.classifiers import ClassifierConfig, MotionClassifier
 from motionlab.evaluation.evaluator import Evaluator, data_fingerprint
 from motionlab.metrics import Interval, mean_ci
-from motionlab.models.classifiers import ClassifierConfig, MotionClassifier
 from motionlab.train import TrainConfig, TrainResult, is_cached, train_or_load
 from motionlab.validation import check_scalar
 

@@ -160,9 +160,10 @@ class ExperimentConfig(config.ProfileConfig):
 
     @classmethod
     def long(cls) -> ExperimentConfig:
-        """A longer, larger run for the training command (``python -m motionlab.train moglow --config long``):
-        20 times the full profile's steps (MoGlow 10,000, the baseline 6,000, the fixed-length Glow 6,000) and
-        twice MoGlow's LSTM and conditioning widths (128); data and evaluation as in :meth:`full`."""
+        """A longer, larger run for the training command (``python -m motionlab.apps.training moglow --config
+        long``): 20 times the full profile's steps (MoGlow 10,000, the baseline 6,000, the fixed-length Glow
+        6,000) and twice MoGlow's LSTM and conditioning widths (128); data and evaluation as in
+        :meth:`full`."""
         return replace(
             cls(),
             moglow_hidden=128,

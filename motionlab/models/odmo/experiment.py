@@ -173,9 +173,9 @@ class ExperimentConfig(config.ProfileConfig):
 
     @classmethod
     def long(cls) -> ExperimentConfig:
-        """A longer, larger run for the training command (``python -m motionlab.train odmo --config long``):
-        20 times the full profile's steps (6,000) and generators of the paper's width (128 LSTM units, one
-        layer where the paper has two); the same sample sets as :meth:`full`."""
+        """A longer, larger run for the training command (``python -m motionlab.apps.training odmo --config
+        long``): 20 times the full profile's steps (6,000) and generators of the paper's width (128 LSTM
+        units, one layer where the paper has two); the same sample sets as :meth:`full`."""
         return cls(model=chapter_model(trajectory_hidden=128, motion_hidden=128), steps=6_000)
 
     def train_config(self) -> TrainConfig:

@@ -167,9 +167,10 @@ class ExperimentConfig(config.ProfileConfig):
 
     @classmethod
     def long(cls) -> ExperimentConfig:
-        """A longer, larger run for the training command (``python -m motionlab.train trajevae --config
-        long``): 20 times the full profile's steps (8,000, batches of 64), TrajeVAE twice as wide (64, latent
-        16, 16 DCT components, 4 heads) and the baselines too; the same test windows as :meth:`full`."""
+        """A longer, larger run for the training command (``python -m motionlab.apps.training trajevae
+        --config long``): 20 times the full profile's steps (8,000, batches of 64), TrajeVAE twice as wide
+        (64, latent 16, 16 DCT components, 4 heads) and the baselines too; the same test windows as
+        :meth:`full`."""
         return cls(
             trajevae=TrajeVAEConfig(n_frames=60, width=64, latent_dim=16, dct_components=16, heads=4),
             gru=RecurrentConfig(n_frames=60, hidden=128),

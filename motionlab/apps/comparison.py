@@ -138,8 +138,7 @@ def _select(n: int | None, count: int) -> slice:
 
 def motion_cell_methods(benchmark: Benchmark, test: CommonTest) -> dict[str, Method]:
     """Chapter 04's Motion Cell, given each test clip's action and body type."""
-    from motionlab.models.motion_cell.denoise import prepare_training_data
-    from motionlab.models.motion_cell.experiment import ExperimentConfig, runs
+    from motionlab.models.motion_cell.experiment import ExperimentConfig, prepare_training_data, runs
 
     cfg = ExperimentConfig.current()
     data = prepare_training_data(benchmark.train, benchmark.val, cfg, progress=False)

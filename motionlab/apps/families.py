@@ -1,6 +1,6 @@
 """The model families the training command knows: each chapter's experiment, its data sets and evaluation.
 
-A :class:`Family` ties the command (:mod:`motionlab.train.cli`) to one chapter's
+A :class:`Family` ties the command (:mod:`motionlab.apps.training`) to one chapter's
 ``motionlab.models.<family>.experiment`` module, which it uses as the chapter does: the same
 ``ExperimentConfig`` (``quick()``, ``full()`` or the longer ``long()``), the same ``runs(cfg, ...)`` (each a
 :class:`~motionlab.train.many.Run` that trains through the checkpoint cache) and the chapter's own
@@ -155,7 +155,7 @@ class _MotionCellData:
 
 def _motion_cell_data(cfg: Any) -> _MotionCellData:
     from motionlab.evaluation.benchmark import load_benchmark, prepare_evaluators
-    from motionlab.models.motion_cell.denoise import prepare_training_data
+    from motionlab.models.motion_cell.experiment import prepare_training_data
 
     benchmark = load_benchmark()
     judges = prepare_evaluators(("conv", "gru"), processes=1).result(progress=False)

@@ -1,4 +1,5 @@
-"""``python -m motionlab.train FAMILY ...``: train one run of a chapter's model family, longer or elsewhere.
+"""``python -m motionlab.apps.training FAMILY ...``: train one run of a chapter's model family, longer or
+elsewhere.
 
 The command trains a chapter's run (``--run``, default the chapter's main model) from the chapter's own
 ``ExperimentConfig`` (``--config quick|full|long``, changed by ``--set key=value`` and ``--steps``), through
@@ -7,7 +8,7 @@ writes into ``--out``: ``run.json`` (what was trained, how, how long), ``history
 ``evaluation.json`` (the chapter's measurements) and ``checkpoints/<name>-<hash>.pt`` (the cache entry).
 
 Devices and processes: ``--device auto`` takes CUDA when there is one (bf16 mixed precision where the GPU
-supports it); ``torchrun --nproc-per-node N -m motionlab.train ...`` trains data-parallel
+supports it); ``torchrun --nproc-per-node N -m motionlab.apps.training ...`` trains data-parallel
 (:mod:`motionlab.train.execution`; gloo on the CPU, nccl on CUDA), the first process logging and writing.
 
 Bad arguments end the command with one line on stderr and exit code 2.
@@ -27,10 +28,10 @@ from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
-from motionlab.train.families import FAMILIES, DataSet, Family, jsonable
+from motionlab.apps.families import FAMILIES, DataSet, Family, jsonable
 
 CONFIGS = ("quick", "full", "long")
-PROG = "python -m motionlab.train"
+PROG = "python -m motionlab.apps.training"
 
 
 class UsageError(Exception):
@@ -424,3 +425,7 @@ def _end_processes() -> None:
 
     if dist.is_available() and dist.is_initialized():
         dist.destroy_process_group()
+
+
+if __name__ == "__main__":
+    sys.exit(main())
