@@ -218,15 +218,15 @@ def trajevae_methods(benchmark: Benchmark, test: CommonTest) -> dict[str, Method
     from motionlab.models.trajevae.experiment import (
         CACHE_NAMES,
         RUNGS,
-        CompletionRun,
         ExperimentConfig,
+        completion_run,
         ladder,
     )
     from motionlab.models.trajevae.masks import given_trajectories, joint_mask
 
     cfg = ExperimentConfig.current()
     name = RUNGS[-1]
-    run = CompletionRun(
+    run = completion_run(
         CACHE_NAMES[name],
         ladder(cfg.trajevae)[name],
         cfg.train,

@@ -4,8 +4,8 @@ A :class:`Run` is a frozen, picklable description: the name and model config tha
 to build the model, the loss, the batches, the :class:`~motionlab.train.TrainConfig` and what defines the
 data (the cache key's data part). Its caching and training are written here once::
 
-    run = Run("vae03_pose_vae", vae_cfg, partial(build_vae, vae_cfg), given(elbo_loss), poses.batches,
-              train_cfg, data={"x": fingerprint})
+    run = Run("vae03_pose_vae", vae_cfg, partial(build_seeded, partial(MLPVAE, vae_cfg)), given(elbo_loss),
+              partial(training_batches, poses), train_cfg, data={"x": fingerprint})
     run.is_cached()                    # would train() load it?
     model, result = run.train()        # load it from the cache, or build, train and cache it
 
@@ -49,7 +49,8 @@ class Run:
     Attributes:
         name: the checkpoint cache name, e.g. ``"mcell_mcell"``.
         model: the model's config (a dataclass or a dict): the cache key's model part.
-        build: ``build() -> nn.Module``, a fresh model with its initial weights drawn from its own seed.
+        build: ``build(seed) -> nn.Module``, a fresh model, its initial weights drawn from ``seed`` (the
+            training config's, so that one seed names the whole run).
         loss: ``loss() -> loss_fn``, the objective ``loss_fn(model, batch, step, coeffs)`` (made only when
             the run trains).
         batches: ``batches(model) -> BatchSource``, the training batches (made only when the run trains;
@@ -61,7 +62,7 @@ class Run:
 
     name: str
     model: Any
-    build: Callable[[], nn.Module]
+    build: Callable[[int], nn.Module]
     loss: Callable[[], LossFn]
     batches: Callable[[nn.Module], BatchSource]
     train_config: TrainConfig
@@ -85,7 +86,7 @@ class Run:
     def train(self, progress: bool | None = None) -> tuple[nn.Module, TrainResult]:
         """Build the model and load its cached weights, or train it (making its loss and batches) and cache
         it; return it in eval mode with its :class:`TrainResult`."""
-        model = self.build()
+        model = self.build(self.train_config.seed)
         cached = load_cached(self.name, self.model, self.train_config, self.data, model)
         if cached is not None:
             return model, cached

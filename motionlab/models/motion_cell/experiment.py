@@ -5,12 +5,11 @@ number of steps (the output-representation comparison has its own, shorter, equa
 evaluated by the same protocol (:mod:`.evaluate`). Every run is seeded by its own configs, so its weights
 do not depend on the process that trained it or on the order of the runs.
 
-The chapter's steps::
+The chapter's steps (and the training command's: :data:`CHAPTER`, :data:`DEFAULT_RUN`, :func:`load_data`,
+:func:`runs`, :func:`measure`, :func:`with_steps`, as in every family)::
 
-    evaluators = prepare_evaluators(("conv", "gru"))  # in two workers, while the denoiser trains here
-    data = prepare_training_data(benchmark.train, benchmark.val, cfg)
-    gru = evaluators.result()["gru"].model
-    trained = train_all(cfg, data, gru, gru.features(benchmark.train.positions))
+    data = load_data(cfg)        # denoised clips; the benchmark's evaluators train in two workers meanwhile
+    trained = train_all(cfg, data)
 """
 
 from __future__ import annotations
@@ -18,6 +17,7 @@ from __future__ import annotations
 import numbers
 from dataclasses import dataclass, field, replace
 from functools import partial
+from typing import Any
 
 import numpy as np
 import torch
@@ -25,7 +25,7 @@ from torch import Tensor, nn
 
 from motionlab import config
 from motionlab.data.store import MotionSet
-from motionlab.evaluation.benchmark import benchmark_evaluator
+from motionlab.evaluation.benchmark import benchmark_evaluator, evaluator_runs, load_benchmark
 from motionlab.evaluation.evaluator import Evaluator, data_fingerprint
 from motionlab.models.motion_cell.baselines import BaselineConfig, FrameBaseline, baseline_loss
 from motionlab.models.motion_cell.data import PoseCodec, WindowBatches, cut_windows, motion_cell_features
@@ -41,7 +41,7 @@ from motionlab.models.motion_cell.denoise import (
 )
 from motionlab.models.motion_cell.evaluate import ModelEvaluation, evaluate_model, rotation_error_degrees
 from motionlab.models.motion_cell.heads import OUTPUT_KINDS
-from motionlab.models.motion_cell.losses import ClassifierLoss, LossConfig, motion_cell_loss
+from motionlab.models.motion_cell.losses import ClassifierLoss, LossConfig, LossFn, motion_cell_loss
 from motionlab.models.motion_cell.model import MotionCellConfig, MotionCellModel
 from motionlab.train import (
     KLAnneal,
@@ -51,10 +51,13 @@ from motionlab.train import (
     build_seeded,
     train_or_load,
 )
-from motionlab.train.many import Trained, train_many
+from motionlab.train.many import Trained, train_many, train_meanwhile
 from motionlab.train.run import Run
 from motionlab.train.schedules import Schedule
 from motionlab.validation import check_scalar
+
+#: The chapter that trains this family, and its main run (the training command's default).
+CHAPTER, DEFAULT_RUN = "04_motion_cell", "mcell"
 
 #: The rows of the paper's Table 2 (run name -> label): the Motion Cell, its ablations, the baselines.
 TABLE = {
@@ -286,10 +289,10 @@ def uses_classifier(train_config: TrainConfig) -> bool:
 
 def make_loss(
     model: MotionCellConfig | BaselineConfig, loss: LossConfig, data: PreparedData, classifier: bool
-):
+) -> LossFn:
     """The objective of a run: the baselines' loss, or the Motion Cell's (eq. 25) with, if ``classifier``,
-    eq. 24's loss through the benchmark's frozen conv evaluator (cached by the chapter's
-    :func:`train_all`), its layer weights taken from the (denoised) training clips."""
+    eq. 24's loss through the benchmark's frozen conv evaluator (trained by :func:`load_data`), its layer
+    weights taken from the (denoised) training clips."""
     if isinstance(model, BaselineConfig):
         return baseline_loss(loss)
     if not classifier:
@@ -316,7 +319,7 @@ def motion_cell_run(
     return Run(
         name,
         {"model": model, "loss": loss},
-        partial(build_model, model, data.codec, train_config.seed),
+        partial(build_model, model, data.codec),
         partial(make_loss, model, loss, data, uses_classifier(train_config)),
         partial(_windows, data),
         train_config,
@@ -324,10 +327,11 @@ def motion_cell_run(
     )
 
 
-def runs(cfg: ExperimentConfig, data: PreparedData) -> dict[str, Run]:
+def runs(cfg: ExperimentConfig, data: ChapterData | PreparedData) -> dict[str, Run]:
     """The chapter's runs by name, the longest first: the Motion Cell and ERD trained ``collapse_steps``
     (``mcell_long``, ``erd_long``), the Motion Cell and its ablations (SL, NL, NC), the baselines, and the
-    three output heads (``output_quaternion`` ...)."""
+    three output heads (``output_quaternion`` ...), on ``data`` (the chapter's, or denoised data alone)."""
+    prepared = data.prepared if isinstance(data, ChapterData) else data
     mc, steps = cfg.motion_cell, cfg.steps
 
     def run(
@@ -341,7 +345,7 @@ def runs(cfg: ExperimentConfig, data: PreparedData) -> dict[str, Run]:
             lr_schedule=learning_rate_decay(steps),
             checkpoint_every=None,
         )
-        return motion_cell_run(f"mcell_{name}", model, loss, train, data)
+        return motion_cell_run(f"mcell_{name}", model, loss, train, prepared)
 
     def variant(
         name: str, model: MotionCellConfig, loss: LossConfig, classifier: float, steps: int = steps
@@ -385,6 +389,32 @@ def runs(cfg: ExperimentConfig, data: PreparedData) -> dict[str, Run]:
     }
 
 
+@dataclass(frozen=True)
+class ChapterData:
+    """What the chapter's runs train on and are measured with.
+
+    Attributes:
+        prepared: the denoised training data (:func:`prepare_training_data`).
+        evaluator: the benchmark's frozen GRU evaluator; reference: its features of the training clips
+            ``(N, D)`` (FID's reference).
+    """
+
+    prepared: PreparedData
+    evaluator: Evaluator
+    reference: Tensor
+
+
+def load_data(cfg: ExperimentConfig, progress: bool | None = None, processes: int = 2) -> ChapterData:
+    """The chapter's data: the benchmark's training split captured with noise and denoised
+    (:func:`prepare_training_data`, here), while ``processes`` workers train the benchmark's two evaluators
+    (the conv one for eq. 24's loss, the GRU one to measure); then the GRU evaluator and its reference."""
+    benchmark = load_benchmark()
+    prepare = partial(prepare_training_data, benchmark.train, benchmark.val, cfg, progress)
+    prepared = train_meanwhile(evaluator_runs(("conv", "gru")), prepare, processes)
+    gru = benchmark_evaluator("gru", progress=False)
+    return ChapterData(prepared, gru, gru.features(benchmark.train.positions))
+
+
 def table_row(
     name: str,
     model: nn.Module,
@@ -400,30 +430,33 @@ def table_row(
     return evaluate_model(model, evaluator, reference, n_per_combination, n_repeats, seed=0)
 
 
-def train_all(
-    cfg: ExperimentConfig,
-    data: PreparedData,
-    evaluator: Evaluator | None = None,
-    reference: Tensor | None = None,
-    processes: int = 2,
-    progress: bool | None = None,
-) -> dict[str, Trained[ModelEvaluation | None]]:
-    """Train (or load) every run of :func:`runs`, ``processes`` at a time in worker processes.
+def measure(cfg: ExperimentConfig, data: ChapterData, name: str, model: nn.Module) -> dict[str, Any]:
+    """The training command's measurement of run ``name``: its Table 2 row (IS, FID, accuracy, diversity,
+    ``{metric: {"mean", "ci95"}}``); the output-head runs have none."""
+    row = table_row(name, model, data.evaluator, data.reference, cfg.n_per_combination, cfg.n_repeats)
+    if row is None:
+        return {"table2": None, "note": f"{name!r} is not a row of the chapter's Table 2"}
+    return {"table2": {key: {"mean": mean, "ci95": half} for key, (mean, half) in row.row.items()}}
 
-    The conv evaluator must be cached first (the classifier loss loads it). With ``evaluator`` (the
-    benchmark's GRU evaluator) and ``reference`` (its features of the training clips ``(N, D)``), every
-    Table 2 model is measured in a worker as soon as it is trained: :attr:`Trained.measured` is its
-    :class:`~.evaluate.ModelEvaluation` (``None`` for the output-head runs).
-    """
-    if (evaluator is None) != (reference is None):
-        raise ValueError("train_all: give both evaluator and reference, or neither")
-    then = None
-    if evaluator is not None:
-        then = partial(
-            table_row,
-            evaluator=evaluator,
-            reference=reference,
-            n_per_combination=cfg.n_per_combination,
-            n_repeats=cfg.n_repeats,
-        )
+
+def with_steps(cfg: ExperimentConfig, name: str, steps: int) -> ExperimentConfig:
+    """``cfg`` with run ``name`` trained for ``steps`` optimiser steps (the output heads share
+    ``representation_steps``, the other runs ``steps``)."""
+    field_name = "representation_steps" if name.startswith("output_") else "steps"
+    return replace(cfg, **{field_name: steps})
+
+
+def train_all(
+    cfg: ExperimentConfig, data: ChapterData, processes: int = 2, progress: bool | None = None
+) -> dict[str, Trained[ModelEvaluation | None]]:
+    """Train (or load) every run of :func:`runs`, ``processes`` at a time in worker processes, and measure
+    every Table 2 model in a worker as soon as it is trained: :attr:`Trained.measured` is its
+    :class:`~.evaluate.ModelEvaluation` (``None`` for the output-head runs)."""
+    then = partial(
+        table_row,
+        evaluator=data.evaluator,
+        reference=data.reference,
+        n_per_combination=cfg.n_per_combination,
+        n_repeats=cfg.n_repeats,
+    )
     return train_many(runs(cfg, data), then=then, processes=processes, progress=progress)

@@ -16,18 +16,22 @@ from __future__ import annotations
 
 import math
 import numbers
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from functools import partial
+from typing import Any
 
+import torch
 from torch import nn
 
 from motionlab import config
+from motionlab.evaluation.benchmark import benchmark_evaluator, evaluator_runs, load_benchmark
 from motionlab.evaluation.evaluator import data_fingerprint
 from motionlab.models.vae.data import CLIP_FEATURES, POSE_FEATURES, BenchmarkClips, BenchmarkPoses
-from motionlab.models.vae.losses import elbo_loss, kl_weight
+from motionlab.models.vae.evaluate import sample_clip_metrics
+from motionlab.models.vae.losses import elbo_loss, elbo_terms, kl_weight
 from motionlab.models.vae.model import MLPVAE, VAEConfig
 from motionlab.train import TensorBatches, TrainConfig, build_seeded
-from motionlab.train.many import PendingTraining, Trained, start_training, train_many
+from motionlab.train.many import Trained, train_many
 from motionlab.train.run import Run, given
 from motionlab.validation import check_scalar
 
@@ -180,7 +184,7 @@ def vae_run(
     return Run(
         name,
         model,
-        partial(build_seeded, partial(MLPVAE, model), train_config.seed),
+        partial(build_seeded, partial(MLPVAE, model)),
         given(elbo_loss),
         partial(training_batches, data),
         train_config,
@@ -220,12 +224,42 @@ def runs(cfg: ExperimentConfig, n_actions: int) -> dict[str, Run]:
 def train_all(
     cfg: ExperimentConfig, n_actions: int, processes: int = 2, progress: bool | None = None
 ) -> dict[str, Trained]:
-    """Train (or load from the cache) every run of :func:`runs` on ``processes`` worker processes;
-    ``{name: Trained}``, every model loaded here."""
-    return train_many(runs(cfg, n_actions), processes=processes, progress=progress)
+    """Train (or load from the cache) every run of :func:`runs` on ``processes`` worker processes, the
+    benchmark's two evaluators after them on the same workers (this is the first chapter that needs them;
+    :func:`~motionlab.evaluation.benchmark.benchmark_evaluator` loads them); ``{name: Trained}`` of the
+    chapter's runs, every model loaded here."""
+    return train_many(
+        runs(cfg, n_actions), processes=processes, progress=progress, alongside=evaluator_runs()
+    )
 
 
-def start_all(cfg: ExperimentConfig, n_actions: int, processes: int = 2) -> PendingTraining:
-    """:func:`train_all` without waiting: hand the runs that are not cached to the workers and return at once
-    (``.result()`` waits and returns ``{name: Trained}``), so the chapter can queue more work behind them."""
-    return start_training(runs(cfg, n_actions), processes)
+#: The chapter that trains this family, and its main run (the training command's default).
+CHAPTER, DEFAULT_RUN = "03_variational_autoencoders", "cvae"
+
+#: The runs on clip windows (the others model single poses).
+CLIP_RUNS = ("cvae", "cvae_no_anneal")
+
+
+def load_data(cfg: ExperimentConfig) -> int:
+    """What :func:`runs` needs besides ``cfg``: the number of actions the clip CVAEs are conditioned on (the
+    benchmark's; each run loads its poses or clips where it trains)."""
+    return len(load_benchmark().train.action_names)
+
+
+def measure(cfg: ExperimentConfig, n_actions: int, name: str, model: nn.Module) -> dict[str, Any]:
+    """The training command's measurement of run ``name``: for the clip CVAEs the chapter's sample metrics
+    (section 2), for the pose models the held-out reconstruction and KL terms of the negative ELBO."""
+    if name in CLIP_RUNS:
+        evaluator = benchmark_evaluator("gru", progress=False)
+        codec, train, _ = cfg.clips.load()
+        reference = evaluator.features(codec.to_positions(train.features))
+        return {"samples": sample_clip_metrics(model, codec, evaluator, reference, cfg, seed=10)}
+    with torch.no_grad():
+        terms = elbo_terms(model, cfg.poses.load().test, generator=torch.Generator().manual_seed(0))
+    return {"test_" + term: float(terms[term]) for term in ("recon", "kl")}
+
+
+def with_steps(cfg: ExperimentConfig, name: str, steps: int) -> ExperimentConfig:
+    """``cfg`` with run ``name`` trained for ``steps`` steps (the clip CVAEs share ``clip_steps``, the pose
+    models ``pose_steps``)."""
+    return replace(cfg, clip_steps=steps) if name in CLIP_RUNS else replace(cfg, pose_steps=steps)
