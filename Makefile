@@ -23,7 +23,7 @@ course: $(STAMP)
 # The formatter and the linter (ruff, settings in pyproject.toml) first, then the tests and notebooks.
 test: $(STAMP)
 	MOTIONLAB_PROFILE=quick $(BIN)/python -m motionlab.course.logs test -- sh -c '\
-		$(BIN)/ruff format --check . && $(BIN)/ruff check . && \
+		$(BIN)/ruff format --check . && $(BIN)/ruff check . && $(BIN)/lint-imports && \
 		$(BIN)/python -m pytest -n 2 --dist loadscope --nbval-sanitize-with tests/nbval_sanitize.cfg'
 
 bench: $(STAMP)

@@ -5,7 +5,7 @@ import numpy as np
 import pytest
 import torch
 
-from motionlab.evaluation.comparison import FRAMES, measured_part, per_clip_apd, resample
+from motionlab.apps.comparison import FRAMES, measured_part, per_clip_apd, resample
 from motionlab.metrics import apd
 
 

@@ -8,9 +8,9 @@ from motionlab.data.representations import rotate_xy
 from motionlab.data.synthetic import generate
 from motionlab.evaluation import EVAL_FEATURES, body_frame_features, hip_heading
 from motionlab.evaluation.benchmark import Benchmark, labels_of, real_reference, sample_metrics
+from motionlab.evaluation.classifiers import ClassifierConfig, MotionClassifier
 from motionlab.evaluation.evaluator import EvaluatorConfig, load_evaluator
 from motionlab.metrics import mean_ci
-from motionlab.models.classifiers import ClassifierConfig, MotionClassifier
 
 
 @pytest.fixture(scope="module")

@@ -22,9 +22,9 @@ def test_experiment_config_profiles_and_runs():
         "MoGlow p=0.95 unscaled",
         experiment.BASELINE,
     ]
-    assert named["MoGlow p=0.5"].model_cfg.dropout == 0.5 and named["MoGlow p=0.5"].model_cfg.dropout_rescale
-    assert not named["MoGlow p=0.95 unscaled"].model_cfg.dropout_rescale
-    assert named[experiment.BASELINE].cache_name == "moglow_gaussian_ar"
+    assert named["MoGlow p=0.5"].model.dropout == 0.5 and named["MoGlow p=0.5"].model.dropout_rescale
+    assert not named["MoGlow p=0.95 unscaled"].model.dropout_rescale
+    assert named[experiment.BASELINE].name == "moglow_gaussian_ar"
     with pytest.raises(ValueError, match="ExperimentConfig: window"):
         experiment.ExperimentConfig(window=0)
     with pytest.raises(TypeError, match="ExperimentConfig: n_commands"):
@@ -47,7 +47,7 @@ def test_train_all_trains_then_loads_every_run(tmp_path, monkeypatch):
     )
     data = PreparedData(windows, windows, fit_scalers(windows))
     named = experiment.runs(cfg, data)
-    assert pickle.loads(pickle.dumps(named["MoGlow p=0.5"])).model_cfg == cfg.moglow(0.5)
+    assert pickle.loads(pickle.dumps(named["MoGlow p=0.5"])).model == cfg.moglow(0.5)
     assert not any(run.is_cached() for run in named.values())
     first = experiment.train_all(cfg, data, processes=1, progress=False)
     assert list(first) == ["MoGlow p=0.0", "MoGlow p=0.5", experiment.BASELINE]

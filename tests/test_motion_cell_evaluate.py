@@ -7,7 +7,7 @@ from test_motion_cell_common import clips, motion_cell, perturb
 
 from motionlab.data.datasets import Standardizer
 from motionlab.evaluation import EVAL_FEATURES, Evaluator, body_frame_features
-from motionlab.models.classifiers import ClassifierConfig, MotionClassifier
+from motionlab.evaluation.classifiers import ClassifierConfig, MotionClassifier
 from motionlab.models.motion_cell import evaluate as E
 from motionlab.models.motion_cell.experiment import table_row
 from motionlab.skeleton import average_skeleton

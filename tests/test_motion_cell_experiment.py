@@ -14,14 +14,15 @@ from motionlab.models.motion_cell.evaluate import rotation_error_degrees
 from motionlab.models.motion_cell.experiment import (
     TABLE,
     ExperimentConfig,
-    MotionCellRun,
     learning_rate_decay,
     motion_cell_schedules,
     runs,
+    uses_classifier,
 )
+from motionlab.train.run import Run
 
 
-def _runs() -> dict[str, MotionCellRun]:
+def _runs() -> dict[str, Run]:
     """The runs of the quick profile on stand-in data (a few short clips, not denoised)."""
     cfg = ExperimentConfig.quick()
     poses = codec().encode(features())
@@ -76,8 +77,8 @@ def test_ablations_change_one_thing_each():
     cfg = ExperimentConfig.quick()
     all_runs = _runs()
     full, sl, nl, nc = (all_runs[name] for name in ("mcell", "sl", "nl", "nc"))
-    assert sl.model.word_length == 1 and full.model.word_length == 3
-    assert nl.loss.joint_weights == "uniform" and full.loss.joint_weights == "impact"
+    assert sl.model["model"].word_length == 1 and full.model["model"].word_length == 3
+    assert nl.model["loss"].joint_weights == "uniform" and full.model["loss"].joint_weights == "impact"
     last = cfg.steps - 1
     assert (
         nc.train_config.schedules["classifier"](last) == 0
@@ -91,11 +92,13 @@ def test_baselines_and_output_heads():
     cfg = ExperimentConfig.quick()
     all_runs = _runs()
     erd, quaternet = all_runs["erd"], all_runs["quaternet"]
-    assert erd.model.kind == "erd" and set(erd.train_config.schedules) == {"input_noise"}
-    assert quaternet.model.kind == "quaternet" and set(quaternet.train_config.schedules) == {"sampling"}
-    assert erd.model.hidden_dim == cfg.motion_cell.hidden_dim
+    assert erd.model["model"].kind == "erd" and set(erd.train_config.schedules) == {"input_noise"}
+    assert quaternet.model["model"].kind == "quaternet" and set(quaternet.train_config.schedules) == {
+        "sampling"
+    }
+    assert erd.model["model"].hidden_dim == cfg.motion_cell.hidden_dim
     for kind in ("quaternion", "matrix", "axis_angle"):
-        assert all_runs[f"output_{kind}"].model.output == kind
+        assert all_runs[f"output_{kind}"].model["model"].output == kind
 
 
 def test_learning_rate_decay_and_motion_cell_schedules():
@@ -134,5 +137,5 @@ def test_cut_windows_and_rotation_error():
 
 
 def test_only_the_variants_with_a_classifier_loss_need_the_evaluator():
-    needing = {name for name, run in _runs().items() if run.uses_classifier}
+    needing = {name for name, run in _runs().items() if uses_classifier(run.train_config)}
     assert needing == {"mcell", "mcell_long", "nl", "sl"}

@@ -88,7 +88,7 @@ class _TinyEvaluator(torch.nn.Module):
 
     def __init__(self):
         super().__init__()
-        from motionlab.models.classifiers import ClassifierConfig, MotionClassifier
+        from motionlab.evaluation.classifiers import ClassifierConfig, MotionClassifier
 
         torch.manual_seed(0)
         heads = {"action": 6, "mode": 12, "body": 2}

@@ -244,7 +244,7 @@ def test_experiment_config_profiles_and_runs(data, monkeypatch):
         "odmo_odmo_prior_on_mu_extension",
         "odmo_r_e",
     ]
-    assert chapter["-L_traj"].cfg.use_trajectory_loss is False
+    assert chapter["-L_traj"].model.use_trajectory_loss is False
     with pytest.raises(ValueError, match="frame_stride"):
         runs(ExperimentConfig(model=CFG), data)
     with pytest.raises(ValueError, match="ExperimentConfig: homogeneity must be one of"):

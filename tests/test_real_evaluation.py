@@ -29,7 +29,7 @@ def evaluator(bench: real.RealBenchmark, tmp_path_factory: pytest.TempPathFactor
     mp.setenv("MOTIONLAB_BUILD", str(tmp_path_factory.mktemp("build")))
     try:
         cfg = real.RealEvaluatorConfig(steps=3, hidden=8, batch_size=16)
-        model, result = real.RealEvaluatorRun(bench.train, cfg).train(progress=False)
+        model, result = real.load_real_evaluator(bench.train, cfg, progress=False)
     finally:
         mp.undo()
     assert not result.loaded_from_cache

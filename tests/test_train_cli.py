@@ -1,5 +1,6 @@
-"""The training command ``python -m motionlab.train``: every family in the quick config, bad arguments, a
-2-process torchrun against one process with the same global batch, and resuming an interrupted run."""
+"""The training command ``python -m motionlab.apps.training``: every family in the quick config, bad
+arguments, a 2-process torchrun against one process with the same global batch, and resuming an interrupted
+run."""
 
 import json
 import os
@@ -12,8 +13,8 @@ import pytest
 import torch
 
 from motionlab import config, paths
-from motionlab.train.cli import main
-from motionlab.train.families import FAMILIES
+from motionlab.apps.families import FAMILIES, family
+from motionlab.apps.training import main
 from motionlab.train.runtime import Execution, executing, local_batch, shard_indices
 
 VENV_BIN = Path(sys.executable).parent
@@ -43,15 +44,17 @@ def state_dict(out: Path) -> dict[str, torch.Tensor]:
     return torch.load(checkpoint, weights_only=True)["state_dict"]
 
 
-@pytest.mark.parametrize("family", list(FAMILIES))
-def test_every_family_trains_and_is_measured_in_the_quick_config(family, tmp_path, monkeypatch, capsys):
+@pytest.mark.parametrize("name", list(FAMILIES))
+def test_every_family_trains_and_is_measured_in_the_quick_config(name, tmp_path, monkeypatch, capsys):
     monkeypatch.setenv("MOTIONLAB_PROFILE", "quick")
-    steps = 10 if family == "motion_cell" else 2  # the Motion Cell's schedules need 10 steps
+    steps = 10 if name == "motion_cell" else 2  # the Motion Cell's schedules need 10 steps
     out = tmp_path / "out"
-    code = main([family, "--config", "quick", "--steps", str(steps), "--device", "cpu", "--out", str(out)])
+    code = main([name, "--config", "quick", "--steps", str(steps), "--device", "cpu", "--out", str(out)])
     assert code == 0
     run = json.loads((out / "run.json").read_text())
-    assert run["family"] == family and run["run"] == FAMILIES[family].default_run
+    experiment = family(name)
+    assert run["family"] == name and run["run"] == experiment.DEFAULT_RUN
+    assert run["chapter"] == experiment.CHAPTER
     assert run["steps"] == steps and run["train_config"]["steps"] == steps
     history = json.loads((out / "history.json").read_text())
     assert len(history["step"]) == steps
@@ -72,8 +75,9 @@ def test_every_family_trains_and_is_measured_in_the_quick_config(family, tmp_pat
         (["vae", "--set", "clip_steps=many"], "expected a value of type int"),
         (["vae", "--set", "lr=-1"], "invalid configuration"),
         (["odmo", "--set", "model=3"], "is a nested config"),
-        (["odmo", "--data", "/no/such/folder"], "neither a data set of odmo"),
-        (["odmo", "--data", ".", "--config", "quick"], "holds neither"),
+        (["odmo_cmu", "--data", "/no/such/folder"], "no such folder"),
+        (["odmo_cmu", "--data", ".", "--config", "quick"], "holds neither"),
+        (["odmo", "--data", ".", "--config", "quick"], "not on a folder"),
         (["moglow", "--data", ".", "--config", "quick"], "not on a folder"),
         (["vae", "--data", "."], "not on a folder"),
         (["vae", "--steps", "0"], "expected a positive integer, got 0"),
@@ -106,7 +110,7 @@ def test_odmo_trains_on_a_downloaded_action2motion_folder(tmp_path, monkeypatch)
             rows.append(f"{name},{action}")
     (folder / "pose_clip.csv").write_text("\n".join(["motion,action_type", *rows]) + "\n")
     out = tmp_path / "out"
-    argv = ["odmo", "--data", str(folder), "--config", "quick", "--steps", "2", "--out", str(out)]
+    argv = ["odmo_cmu", "--data", str(folder), "--config", "quick", "--steps", "2", "--out", str(out)]
     assert main([*argv, "--skip-evaluation"]) == 0
     run = json.loads((out / "run.json").read_text())
     assert run["data"] == str(folder) and run["steps"] == 2
@@ -119,7 +123,7 @@ def test_help_lists_families_configs_and_data_sets(capsys):
         main(["--help"])
     assert exit_info.value.code == 0
     text = capsys.readouterr().out
-    for word in (*FAMILIES, "quick", "full", "long", "--data benchmark", "--data cmu", "--tensorboard"):
+    for word in (*FAMILIES, *FAMILIES.values(), "quick", "full", "long", "--data PATH", "--tensorboard"):
         assert word in text
 
 
@@ -154,7 +158,15 @@ def test_two_processes_under_torchrun_match_one_process_with_the_same_global_bat
     of the two gloo processes gets 32 samples of every batch, and the weights end where one process's do."""
     args = ["vae", "--config", "quick", "--run-name", "pose_ae", "--steps", "3", "--device", "cpu"]
     two = subprocess.Popen(
-        [str(VENV_BIN / "torchrun"), "--standalone", "--nproc-per-node", "2", "-m", "motionlab.train", *args]
+        [
+            str(VENV_BIN / "torchrun"),
+            "--standalone",
+            "--nproc-per-node",
+            "2",
+            "-m",
+            "motionlab.apps.training",
+            *args,
+        ]
         + ["--out", str(tmp_path / "two")],
         env=command_env(fresh_build(tmp_path / "build_two")),
         stdout=subprocess.DEVNULL,
@@ -188,9 +200,9 @@ class StopAt:
 
 def test_an_interrupted_run_resumes_to_the_weights_of_an_uninterrupted_one(tmp_path, monkeypatch):
     monkeypatch.setenv("MOTIONLAB_PROFILE", "quick")
-    family = FAMILIES["vae"]
-    cfg = family.steps(family.config("quick"), "pose_vae", 6)
-    run = family.runs(cfg, family.datasets["benchmark"].load(cfg))["pose_vae"]  # samples noise: RNG state
+    experiment = family("vae")
+    cfg = experiment.with_steps(experiment.ExperimentConfig.quick(), "pose_vae", 6)
+    run = experiment.runs(cfg, experiment.load_data(cfg))["pose_vae"]  # samples noise: RNG state
     results = {}
     for name in ("straight", "resumed"):
         monkeypatch.setenv("MOTIONLAB_BUILD", str(fresh_build(tmp_path / name)))
@@ -222,3 +234,16 @@ def test_the_chapter_loads_what_the_command_trained(tmp_path, monkeypatch):
     written = state_dict(out)
     for key, value in model.state_dict().items():
         assert torch.equal(written[key], value), key
+
+
+@pytest.mark.parametrize("name", list(FAMILIES))
+def test_every_family_module_has_the_same_few_names(name):
+    experiment = family(name)
+    assert (Path(__file__).resolve().parents[1] / "notebooks" / f"{experiment.CHAPTER}.ipynb").exists()
+    assert isinstance(experiment.DEFAULT_RUN, str)
+    for profile in ("quick", "full", "long"):
+        assert callable(getattr(experiment.ExperimentConfig, profile))
+    for function in ("load_data", "runs", "measure", "with_steps"):
+        assert callable(getattr(experiment, function)), function
+    with pytest.raises(ValueError, match="unknown family 'gan'"):
+        family("gan")

@@ -3,15 +3,15 @@
 from __future__ import annotations
 
 import functools
-from dataclasses import dataclass
 from pathlib import Path
 
 import pytest
 import torch
 from torch import nn
 
-from motionlab.train import TensorBatches, TrainConfig, TrainResult, build_seeded, is_cached, train_or_load
-from motionlab.train.many import Trained, start_training, train_many
+from motionlab.train import TensorBatches, TrainConfig, build_seeded
+from motionlab.train.many import Trained, train_many, train_meanwhile
+from motionlab.train.run import Run, given
 
 CFG = TrainConfig(steps=12, batch_size=8, lr=1e-2, checkpoint_every=None)
 
@@ -27,27 +27,24 @@ def _loss(model: nn.Module, x: torch.Tensor, step: int, coeffs: dict) -> dict:
     return {"loss": ((model(x) - x.sum(-1, keepdim=True)) ** 2).mean()}
 
 
-@dataclass(frozen=True)
-class LineRun:
+def _batches(width: int, model: nn.Module) -> TensorBatches:
+    return TensorBatches(torch.randn(32, width, generator=torch.Generator().manual_seed(width)))
+
+
+def _failing_loss(name: str):
+    raise RuntimeError(f"run {name} failed on purpose")
+
+
+def line_run(name: str, width: int, fail: bool = False) -> Run:
     """A toy run: a linear model of ``width`` inputs fitted to the sum of its inputs."""
-
-    name: str
-    width: int
-    fail: bool = False
-
-    def _parts(self) -> tuple[dict, TensorBatches]:
-        data = torch.randn(32, self.width, generator=torch.Generator().manual_seed(self.width))
-        return {"width": self.width}, TensorBatches(data)
-
-    def is_cached(self) -> bool:
-        return is_cached(self.name, self._parts()[0], CFG)
-
-    def train(self, progress: bool | None = None) -> tuple[nn.Module, TrainResult]:
-        if self.fail:
-            raise RuntimeError(f"run {self.name} failed on purpose")
-        model_config, batches = self._parts()
-        model = build_seeded(lambda: nn.Linear(self.width, 1), CFG.seed)
-        return model, train_or_load(self.name, model_config, model, _loss, batches, CFG, progress=False)
+    return Run(
+        name,
+        {"width": width},
+        functools.partial(build_seeded, functools.partial(nn.Linear, width, 1)),
+        functools.partial(_failing_loss, name) if fail else given(_loss),
+        functools.partial(_batches, width),
+        CFG,
+    )
 
 
 def weight_norm(scale: float, name: str, model: nn.Module) -> float:
@@ -55,7 +52,7 @@ def weight_norm(scale: float, name: str, model: nn.Module) -> float:
     return scale * float(model.weight.detach().norm())
 
 
-RUNS = {"wide": LineRun("line_wide", 6), "narrow": LineRun("line_narrow", 3)}
+RUNS = {"wide": line_run("line_wide", 6), "narrow": line_run("line_narrow", 3)}
 
 
 @pytest.mark.parametrize("processes", [1, 2])
@@ -87,15 +84,35 @@ def test_then_measures_every_model_where_it_was_trained(processes: int) -> None:
     assert [t.measured for t in cached.values()] == [t.measured for t in trained.values()]
 
 
-def test_start_training_returns_at_once_and_result_waits() -> None:
-    pending = start_training(RUNS, processes=2)
-    trained = pending.result()
-    assert pending.done()
-    assert set(trained) == set(RUNS) and all(t.seconds is not None for t in trained.values())
+@pytest.mark.parametrize("processes", [1, 2])
+def test_train_meanwhile_trains_while_the_work_runs_here(processes: int) -> None:
+    done = train_meanwhile(RUNS, functools.partial(sum, (1, 2)), processes=processes)
+    assert done == 3 and all(run.is_cached() for run in RUNS.values())
+
+
+@pytest.mark.parametrize("processes", [1, 2])
+def test_runs_alongside_are_trained_into_the_cache_not_loaded(processes: int) -> None:
+    extra = line_run("line_extra", 5)
+    trained = train_many({"wide": RUNS["wide"]}, processes=processes, alongside={"extra": extra})
+    assert list(trained) == ["wide"] and extra.is_cached()
+
+
+def test_a_run_loads_without_making_its_loss_or_batches() -> None:
+    first, result = line_run("line_lazy", 2).train()
+    assert not result.loaded_from_cache
+    again, cached = line_run("line_lazy", 2, fail=True).train()  # its loss would raise if it were made
+    assert cached.loaded_from_cache and torch.equal(first.weight, again.weight)
+
+
+def test_a_run_checks_its_fields() -> None:
+    with pytest.raises(TypeError, match="train_config must be a TrainConfig"):
+        Run("x", {}, nn.Identity, given(_loss), _batches, {"steps": 3})
+    with pytest.raises(TypeError, match="loss must be callable"):
+        Run("x", {}, nn.Identity, _loss(nn.Identity(), torch.zeros(1), 0, {}), _batches, CFG)
 
 
 @pytest.mark.parametrize("processes", [1, 2])
 def test_a_failed_run_raises_its_own_error(processes: int) -> None:
-    runs = {"ok": LineRun("line_ok", 2), "bad": LineRun("line_bad", 4, fail=True)}
+    runs = {"ok": line_run("line_ok", 2), "bad": line_run("line_bad", 4, fail=True)}
     with pytest.raises(RuntimeError, match="line_bad failed on purpose"):
         train_many(runs, processes=processes)

@@ -29,8 +29,8 @@ from motionlab.models.trajevae.experiment import (
     RUNGS,
     SCHEDULE_CHECK_KS,
     START_ORDER,
-    CompletionRun,
     ExperimentConfig,
+    completion_run,
     runs,
     schedule_check,
     train_all,
@@ -88,7 +88,7 @@ def test_training_is_cached_and_reproducible(clips):
     positions, rotations = clips
     cfg = ExperimentConfig.quick().trajevae
     train_cfg = TrainConfig(steps=3, batch_size=3, lr=1e-3, checkpoint_every=None)
-    run = CompletionRun("trajevae_test", cfg, train_cfg, positions, rotations)
+    run = completion_run("trajevae_test", cfg, train_cfg, positions, rotations)
     assert not run.is_cached()
     model, result = run.train(progress=False)
     assert not result.loaded_from_cache and set(result.history.terms) >= {"recon", "kl"}
@@ -103,8 +103,8 @@ def test_training_is_cached_and_reproducible(clips):
         model.sample(start, trajectories, 3, generator=g().manual_seed(1)),
         again.sample(start, trajectories, 3, generator=g().manual_seed(1)),
     )
-    with pytest.raises(TypeError, match="CompletionRun: model must be"):
-        CompletionRun("trajevae_test", {"width": 3}, train_cfg, positions, rotations)
+    with pytest.raises(TypeError, match="completion_run: model must be"):
+        completion_run("trajevae_test", {"width": 3}, train_cfg, positions, rotations)
 
 
 def _tiny_experiment(clips):
@@ -164,14 +164,14 @@ def test_experiment_config_profiles_and_model_dispatch(monkeypatch):
     quick = ExperimentConfig.quick()
     clips = torch.zeros(1, 60, 22, 3), torch.zeros(1, 60, 22, 4)
     run = {
-        kind: CompletionRun(f"trajevae_{kind}", getattr(quick, kind), quick.train, *clips)
+        kind: completion_run(f"trajevae_{kind}", getattr(quick, kind), quick.train, *clips)
         for kind in ("trajevae", "gru", "cvae_rnn")
     }
-    assert isinstance(run["trajevae"].build_model(), TrajeVAE)
-    assert isinstance(run["gru"].build_model(), GRUCompletion)
-    assert type(run["cvae_rnn"].build_model()).__name__ == "CVAERNN"
-    assert run["gru"].loss_function().__name__ == "gru_loss"
-    assert run["cvae_rnn"].loss_function().__name__ == "cvae_rnn_loss"
+    assert isinstance(run["trajevae"].build(0), TrajeVAE)
+    assert isinstance(run["gru"].build(0), GRUCompletion)
+    assert type(run["cvae_rnn"].build(0)).__name__ == "CVAERNN"
+    assert run["gru"].loss().__name__ == "gru_loss"
+    assert run["cvae_rnn"].loss().__name__ == "cvae_rnn_loss"
     full = ExperimentConfig.full()
     assert full.trajevae.n_frames == 60 and full.train.steps == 300 and quick.train.steps == 30
     monkeypatch.setenv("MOTIONLAB_PROFILE", "quick")

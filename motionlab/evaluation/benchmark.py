@@ -7,7 +7,6 @@ and the trained classifiers are cached under ``build/``, so only the first chapt
 
 from __future__ import annotations
 
-from dataclasses import dataclass
 from typing import Literal, NamedTuple
 
 import numpy as np
@@ -16,10 +15,9 @@ import torch
 from motionlab import config
 from motionlab.data.store import MotionSet
 from motionlab.data.synthetic import load_splits
-from motionlab.evaluation.evaluator import Evaluator, evaluator_is_cached, load_evaluator
+from motionlab.evaluation.evaluator import Evaluator, evaluator_run, load_evaluator
 from motionlab.metrics import diversity, fid, inception_score, mean_ci, multimodality
-from motionlab.train import TrainResult
-from motionlab.train.many import PendingTraining, start_training
+from motionlab.train.run import Run
 
 #: The benchmark's seed; each split draws from its own random streams of this seed.
 BENCHMARK_SEED = 0
@@ -55,31 +53,12 @@ def benchmark_evaluator(kind: Literal["conv", "gru"] = "gru", progress: bool | N
     return evaluator
 
 
-@dataclass(frozen=True)
-class EvaluatorRun:
-    """The training run of the benchmark's evaluator of ``kind`` (a :class:`~motionlab.train.many.Run`)."""
-
-    kind: Literal["conv", "gru"]
-
-    def is_cached(self) -> bool:
-        train = load_benchmark().train
-        return evaluator_is_cached(train.positions, labels_of(train), kind=self.kind)
-
-    def train(self, progress: bool | None = None) -> tuple[Evaluator, TrainResult]:
-        train = load_benchmark().train
-        return load_evaluator(train.positions, labels_of(train), kind=self.kind, progress=progress)
-
-
-def prepare_evaluators(
-    kinds: tuple[Literal["conv", "gru"], ...] = ("gru", "conv"), processes: int = 2
-) -> PendingTraining:
-    """Start training the benchmark's evaluators that are not cached yet, in worker processes.
-
-    Any chapter that measures with them may call this first; it returns at once, so the chapter can go on
-    with its own work. ``.result()`` waits and returns ``{kind: Trained}`` (the evaluators loaded here);
-    :func:`benchmark_evaluator` loads them from the cache afterwards.
-    """
-    return start_training({kind: EvaluatorRun(kind) for kind in kinds}, processes)
+def evaluator_runs(kinds: tuple[Literal["conv", "gru"], ...] = ("gru", "conv")) -> dict[str, Run]:
+    """``{kind: Run}``: the training runs of the benchmark's evaluators (:func:`benchmark_evaluator` loads
+    them from the cache). A chapter that measures with them trains them beside its own runs
+    (``train_many(..., alongside=evaluator_runs())``), so a fresh build pays for them on the worker cores."""
+    train = load_benchmark().train
+    return {kind: evaluator_run(train.positions, labels_of(train), kind=kind) for kind in kinds}
 
 
 def sample_metrics(

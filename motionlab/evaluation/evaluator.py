@@ -1,6 +1,6 @@
 """The frozen evaluation classifiers every chapter measures its samples with.
 
-:func:`load_evaluator` trains a :class:`~motionlab.models.classifiers.MotionClassifier` on the training
+:func:`load_evaluator` trains a :class:`~motionlab.evaluation.classifiers.MotionClassifier` on the training
 split of the synthetic data set (through the one training loop, so it is cached and trained once), and
 wraps it with its input standardisation in an :class:`Evaluator` that takes global joint positions::
 
@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import hashlib
 from dataclasses import dataclass
+from functools import partial
 from typing import Any, Literal
 
 import numpy as np
@@ -22,9 +23,10 @@ from torch import Tensor, nn
 
 from motionlab import config
 from motionlab.data.datasets import Standardizer
+from motionlab.evaluation.classifiers import HEADS, ClassifierConfig, MotionClassifier
 from motionlab.evaluation.inputs import EVAL_FEATURES, body_frame_features
-from motionlab.models.classifiers import HEADS, ClassifierConfig, MotionClassifier
-from motionlab.train import TrainConfig, TrainResult, is_cached, train_or_load
+from motionlab.train import TrainConfig, TrainResult
+from motionlab.train.run import Run, given
 
 #: Clips are evaluated in chunks of this many to bound memory.
 CHUNK = 256
@@ -211,16 +213,43 @@ def _training_identity(
     return f"evaluator_{cfg.kind}", {"evaluator": cfg, "classifier": classifier_cfg}, train_cfg, data_config
 
 
-def evaluator_is_cached(
+def _classifier_loss(model: Evaluator, batch, step: int, coeffs: dict[str, float]) -> dict[str, Tensor]:
+    return _classification_loss(model.classifier, batch, step, coeffs)
+
+
+def build_evaluator(classifier: ClassifierConfig, positions: Tensor, seed: int) -> Evaluator:
+    """An untrained :class:`Evaluator`: its standardisation fitted on the features of ``positions``
+    ``(N, T, 22, 3)``, its classifier's weights drawn after seeding torch's global generator with ``seed``."""
+    standardizer = Standardizer(EVAL_FEATURES).fit(body_frame_features(positions))
+    torch.manual_seed(seed)
+    return Evaluator(MotionClassifier(classifier), standardizer)
+
+
+def _evaluator_batches(positions: Tensor, labels: dict[str, Tensor], min_crop: int, model: Evaluator):
+    return _crop_batches(model.standardizer.transform(body_frame_features(positions)), labels, min_crop)
+
+
+def evaluator_run(
     positions: np.ndarray | Tensor,
     labels: dict[str, np.ndarray | Tensor],
     cfg: EvaluatorConfig | None = None,
     kind: Literal["conv", "gru"] = "gru",
-) -> bool:
-    """Whether :func:`load_evaluator` with these arguments would load from the cache (and not train)."""
+) -> Run:
+    """The :class:`~motionlab.train.run.Run` that trains an evaluation classifier on training clips
+    ``positions`` ``(N, T, 22, 3)`` with ``labels`` ``{"action": (N,), "mode": (N,), "body": (N,)}`` (any
+    subset of these heads); ``cfg``: by default :func:`default_evaluator_config` of ``kind``."""
     cfg = default_evaluator_config(kind) if cfg is None else cfg
     positions, label_tensors = _training_tensors(positions, labels)
-    return is_cached(*_training_identity(positions, label_tensors, cfg))
+    name, model_config, train_cfg, data_config = _training_identity(positions, label_tensors, cfg)
+    return Run(
+        name,
+        model_config,
+        partial(build_evaluator, model_config["classifier"], positions),
+        given(_classifier_loss),
+        partial(_evaluator_batches, positions, label_tensors, cfg.min_crop),
+        train_cfg,
+        data_config,
+    )
 
 
 def load_evaluator(
@@ -230,7 +259,7 @@ def load_evaluator(
     kind: Literal["conv", "gru"] = "gru",
     progress: bool | None = None,
 ) -> tuple[Evaluator, TrainResult]:
-    """Train (or load from the cache) an evaluation classifier on training clips.
+    """Train (or load from the cache) an evaluation classifier on training clips (:func:`evaluator_run`).
 
     Args:
         positions: training clips ``(N, T, 22, 3)``, global positions in metres.
@@ -241,23 +270,6 @@ def load_evaluator(
     Returns:
         The frozen :class:`Evaluator` (eval mode, no gradients needed) and the training result.
     """
-    cfg = default_evaluator_config(kind) if cfg is None else cfg
-    positions, label_tensors = _training_tensors(positions, labels)
-    name, model_config, train_cfg, data_config = _training_identity(positions, label_tensors, cfg)
-    features = body_frame_features(positions)
-    standardizer = Standardizer(EVAL_FEATURES).fit(features)
-    torch.manual_seed(cfg.seed)
-    evaluator = Evaluator(MotionClassifier(model_config["classifier"]), standardizer)
-    batches = _crop_batches(standardizer.transform(features), label_tensors, cfg.min_crop)
-    result = train_or_load(
-        name,
-        model_config,
-        evaluator,
-        lambda model, batch, step, coeffs: _classification_loss(model.classifier, batch, step, coeffs),
-        batches,
-        train_cfg,
-        data_config=data_config,
-        progress=progress,
-    )
+    evaluator, result = evaluator_run(positions, labels, cfg, kind).train(progress)
     evaluator.requires_grad_(False)
     return evaluator.eval(), result

@@ -24,6 +24,7 @@ from __future__ import annotations
 import numbers
 from collections.abc import Callable, Iterator
 from dataclasses import asdict, dataclass
+from functools import partial
 from pathlib import Path
 from typing import NamedTuple
 
@@ -46,10 +47,11 @@ from motionlab.data.cmu_mocap import (
 )
 from motionlab.data.datasets import Standardizer
 from motionlab.evaluation.benchmark import feature_metrics
+from motionlab.evaluation.classifiers import ClassifierConfig, MotionClassifier
 from motionlab.evaluation.evaluator import Evaluator, data_fingerprint
 from motionlab.metrics import Interval, mean_ci
-from motionlab.models.classifiers import ClassifierConfig, MotionClassifier
-from motionlab.train import TrainConfig, TrainResult, is_cached, train_or_load
+from motionlab.train import TrainConfig, TrainResult
+from motionlab.train.run import Run, given
 from motionlab.validation import check_scalar
 
 #: Columns of Table 2 that this protocol measures, in the paper's order.
@@ -204,58 +206,58 @@ def clips_fingerprint(clips: MocapClips) -> dict[str, str]:
     }
 
 
-@dataclass(frozen=True, eq=False)
-class RealEvaluatorRun:
-    """The training of the real-data evaluator on ``clips`` (a :class:`~motionlab.train.many.Run`)."""
+def build_real_evaluator(
+    classifier: ClassifierConfig, clips: MocapClips, cfg: RealEvaluatorConfig, seed: int
+) -> XYZEvaluator:
+    """An untrained real-data evaluator: its classifier's weights drawn after seeding torch's global
+    generator with ``seed``, its standardisation fitted on one random window per clip (``cfg.seed``)."""
+    torch.manual_seed(seed)
+    standardizer = Standardizer(IN_FEATURES)
+    evaluator = XYZEvaluator(MotionClassifier(classifier), standardizer, cfg.frame_stride)
+    first = random_windows(clips, cfg.window, cfg.seed).positions
+    standardizer.fit(
+        torch.as_tensor(canonical(first)[:, :: cfg.frame_stride], dtype=torch.float32).flatten(2)
+    )
+    return evaluator
 
-    clips: MocapClips
-    cfg: RealEvaluatorConfig
 
-    def _identity(self) -> tuple[str, dict, TrainConfig, dict]:
-        classifier = ClassifierConfig(
-            "gru",
-            IN_FEATURES,
-            {"action": len(self.clips.action_names)},
-            self.cfg.hidden,
-            self.cfg.feature_dim,
-        )
-        training = TrainConfig(
-            steps=self.cfg.steps,
-            batch_size=min(self.cfg.batch_size, self.clips.n_clips),
-            lr=self.cfg.lr,
-            grad_clip=1.0,
-            seed=self.cfg.seed,
-            checkpoint_every=None,
-        )
-        model = {"evaluator": asdict(self.cfg), "classifier": classifier}
-        return "evaluator_real", model, training, clips_fingerprint(self.clips)
+def _window_batches(clips: MocapClips, window: int, model: XYZEvaluator) -> WindowBatches:
+    return WindowBatches(clips, model, window)
 
-    def is_cached(self) -> bool:
-        return is_cached(*self._identity())
 
-    def train(self, progress: bool | None = None) -> tuple[XYZEvaluator, TrainResult]:
-        name, model_config, training, data_config = self._identity()
-        torch.manual_seed(self.cfg.seed)
-        standardizer = Standardizer(IN_FEATURES)
-        evaluator = XYZEvaluator(
-            MotionClassifier(model_config["classifier"]), standardizer, self.cfg.frame_stride
-        )
-        first = random_windows(self.clips, self.cfg.window, self.cfg.seed).positions
-        standardizer.fit(
-            torch.as_tensor(canonical(first)[:, :: self.cfg.frame_stride], dtype=torch.float32).flatten(2)
-        )
-        result = train_or_load(
-            name,
-            model_config,
-            evaluator,
-            _cross_entropy,
-            WindowBatches(self.clips, evaluator, self.cfg.window),
-            training,
-            data_config=data_config,
-            progress=progress,
-        )
-        evaluator.requires_grad_(False)
-        return evaluator.eval(), result
+def real_evaluator_run(clips: MocapClips, cfg: RealEvaluatorConfig) -> Run:
+    """The :class:`~motionlab.train.run.Run` that trains the real-data evaluator on ``clips``: random
+    windows of ``cfg.window`` frames, the clips' fingerprint as the cache key's data part."""
+    classifier = ClassifierConfig(
+        "gru", IN_FEATURES, {"action": len(clips.action_names)}, cfg.hidden, cfg.feature_dim
+    )
+    training = TrainConfig(
+        steps=cfg.steps,
+        batch_size=min(cfg.batch_size, clips.n_clips),
+        lr=cfg.lr,
+        grad_clip=1.0,
+        seed=cfg.seed,
+        checkpoint_every=None,
+    )
+    return Run(
+        "evaluator_real",
+        {"evaluator": asdict(cfg), "classifier": classifier},
+        partial(build_real_evaluator, classifier, clips, cfg),
+        given(_cross_entropy),
+        partial(_window_batches, clips, cfg.window),
+        training,
+        clips_fingerprint(clips),
+    )
+
+
+def load_real_evaluator(
+    clips: MocapClips, cfg: RealEvaluatorConfig, progress: bool | None = None
+) -> tuple[XYZEvaluator, TrainResult]:
+    """Train (or load from the cache) the real-data evaluator on ``clips`` (:func:`real_evaluator_run`);
+    returns it frozen (eval mode, no gradients needed) with its training result."""
+    evaluator, result = real_evaluator_run(clips, cfg).train(progress)
+    evaluator.requires_grad_(False)
+    return evaluator.eval(), result
 
 
 # ----------------------------------------------------------------------------------------------------

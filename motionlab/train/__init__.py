@@ -14,8 +14,9 @@ Modules: :mod:`~motionlab.train.schedules` (schedules), :mod:`~motionlab.train.t
 :mod:`~motionlab.train.loop` (:func:`train`), :mod:`~motionlab.train.state` (resumable state),
 :mod:`~motionlab.train.cache` (:func:`train_or_load`), :mod:`~motionlab.train.history` and
 :mod:`~motionlab.train.plot` (records and the figure), :mod:`~motionlab.train.runtime` (device, mixed
-precision and data-parallel processes of a run). The training command ``python -m motionlab.train FAMILY``
-(:mod:`~motionlab.train.cli`) trains one run of a chapter's family (:mod:`~motionlab.train.families`).
+precision and data-parallel processes of a run), :mod:`~motionlab.train.run` (:class:`~.run.Run`, the one
+description of a training run: its model, loss, batches, training config and cache key) and
+:mod:`~motionlab.train.many` (training several runs on both cores).
 """
 
 from motionlab.train.batches import TensorBatches

@@ -87,6 +87,17 @@ def _cached_result(name: str, identity: dict[str, Any], model: nn.Module) -> Tra
     return TrainResult(history, metrics, loaded_from_cache=True, path=checkpoint_path(name, identity))
 
 
+def load_cached(
+    name: str, model_config: Any, train_config: TrainConfig, data_config: Any | None, model: nn.Module
+) -> TrainResult | None:
+    """The cached run of these configs loaded into ``model`` (left in eval mode), or ``None`` (``model``
+    untouched) when the cache holds no usable entry: what :func:`train_or_load` does before training."""
+    cached = _cached_result(name, run_identity(model_config, train_config, data_config), model)
+    if cached is not None:
+        model.eval()
+    return cached
+
+
 def train_or_load(
     name: str,
     model_config: Any,
@@ -115,11 +126,10 @@ def train_or_load(
         :class:`TrainResult`; ``loaded_from_cache`` says whether training was skipped. A missing, corrupt
         or mismatching entry is retrained, never half-loaded.
     """
-    identity = run_identity(model_config, train_config, data_config)
-    cached = _cached_result(name, identity, model)
+    cached = load_cached(name, model_config, train_config, data_config, model)
     if cached is not None:
-        model.eval()
         return cached
+    identity = run_identity(model_config, train_config, data_config)
     resume = ResumeFile(resume_path(name, identity), identity)
     execution = current_execution()
     if not execution.resume and execution.is_main:

@@ -1,44 +1,29 @@
 """Training several runs on both cores: the one entry point every chapter uses.
 
-A *run* is one training of one model: a small picklable object (every model family defines its own, e.g.
-``MotionCellRun``) that says whether the checkpoint cache already holds it and how to train it or load it::
-
-    class Run(Protocol):
-        def is_cached(self) -> bool: ...
-        def train(self, progress: bool | None = None) -> tuple[nn.Module, TrainResult]: ...
+A *run* is one training of one model, a :class:`~motionlab.train.run.Run`: a frozen, picklable
+description that says whether the checkpoint cache already holds it and how to train it or load it.
 
 :func:`train_many` trains the runs that are not cached in worker processes, one thread each (see
 :mod:`motionlab.train.parallel`), optionally measures every model in a worker as soon as it is trained
 (``then``), and finally loads every model here from the cache. Runs are seeded by their own configs, so a
-model's weights do not depend on which process trained it, or when. :func:`start_training` does the same
-without waiting, so a chapter can go on with its own work while the workers train.
+model's weights do not depend on which process trained it, or when. :func:`train_meanwhile` trains runs in
+the workers while a function (a chapter's data preparation) runs here.
 """
 
 from __future__ import annotations
 
 from collections.abc import Callable, Mapping
-from concurrent.futures import Future
 from dataclasses import dataclass
-from typing import Any, Generic, Protocol, TypeVar
+from typing import Any, Generic, TypeVar
 
 from torch import nn
 
 from motionlab.train.loop import TrainResult
 from motionlab.train.parallel import outcome, run_chains, shared_pool, submit
+from motionlab.train.run import Run
 
 M = TypeVar("M")
-
-
-class Run(Protocol):
-    """One training run of one model (picklable, so that a worker process can run it)."""
-
-    def is_cached(self) -> bool:
-        """Whether :meth:`train` would load the model from the checkpoint cache instead of training it."""
-        ...
-
-    def train(self, progress: bool | None = None) -> tuple[nn.Module, TrainResult]:
-        """Train the model (or load it from the cache); return it and its :class:`TrainResult`."""
-        ...
+T = TypeVar("T")
 
 
 @dataclass
@@ -82,34 +67,25 @@ def _load_all(
     return trained
 
 
-class PendingTraining:
-    """Runs that :func:`start_training` handed to the workers; :meth:`result` waits for them."""
+def train_meanwhile(runs: Mapping[str, Run], work: Callable[[], T], processes: int = 2) -> T:
+    """Train the runs that are not cached in ``processes`` workers while ``work()`` runs here; wait for both
+    and return what ``work`` returned (the runs are in the cache then; load them with their ``train``).
 
-    def __init__(self, runs: Mapping[str, Run], futures: dict[str, Future[bytes]]) -> None:
-        self._runs = dict(runs)
-        self._futures = futures
-
-    def done(self) -> bool:
-        """Whether every run handed to the workers has finished."""
-        return all(future.done() for future in self._futures.values())
-
-    def result(self, progress: bool | None = None) -> dict[str, Trained]:
-        """Wait for the workers (raising the first failed run's exception), then load every model here."""
-        seconds = {name: outcome(future) for name, future in self._futures.items()}
-        return _load_all(self._runs, seconds, {}, progress)
-
-
-def start_training(runs: Mapping[str, Run], processes: int = 2) -> PendingTraining:
-    """Hand the runs that are not cached to ``processes`` workers and return at once.
-
-    Runs start in the order given (put the longest first). With one process nothing starts now: the runs
-    train in this process when :meth:`PendingTraining.result` is called.
+    A chapter's data preparation uses it to train the evaluators it needs on the idle cores. With one
+    process, ``work()`` runs first and the runs train here afterwards.
     """
-    futures = {}
-    if processes > 1:
-        pool = shared_pool(processes)
-        futures = {name: submit(pool, _train_run, run) for name, run in runs.items() if not run.is_cached()}
-    return PendingTraining(runs, futures)
+    if processes == 1:
+        done = work()
+        for run in runs.values():
+            if not run.is_cached():
+                _train_run(run)
+        return done
+    pool = shared_pool(processes)
+    futures = [submit(pool, _train_run, run) for run in runs.values() if not run.is_cached()]
+    done = work()
+    for future in futures:
+        outcome(future)  # raises the first failed run's exception
+    return done
 
 
 def train_many(
@@ -117,6 +93,7 @@ def train_many(
     then: Callable[[str, nn.Module], M] | None = None,
     processes: int = 2,
     progress: bool | None = None,
+    alongside: Mapping[str, Run] | None = None,
 ) -> dict[str, Trained[M]]:
     """Train (or load) every run, ``processes`` at a time in worker processes, and return them by name.
 
@@ -129,20 +106,21 @@ def train_many(
             on where or when it ran. Its result is :attr:`Trained.measured`.
         processes: worker processes (one thread each); with 1 everything runs here, in order.
         progress: progress bars while loading the models here (the workers show none).
+        alongside: more runs to train into the cache on the same workers after ``runs`` (e.g. the
+            benchmark's evaluators that a later section loads), neither measured nor loaded here.
 
     Returns:
         ``{name: Trained}`` in the order of ``runs``, every model loaded here from the cache.
     """
-    if then is None:
-        return start_training(runs, processes).result(progress)
     names = list(runs)
     pending = {name for name in names if not runs[name].is_cached()}
     chains = [
         ([(_train_run, (runs[name],))] if name in pending else [])
-        + [(_measure_run, (runs[name], name, then))]
+        + ([(_measure_run, (runs[name], name, then))] if then is not None else [])
         for name in names
     ]
+    chains += [[(_train_run, (run,))] for run in (alongside or {}).values() if not run.is_cached()]
     outcomes = run_chains(chains, processes)
     seconds = {name: outcome[0] for name, outcome in zip(names, outcomes) if name in pending}
-    measured = {name: outcome[-1] for name, outcome in zip(names, outcomes)}
+    measured = {name: outcome[-1] for name, outcome in zip(names, outcomes) if then is not None}
     return _load_all(runs, seconds, measured, progress)

@@ -2,7 +2,7 @@
 
 The chapters never set any of this: the default :class:`Execution` is one CPU process in full precision,
 and the loop then does exactly what it always did (bitwise the same weights). The training command
-(``python -m motionlab.train``) sets it around a run's ``train()`` call::
+(``python -m motionlab.apps.training``) sets it around a run's ``train()`` call::
 
     with executing(Execution(device=torch.device("cuda"), mixed_precision=True)):
         model, result = run.train()

@@ -10,26 +10,31 @@ from __future__ import annotations
 
 import numbers
 from dataclasses import asdict, dataclass, replace
+from functools import partial
 from typing import Any
 
+import torch
 from torch import nn
 
 from motionlab import config
-from motionlab.evaluation.benchmark import Benchmark
+from motionlab.evaluation.benchmark import Benchmark, load_benchmark
+from motionlab.metrics import mean_ci
 from motionlab.models.moglow.baselines import GaussianAR, GaussianARConfig
-from motionlab.models.moglow.data import MoGlowDataConfig, PreparedData, data_identity, prepare_data
-from motionlab.models.moglow.losses import nll_per_frame_loss
-from motionlab.models.moglow.model import MoGlow, MoGlowConfig
-from motionlab.train import (
-    PiecewiseLinear,
-    TensorBatches,
-    TrainConfig,
-    TrainResult,
-    build_seeded,
-    is_cached,
-    train_or_load,
+from motionlab.models.moglow.data import (
+    MoGlowDataConfig,
+    PreparedData,
+    clip_features,
+    data_identity,
+    prepare_data,
+    select_actions,
 )
+from motionlab.models.moglow.evaluate import control_mismatch, control_test
+from motionlab.models.moglow.losses import held_out_nll_per_window, nll_per_frame_loss
+from motionlab.models.moglow.model import MoGlow, MoGlowConfig
+from motionlab.models.moglow.sampling import generate_motion
+from motionlab.train import PiecewiseLinear, TensorBatches, TrainConfig, build_seeded
 from motionlab.train.many import Trained, train_many
+from motionlab.train.run import Run, given
 from motionlab.validation import check_scalar
 
 #: The run name of the Gaussian autoregressive baseline in :func:`runs`.
@@ -160,9 +165,10 @@ class ExperimentConfig(config.ProfileConfig):
 
     @classmethod
     def long(cls) -> ExperimentConfig:
-        """A longer, larger run for the training command (``python -m motionlab.train moglow --config long``):
-        20 times the full profile's steps (MoGlow 10,000, the baseline 6,000, the fixed-length Glow 6,000) and
-        twice MoGlow's LSTM and conditioning widths (128); data and evaluation as in :meth:`full`."""
+        """A longer, larger run for the training command (``python -m motionlab.apps.training moglow --config
+        long``): 20 times the full profile's steps (MoGlow 10,000, the baseline 6,000, the fixed-length Glow
+        6,000) and twice MoGlow's LSTM and conditioning widths (128); data and evaluation as in
+        :meth:`full`."""
         return replace(
             cls(),
             moglow_hidden=128,
@@ -209,60 +215,67 @@ class ExperimentConfig(config.ProfileConfig):
         return data_identity(self.data, self.window, self.stride)
 
 
-def load_data(cfg: ExperimentConfig, benchmark: Benchmark) -> PreparedData:
-    """The chapter's training and test windows and scalers (``cfg.data``, ``cfg.window``, ``cfg.stride``)."""
-    return prepare_data(benchmark, cfg.data, cfg.window, cfg.stride)
+def load_data(cfg: ExperimentConfig, benchmark: Benchmark | None = None) -> PreparedData:
+    """The chapter's training and test windows and scalers (``cfg.data``, ``cfg.window``, ``cfg.stride``) of
+    ``benchmark`` (default: the course benchmark)."""
+    return prepare_data(
+        load_benchmark() if benchmark is None else benchmark, cfg.data, cfg.window, cfg.stride
+    )
 
 
-@dataclass(frozen=True, eq=False)
-class AutoregressiveRun:
-    """One training of MoGlow or of the Gaussian baseline on the chapter's windows (a ``Run`` of
-    :mod:`motionlab.train.many`): build the model seeded, fit its linear predictor, then train or load it.
-
-    The fitted predictor's RMS residual (standard units) stays on the model as ``model.linear.fit_rms``.
-    """
-
-    cache_name: str
-    model_class: type[MoGlow] | type[GaussianAR]
-    model_cfg: MoGlowConfig | GaussianARConfig
-    train_cfg: TrainConfig
-    data: PreparedData
-    data_config: dict[str, Any]
-
-    def is_cached(self) -> bool:
-        """Whether :meth:`train` would load the model from the checkpoint cache."""
-        return is_cached(self.cache_name, self.model_cfg, self.train_cfg, self.data_config)
-
-    def train(self, progress: bool | None = None) -> tuple[nn.Module, TrainResult]:
-        """The trained (or cache-loaded) model, in eval mode, and its :class:`TrainResult`."""
-        model = build_seeded(lambda: self.model_class(self.model_cfg), self.train_cfg.seed)
-        model.initialize(self.data.train.pose, self.data.train.control)
-        result = train_or_load(
-            self.cache_name,
-            self.model_cfg,
-            model,
-            nll_per_frame_loss,
-            TensorBatches((self.data.train.pose, self.data.train.control)),
-            self.train_cfg,
-            data_config=self.data_config,
-            progress=progress,
-        )
-        return model, result
+def build_autoregressive(
+    model_class: type[MoGlow] | type[GaussianAR],
+    model_cfg: MoGlowConfig | GaussianARConfig,
+    data: PreparedData,
+    seed: int,
+) -> MoGlow | GaussianAR:
+    """MoGlow or the Gaussian baseline, its weights drawn from ``seed``, its linear predictor fitted to the
+    training windows (the fit's RMS residual, in standard units, stays on the model as
+    ``model.linear.fit_rms``)."""
+    model = build_seeded(partial(model_class, model_cfg), seed)
+    model.initialize(data.train.pose, data.train.control)
+    return model
 
 
-def runs(cfg: ExperimentConfig, data: PreparedData) -> dict[str, AutoregressiveRun]:
+def training_batches(data: PreparedData, model: nn.Module) -> TensorBatches:
+    """The chapter's training windows: poses and controls."""
+    return TensorBatches((data.train.pose, data.train.control))
+
+
+def autoregressive_run(
+    name: str,
+    model_class: type[MoGlow] | type[GaussianAR],
+    model_cfg: MoGlowConfig | GaussianARConfig,
+    train_config: TrainConfig,
+    data: PreparedData,
+    data_identity: dict[str, Any],
+) -> Run:
+    """The :class:`~motionlab.train.run.Run` of MoGlow or of the Gaussian baseline on the chapter's windows
+    (``data_identity``, what defines them, is the cache key's data part)."""
+    return Run(
+        name,
+        model_cfg,
+        partial(build_autoregressive, model_class, model_cfg, data),
+        given(nll_per_frame_loss),
+        partial(training_batches, data),
+        train_config,
+        data_identity,
+    )
+
+
+def runs(cfg: ExperimentConfig, data: PreparedData) -> dict[str, Run]:
     """MoGlow at every rate of ``cfg.dropout_rates`` and, unscaled, of ``cfg.unscaled_rates``
     (:func:`moglow_name`), then the Gaussian baseline (:data:`BASELINE`): the chapter's runs in the order to
     start them (MoGlow trains longest)."""
     identity = cfg.data_identity()
     variants = [(rate, True) for rate in cfg.dropout_rates] + [(rate, False) for rate in cfg.unscaled_rates]
     named = {
-        moglow_name(rate, rescale): AutoregressiveRun(
+        moglow_name(rate, rescale): autoregressive_run(
             "moglow", MoGlow, cfg.moglow(rate, rescale), cfg.moglow_train(), data, identity
         )
         for rate, rescale in variants
     }
-    named[BASELINE] = AutoregressiveRun(
+    named[BASELINE] = autoregressive_run(
         "moglow_gaussian_ar", GaussianAR, cfg.baseline(), cfg.baseline_train(), data, identity
     )
     return named
@@ -273,6 +286,44 @@ def train_all(
 ) -> dict[str, Trained]:
     """Train (or load) every run of :func:`runs`, ``processes`` at a time, and return them by name."""
     return train_many(runs(cfg, data), processes=processes, progress=progress)
+
+
+#: The chapter that trains this family, and its main run (the training command's default).
+CHAPTER, DEFAULT_RUN = "06_moglow", moglow_name(0.95)
+
+
+def _interval(values: Any) -> dict[str, float]:
+    mean, half = mean_ci(values)
+    return {"mean": float(mean), "ci95": float(half)}
+
+
+def measure(cfg: ExperimentConfig, data: PreparedData, name: str, model: nn.Module) -> dict[str, Any]:
+    """The training command's measurement of run ``name``: the chapter's held-out NLL per frame and the
+    control test's mismatch on the zero-latent path (a diverging sample is reported, not hidden)."""
+    test = load_benchmark().test
+    test_set = select_actions(test, cfg.data.actions)
+    test_raw = clip_features(test, cfg.data, augment=False)
+    out: dict[str, Any] = {"test_nll_per_frame": _interval(held_out_nll_per_window(model, data.test).numpy())}
+    names = [str(action) for action in test_set.action_names]
+    history = model.cfg.history
+    commands = control_test(test_raw, test_set.action, names, cfg.n_commands, history, cfg.piece_seconds)
+    try:
+        motion = generate_motion(
+            model, data.scalers, commands.control, commands.seed, 0.0, torch.Generator().manual_seed(0)
+        )
+    except ValueError as error:
+        out["control_mismatch_zero_latent"] = f"generation diverged: {error}"
+        return out
+    mismatch = control_mismatch(motion.pose[:, history:], motion.control[:, history:])
+    out["control_mismatch_zero_latent"] = _interval(mismatch.numpy())
+    return out
+
+
+def with_steps(cfg: ExperimentConfig, name: str, steps: int) -> ExperimentConfig:
+    """``cfg`` with run ``name`` trained for ``steps`` steps (the baseline's ``baseline_train_steps``, every
+    MoGlow's ``moglow_train_steps``)."""
+    field_name = "baseline_train_steps" if name == BASELINE else "moglow_train_steps"
+    return replace(cfg, **{field_name: steps})
 
 
 # ----------------------------------------------------------------------------------------------------
@@ -351,9 +402,20 @@ class RealLocomotionConfig(config.ProfileConfig):
         )
 
 
+def train_real(
+    cfg: RealLocomotionConfig,
+    data: PreparedData,
+    clips_identity: dict[str, Any],
+    processes: int = 2,
+    progress: bool | None = None,
+) -> dict[str, Trained]:
+    """Train (or load) the runs of :func:`real_runs`, ``processes`` at a time, and return them by name."""
+    return train_many(real_runs(cfg, data, clips_identity), processes=processes, progress=progress)
+
+
 def real_runs(
     cfg: RealLocomotionConfig, data: PreparedData, clips_identity: dict[str, Any]
-) -> dict[str, AutoregressiveRun]:
+) -> dict[str, Run]:
     """MoGlow and the Gaussian baseline on prepared real windows (:func:`~.data.prepare_real`); the cache key
     holds ``clips_identity`` (what identifies the training clips) and the window settings."""
     pose_dim, control_dim = data.train.pose.shape[-1], data.train.control.shape[-1]
@@ -375,10 +437,10 @@ def real_runs(
         dropout=0.0,
     )
     return {
-        "MoGlow": AutoregressiveRun(
+        "MoGlow": autoregressive_run(
             "real_moglow", MoGlow, moglow, cfg.schedule(cfg.moglow_train_steps), data, identity
         ),
-        BASELINE: AutoregressiveRun(
+        BASELINE: autoregressive_run(
             "real_moglow_gaussian_ar",
             GaussianAR,
             baseline,

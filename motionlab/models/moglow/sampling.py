@@ -39,7 +39,6 @@ import warnings
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from typing import (  # TorchScript reads these annotations: no ``from __future__ import annotations``
-    TYPE_CHECKING,
     Any,
     NamedTuple,
     Protocol,
@@ -54,9 +53,6 @@ from motionlab.models.moglow.conditioning import check_pose_control, frame_condi
 from motionlab.models.moglow.coupling import FrameCoupling
 from motionlab.models.moglow.data import CONTROL_DIM, MoGlowFeatures, Scalers
 from motionlab.validation import check_scalar, check_tensor
-
-if TYPE_CHECKING:
-    from motionlab.models.moglow.model import MoGlow
 
 FrameStep = Callable[[int, Tensor, Any], tuple[Tensor, Any]]
 """``step(t, cond_t (B, cond_dim), state) -> (pose_t (B, P), state)``: generated frame ``t`` (0-based)."""
@@ -90,7 +86,7 @@ def sampling_setup(
 
 @torch.no_grad()
 def sample_plain(
-    model: "MoGlow",
+    model: torch.nn.Module,
     control: Tensor,
     seed_pose: Tensor,
     temperature: float = 1.0,
@@ -99,7 +95,7 @@ def sample_plain(
     """MoGlow's generation loop, written to be read: poses ``(B, N, P)`` in standard units.
 
     Args:
-        model: a MoGlow.
+        model: a :class:`~motionlab.models.moglow.model.MoGlow`.
         control: ``(B, tau + N, C)``: the seed frames' controls, then those of the frames to generate.
         seed_pose: ``(B, tau, P)``, the poses that start the history.
         temperature, generator: as for :meth:`MoGlow.sample <motionlab.models.moglow.model.MoGlow.sample>`,

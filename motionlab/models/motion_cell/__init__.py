@@ -15,7 +15,7 @@ Modules, in the order the chapter uses them:
 from motionlab.models.motion_cell.baselines import BaselineConfig, FrameBaseline, baseline_loss
 from motionlab.models.motion_cell.data import PoseCodec, WindowBatches, motion_cell_features
 from motionlab.models.motion_cell.denoise import DenoiserConfig, DenoisingAutoencoder, noisy_features
-from motionlab.models.motion_cell.experiment import ExperimentConfig, MotionCellRun, runs, train_all
+from motionlab.models.motion_cell.experiment import ExperimentConfig, motion_cell_run, runs, train_all
 from motionlab.models.motion_cell.losses import ClassifierLoss, LossConfig, motion_cell_loss
 from motionlab.models.motion_cell.model import MotionCellConfig, MotionCellModel
 
@@ -29,7 +29,7 @@ __all__ = [
     "LossConfig",
     "MotionCellConfig",
     "MotionCellModel",
-    "MotionCellRun",
+    "motion_cell_run",
     "PoseCodec",
     "WindowBatches",
     "baseline_loss",

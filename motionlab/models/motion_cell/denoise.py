@@ -5,7 +5,7 @@ Real capture is noisy (jitter on every frame, spikes where markers were lost). O
 clean, so the chapter plays the whole story: the training split is "captured" through the noise model
 of :mod:`motionlab.data.noise`, a denoiser is trained on *other* clips whose clean version we know (the
 validation split, with fresh noise), and the denoised training split is what every model learns from
-(:func:`prepare_training_data`).
+(:func:`~.experiment.prepare_training_data`).
 
 The autoencoder reads pose vectors ``(B, T, 90)`` as 90 channels over time: two conv layers down to a
 bottleneck and two back up, every layer keeping the frame count (kernel ``k``, padding ``k // 2``). Its
@@ -19,32 +19,24 @@ from __future__ import annotations
 
 import numbers
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, NamedTuple
+from typing import NamedTuple
 
 import numpy as np
 import torch
 from torch import Tensor, nn
 
-from motionlab import config
 from motionlab.data.noise import ROTATION_NOISE, NoiseConfig, add_position_noise, add_rotation_noise
-from motionlab.data.store import MotionSet
-from motionlab.evaluation.evaluator import data_fingerprint
 from motionlab.geometry import quat_normalize
 from motionlab.models.motion_cell.data import (
     PoseCodec,
     WindowBatches,
-    cut_windows,
     motion_cell_features,
     pose_dim,
 )
-from motionlab.models.motion_cell.evaluate import rotation_error_degrees
 from motionlab.models.motion_cell.heads import OutputHead, PosePrediction, assemble_pose
 from motionlab.models.motion_cell.losses import LossConfig, LossFn, joint_weights, norm_loss, pose_loss
-from motionlab.train import TensorBatches, TrainConfig, TrainResult, build_seeded, train_or_load
+from motionlab.train import TrainResult
 from motionlab.validation import check_scalar, check_tensor
-
-if TYPE_CHECKING:
-    from motionlab.models.motion_cell.experiment import ExperimentConfig
 
 #: Noise on the root position: 0.5 mm jitter, no spikes. The pelvis is tracked by a rigid cluster of markers,
 #: far better than single joints, and the root channels are velocities (frame differences), which magnify
@@ -196,64 +188,3 @@ class PreparedData(NamedTuple):
     denoiser: nn.Module
     denoiser_result: TrainResult
     errors: dict[str, float]
-
-
-def prepare_training_data(
-    train: MotionSet, val: MotionSet, cfg: ExperimentConfig, progress: bool | None = None
-) -> PreparedData:
-    """Capture the training split with noise, train the denoiser on the validation split (or load it from
-    the checkpoint cache), and denoise the capture.
-
-    Args:
-        train, val: the benchmark's training and validation splits (clean clips).
-        cfg: the chapter's :class:`~.experiment.ExperimentConfig` (the denoiser, its training, the window).
-        progress: the denoiser's progress bar.
-    """
-    captured = noisy_features(train.rotations, train.positions, CAPTURE_SEED)
-    codec = PoseCodec(train.offsets, train.parents.tolist()).fit(captured)
-    clean_val = codec.encode(motion_cell_features(val.rotations, val.positions))
-    rng = np.random.default_rng(DENOISER_DATA_SEED)
-    noisy_val = torch.cat(
-        [codec.encode(noisy_features(val.rotations, val.positions, rng)) for _ in range(cfg.denoiser_copies)]
-    )
-    pairs = TensorBatches(
-        (
-            cut_windows(noisy_val, cfg.window),
-            cut_windows(clean_val.repeat(cfg.denoiser_copies, 1, 1), cfg.window),
-        )
-    )
-    loss_cfg = LossConfig()
-    train_cfg = TrainConfig(
-        steps=cfg.denoiser_steps,
-        batch_size=min(cfg.denoiser_batch, len(pairs)),
-        lr=cfg.denoiser_lr,
-        checkpoint_every=None,
-    )
-    own_codec = codec.copy()
-    with config.threads(DENOISER_THREADS):
-        denoiser = build_seeded(lambda: DenoisingAutoencoder(cfg.denoiser, own_codec), train_cfg.seed)
-        result = train_or_load(
-            "mcell_denoiser",
-            {"model": cfg.denoiser, "loss": loss_cfg},
-            denoiser,
-            denoiser_loss(loss_cfg),
-            pairs,
-            train_cfg,
-            data_config={
-                "val": data_fingerprint(noisy_val.numpy()),
-                "codec": data_fingerprint(captured.numpy()),
-                "window": cfg.window,
-            },
-            progress=progress,
-        )
-    captured_poses = codec.encode(captured)
-    denoised = denoiser.denoise(captured_poses)
-    clean = codec.encode(motion_cell_features(train.rotations, train.positions))
-    errors = {
-        "captured": rotation_error_degrees(codec, captured_poses, clean),
-        "denoised": rotation_error_degrees(codec, denoised, clean),
-    }
-    batches = WindowBatches(denoised, train.action, train.body, cfg.window)
-    return PreparedData(
-        codec, captured_poses, batches, data_fingerprint(denoised.numpy()), denoiser, result, errors
-    )

@@ -5,12 +5,11 @@ number of steps (the output-representation comparison has its own, shorter, equa
 evaluated by the same protocol (:mod:`.evaluate`). Every run is seeded by its own configs, so its weights
 do not depend on the process that trained it or on the order of the runs.
 
-The chapter's steps::
+The chapter's steps (and the training command's: :data:`CHAPTER`, :data:`DEFAULT_RUN`, :func:`load_data`,
+:func:`runs`, :func:`measure`, :func:`with_steps`, as in every family)::
 
-    evaluators = prepare_evaluators(("conv", "gru"))  # in two workers, while the denoiser trains here
-    data = prepare_training_data(benchmark.train, benchmark.val, cfg)
-    gru = evaluators.result()["gru"].model
-    trained = train_all(cfg, data, gru, gru.features(benchmark.train.positions))
+    data = load_data(cfg)        # denoised clips; the benchmark's evaluators train in two workers meanwhile
+    trained = train_all(cfg, data)
 """
 
 from __future__ import annotations
@@ -18,25 +17,47 @@ from __future__ import annotations
 import numbers
 from dataclasses import dataclass, field, replace
 from functools import partial
+from typing import Any
 
+import numpy as np
 import torch
 from torch import Tensor, nn
 
 from motionlab import config
-from motionlab.evaluation.benchmark import benchmark_evaluator
-from motionlab.evaluation.evaluator import Evaluator
+from motionlab.data.store import MotionSet
+from motionlab.evaluation.benchmark import benchmark_evaluator, evaluator_runs, load_benchmark
+from motionlab.evaluation.evaluator import Evaluator, data_fingerprint
 from motionlab.models.motion_cell.baselines import BaselineConfig, FrameBaseline, baseline_loss
-from motionlab.models.motion_cell.data import PoseCodec
-from motionlab.models.motion_cell.denoise import DenoiserConfig, PreparedData
-from motionlab.models.motion_cell.evaluate import ModelEvaluation, evaluate_model
+from motionlab.models.motion_cell.data import PoseCodec, WindowBatches, cut_windows, motion_cell_features
+from motionlab.models.motion_cell.denoise import (
+    CAPTURE_SEED,
+    DENOISER_DATA_SEED,
+    DENOISER_THREADS,
+    DenoiserConfig,
+    DenoisingAutoencoder,
+    PreparedData,
+    denoiser_loss,
+    noisy_features,
+)
+from motionlab.models.motion_cell.evaluate import ModelEvaluation, evaluate_model, rotation_error_degrees
 from motionlab.models.motion_cell.heads import OUTPUT_KINDS
-from motionlab.models.motion_cell.losses import ClassifierLoss, LossConfig, motion_cell_loss
+from motionlab.models.motion_cell.losses import ClassifierLoss, LossConfig, LossFn, motion_cell_loss
 from motionlab.models.motion_cell.model import MotionCellConfig, MotionCellModel
-from motionlab.train import KLAnneal, LinearRamp, TrainConfig, TrainResult, build_seeded, train_or_load
-from motionlab.train import is_cached as cache_entry_exists
-from motionlab.train.many import Trained, train_many
+from motionlab.train import (
+    KLAnneal,
+    LinearRamp,
+    TensorBatches,
+    TrainConfig,
+    build_seeded,
+    train_or_load,
+)
+from motionlab.train.many import Trained, train_many, train_meanwhile
+from motionlab.train.run import Run
 from motionlab.train.schedules import Schedule
 from motionlab.validation import check_scalar
+
+#: The chapter that trains this family, and its main run (the training command's default).
+CHAPTER, DEFAULT_RUN = "04_motion_cell", "mcell"
 
 #: The rows of the paper's Table 2 (run name -> label): the Motion Cell, its ablations, the baselines.
 TABLE = {
@@ -150,13 +171,74 @@ class ExperimentConfig(config.ProfileConfig):
 
     @classmethod
     def long(cls) -> ExperimentConfig:
-        """A longer, larger run for the training command (``python -m motionlab.train motion_cell --config
-        long``): the Motion Cell at :class:`MotionCellConfig`'s own sizes (hidden 128, words of 64), 20 times
-        the full profile's steps (6,000; the output heads 1,600; the longer mean-collapse runs 10,000); the
-        same denoiser and evaluation as :meth:`full`."""
+        """A longer, larger run for the training command (``python -m motionlab.apps.training motion_cell
+        --config long``): the Motion Cell at :class:`MotionCellConfig`'s own sizes (hidden 128, words of 64),
+        20 times the full profile's steps (6,000; the output heads 1,600; the longer mean-collapse runs
+        10,000); the same denoiser and evaluation as :meth:`full`."""
         return cls(
             motion_cell=MotionCellConfig(), steps=6_000, representation_steps=1_600, collapse_steps=10_000
         )
+
+
+def prepare_training_data(
+    train: MotionSet, val: MotionSet, cfg: ExperimentConfig, progress: bool | None = None
+) -> PreparedData:
+    """Capture the training split with noise, train the denoiser on the validation split (or load it from
+    the checkpoint cache), and denoise the capture.
+
+    Args:
+        train, val: the benchmark's training and validation splits (clean clips).
+        cfg: the chapter's :class:`ExperimentConfig` (the denoiser, its training, the window).
+        progress: the denoiser's progress bar.
+    """
+    captured = noisy_features(train.rotations, train.positions, CAPTURE_SEED)
+    codec = PoseCodec(train.offsets, train.parents.tolist()).fit(captured)
+    clean_val = codec.encode(motion_cell_features(val.rotations, val.positions))
+    rng = np.random.default_rng(DENOISER_DATA_SEED)
+    noisy_val = torch.cat(
+        [codec.encode(noisy_features(val.rotations, val.positions, rng)) for _ in range(cfg.denoiser_copies)]
+    )
+    pairs = TensorBatches(
+        (
+            cut_windows(noisy_val, cfg.window),
+            cut_windows(clean_val.repeat(cfg.denoiser_copies, 1, 1), cfg.window),
+        )
+    )
+    loss_cfg = LossConfig()
+    train_cfg = TrainConfig(
+        steps=cfg.denoiser_steps,
+        batch_size=min(cfg.denoiser_batch, len(pairs)),
+        lr=cfg.denoiser_lr,
+        checkpoint_every=None,
+    )
+    own_codec = codec.copy()
+    with config.threads(DENOISER_THREADS):
+        denoiser = build_seeded(lambda: DenoisingAutoencoder(cfg.denoiser, own_codec), train_cfg.seed)
+        result = train_or_load(
+            "mcell_denoiser",
+            {"model": cfg.denoiser, "loss": loss_cfg},
+            denoiser,
+            denoiser_loss(loss_cfg),
+            pairs,
+            train_cfg,
+            data_config={
+                "val": data_fingerprint(noisy_val.numpy()),
+                "codec": data_fingerprint(captured.numpy()),
+                "window": cfg.window,
+            },
+            progress=progress,
+        )
+    captured_poses = codec.encode(captured)
+    denoised = denoiser.denoise(captured_poses)
+    clean = codec.encode(motion_cell_features(train.rotations, train.positions))
+    errors = {
+        "captured": rotation_error_degrees(codec, captured_poses, clean),
+        "denoised": rotation_error_degrees(codec, denoised, clean),
+    }
+    batches = WindowBatches(denoised, train.action, train.body, cfg.window)
+    return PreparedData(
+        codec, captured_poses, batches, data_fingerprint(denoised.numpy()), denoiser, result, errors
+    )
 
 
 def learning_rate_decay(steps: int) -> LinearRamp:
@@ -198,80 +280,63 @@ def build_model(cfg: MotionCellConfig | BaselineConfig, codec: PoseCodec, seed: 
     return build_seeded(lambda: network(cfg, own_codec), seed)
 
 
-@dataclass(frozen=True, eq=False)
-class MotionCellRun:
-    """One training run of the chapter (a :class:`~motionlab.train.many.Run`): a Motion Cell (or ablation,
-    or output head) or a baseline on the denoised training data.
-
-    Attributes:
-        name: the checkpoint's name; model, loss, train_config: the model, loss and training configs;
-        data: the denoised training data (its fingerprint and the window length enter the cache key).
-    """
-
-    name: str
-    model: MotionCellConfig | BaselineConfig
-    loss: LossConfig
-    train_config: TrainConfig
-    data: PreparedData
-
-    @property
-    def uses_classifier(self) -> bool:
-        """Whether the run trains with the classifier loss of eq. 24 (and so needs the conv evaluator)."""
-        ramp = self.train_config.schedules.get("classifier")
-        return ramp is not None and ramp(self.train_config.steps) > 0
-
-    def _cache_key(self) -> tuple[dict, TrainConfig, dict]:
-        data_config = {"poses": self.data.fingerprint, "window": self.data.batches.length}
-        return {"model": self.model, "loss": self.loss}, self.train_config, data_config
-
-    def is_cached(self) -> bool:
-        model_config, train_config, data_config = self._cache_key()
-        return cache_entry_exists(self.name, model_config, train_config, data_config)
-
-    def _classifier_loss(self) -> ClassifierLoss:
-        """Eq. 24's loss with the benchmark's frozen conv evaluator, its layer weights taken from the
-        (denoised) training clips."""
-        batches, codec = self.data.batches, self.data.codec
-        with torch.no_grad():
-            positions = codec.positions(batches.poses, batches.body)
-        return ClassifierLoss(benchmark_evaluator("conv", progress=False), positions)
-
-    def train(self, progress: bool | None = None) -> tuple[nn.Module, TrainResult]:
-        """Train the model (or load it from the checkpoint cache).
-
-        The classifier loss, which needs the conv evaluator (cached by
-        :func:`~motionlab.evaluation.benchmark.prepare_evaluators`), is built only when the run trains, so
-        loading a model costs no evaluator and no pass over the training clips.
-        """
-        if isinstance(self.model, BaselineConfig):
-            loss_fn = baseline_loss(self.loss)
-        else:
-            classifier = self._classifier_loss() if self.uses_classifier and not self.is_cached() else None
-            loss_fn = motion_cell_loss(self.loss, classifier)
-        model = build_model(self.model, self.data.codec, self.train_config.seed)
-        model_config, train_config, data_config = self._cache_key()
-        result = train_or_load(
-            self.name,
-            model_config,
-            model,
-            loss_fn,
-            self.data.batches,
-            train_config,
-            data_config=data_config,
-            progress=progress,
-        )
-        return model, result
+def uses_classifier(train_config: TrainConfig) -> bool:
+    """Whether a run of ``train_config`` trains with the classifier loss of eq. 24 (and so needs the conv
+    evaluator)."""
+    ramp = train_config.schedules.get("classifier")
+    return ramp is not None and ramp(train_config.steps) > 0
 
 
-def runs(cfg: ExperimentConfig, data: PreparedData) -> dict[str, MotionCellRun]:
+def make_loss(
+    model: MotionCellConfig | BaselineConfig, loss: LossConfig, data: PreparedData, classifier: bool
+) -> LossFn:
+    """The objective of a run: the baselines' loss, or the Motion Cell's (eq. 25) with, if ``classifier``,
+    eq. 24's loss through the benchmark's frozen conv evaluator (trained by :func:`load_data`), its layer
+    weights taken from the (denoised) training clips."""
+    if isinstance(model, BaselineConfig):
+        return baseline_loss(loss)
+    if not classifier:
+        return motion_cell_loss(loss, None)
+    batches, codec = data.batches, data.codec
+    with torch.no_grad():
+        positions = codec.positions(batches.poses, batches.body)
+    return motion_cell_loss(loss, ClassifierLoss(benchmark_evaluator("conv", progress=False), positions))
+
+
+def _windows(data: PreparedData, model: nn.Module) -> WindowBatches:
+    return data.batches
+
+
+def motion_cell_run(
+    name: str,
+    model: MotionCellConfig | BaselineConfig,
+    loss: LossConfig,
+    train_config: TrainConfig,
+    data: PreparedData,
+) -> Run:
+    """The :class:`~motionlab.train.run.Run` of a Motion Cell (or ablation, or output head) or a baseline on
+    the denoised training data (its fingerprint and the window length are the cache key's data part)."""
+    return Run(
+        name,
+        {"model": model, "loss": loss},
+        partial(build_model, model, data.codec),
+        partial(make_loss, model, loss, data, uses_classifier(train_config)),
+        partial(_windows, data),
+        train_config,
+        {"poses": data.fingerprint, "window": data.batches.length},
+    )
+
+
+def runs(cfg: ExperimentConfig, data: ChapterData | PreparedData) -> dict[str, Run]:
     """The chapter's runs by name, the longest first: the Motion Cell and ERD trained ``collapse_steps``
     (``mcell_long``, ``erd_long``), the Motion Cell and its ablations (SL, NL, NC), the baselines, and the
-    three output heads (``output_quaternion`` ...)."""
+    three output heads (``output_quaternion`` ...), on ``data`` (the chapter's, or denoised data alone)."""
+    prepared = data.prepared if isinstance(data, ChapterData) else data
     mc, steps = cfg.motion_cell, cfg.steps
 
     def run(
         name: str, model: MotionCellConfig | BaselineConfig, loss: LossConfig, steps: int, schedules: dict
-    ) -> MotionCellRun:
+    ) -> Run:
         train = TrainConfig(
             steps=steps,
             batch_size=cfg.batch_size,
@@ -280,15 +345,15 @@ def runs(cfg: ExperimentConfig, data: PreparedData) -> dict[str, MotionCellRun]:
             lr_schedule=learning_rate_decay(steps),
             checkpoint_every=None,
         )
-        return MotionCellRun(f"mcell_{name}", model, loss, train, data)
+        return motion_cell_run(f"mcell_{name}", model, loss, train, prepared)
 
     def variant(
         name: str, model: MotionCellConfig, loss: LossConfig, classifier: float, steps: int = steps
-    ) -> MotionCellRun:
+    ) -> Run:
         schedules = motion_cell_schedules(steps, cfg.beta, classifier, cfg.word_drop)
         return run(name, model, loss, steps, schedules)
 
-    def baseline(kind: str, schedules: dict, name: str | None = None, steps: int = steps) -> MotionCellRun:
+    def baseline(kind: str, schedules: dict, name: str | None = None, steps: int = steps) -> Run:
         model = BaselineConfig(
             kind=kind,
             n_joints=mc.n_joints,
@@ -300,11 +365,11 @@ def runs(cfg: ExperimentConfig, data: PreparedData) -> dict[str, MotionCellRun]:
         )
         return run(name or kind, model, LossConfig(), steps, schedules)
 
-    def erd(steps: int, name: str = "erd") -> MotionCellRun:
+    def erd(steps: int, name: str = "erd") -> Run:
         noise = LinearRamp(0, int(0.6 * steps), 0.0, cfg.input_noise)
         return baseline("erd", {"input_noise": noise}, name, steps)
 
-    def output_head(kind: str) -> MotionCellRun:
+    def output_head(kind: str) -> Run:
         short = cfg.representation_steps
         schedules = motion_cell_schedules(short, cfg.beta, 0.0, cfg.word_drop)
         return run(f"output_{kind}", replace(mc, output=kind), LossConfig(), short, schedules)
@@ -324,6 +389,32 @@ def runs(cfg: ExperimentConfig, data: PreparedData) -> dict[str, MotionCellRun]:
     }
 
 
+@dataclass(frozen=True)
+class ChapterData:
+    """What the chapter's runs train on and are measured with.
+
+    Attributes:
+        prepared: the denoised training data (:func:`prepare_training_data`).
+        evaluator: the benchmark's frozen GRU evaluator; reference: its features of the training clips
+            ``(N, D)`` (FID's reference).
+    """
+
+    prepared: PreparedData
+    evaluator: Evaluator
+    reference: Tensor
+
+
+def load_data(cfg: ExperimentConfig, progress: bool | None = None, processes: int = 2) -> ChapterData:
+    """The chapter's data: the benchmark's training split captured with noise and denoised
+    (:func:`prepare_training_data`, here), while ``processes`` workers train the benchmark's two evaluators
+    (the conv one for eq. 24's loss, the GRU one to measure); then the GRU evaluator and its reference."""
+    benchmark = load_benchmark()
+    prepare = partial(prepare_training_data, benchmark.train, benchmark.val, cfg, progress)
+    prepared = train_meanwhile(evaluator_runs(("conv", "gru")), prepare, processes)
+    gru = benchmark_evaluator("gru", progress=False)
+    return ChapterData(prepared, gru, gru.features(benchmark.train.positions))
+
+
 def table_row(
     name: str,
     model: nn.Module,
@@ -339,30 +430,33 @@ def table_row(
     return evaluate_model(model, evaluator, reference, n_per_combination, n_repeats, seed=0)
 
 
-def train_all(
-    cfg: ExperimentConfig,
-    data: PreparedData,
-    evaluator: Evaluator | None = None,
-    reference: Tensor | None = None,
-    processes: int = 2,
-    progress: bool | None = None,
-) -> dict[str, Trained[ModelEvaluation | None]]:
-    """Train (or load) every run of :func:`runs`, ``processes`` at a time in worker processes.
+def measure(cfg: ExperimentConfig, data: ChapterData, name: str, model: nn.Module) -> dict[str, Any]:
+    """The training command's measurement of run ``name``: its Table 2 row (IS, FID, accuracy, diversity,
+    ``{metric: {"mean", "ci95"}}``); the output-head runs have none."""
+    row = table_row(name, model, data.evaluator, data.reference, cfg.n_per_combination, cfg.n_repeats)
+    if row is None:
+        return {"table2": None, "note": f"{name!r} is not a row of the chapter's Table 2"}
+    return {"table2": {key: {"mean": mean, "ci95": half} for key, (mean, half) in row.row.items()}}
 
-    The conv evaluator must be cached first (the classifier loss loads it). With ``evaluator`` (the
-    benchmark's GRU evaluator) and ``reference`` (its features of the training clips ``(N, D)``), every
-    Table 2 model is measured in a worker as soon as it is trained: :attr:`Trained.measured` is its
-    :class:`~.evaluate.ModelEvaluation` (``None`` for the output-head runs).
-    """
-    if (evaluator is None) != (reference is None):
-        raise ValueError("train_all: give both evaluator and reference, or neither")
-    then = None
-    if evaluator is not None:
-        then = partial(
-            table_row,
-            evaluator=evaluator,
-            reference=reference,
-            n_per_combination=cfg.n_per_combination,
-            n_repeats=cfg.n_repeats,
-        )
+
+def with_steps(cfg: ExperimentConfig, name: str, steps: int) -> ExperimentConfig:
+    """``cfg`` with run ``name`` trained for ``steps`` optimiser steps (the output heads share
+    ``representation_steps``, the other runs ``steps``)."""
+    field_name = "representation_steps" if name.startswith("output_") else "steps"
+    return replace(cfg, **{field_name: steps})
+
+
+def train_all(
+    cfg: ExperimentConfig, data: ChapterData, processes: int = 2, progress: bool | None = None
+) -> dict[str, Trained[ModelEvaluation | None]]:
+    """Train (or load) every run of :func:`runs`, ``processes`` at a time in worker processes, and measure
+    every Table 2 model in a worker as soon as it is trained: :attr:`Trained.measured` is its
+    :class:`~.evaluate.ModelEvaluation` (``None`` for the output-head runs)."""
+    then = partial(
+        table_row,
+        evaluator=data.evaluator,
+        reference=data.reference,
+        n_per_combination=cfg.n_per_combination,
+        n_repeats=cfg.n_repeats,
+    )
     return train_many(runs(cfg, data), then=then, processes=processes, progress=progress)

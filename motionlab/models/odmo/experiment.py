@@ -1,11 +1,11 @@
 """Chapter 08's experiment: its sizes, its seven models, and training and measuring them on both cores.
 
-:class:`ExperimentConfig` holds every knob of the chapter (the base model's sizes, the training schedule,
-the sizes of the sample sets and which variant takes part in which table); :data:`VARIANTS` lists the seven
-models as changes to the base model's config; :func:`runs` gives one :class:`ODMORun` per variant, and
-:func:`train_all` trains them on both cores, measuring each in a worker as soon as it is trained
-(:func:`measure_variant`: its samplers, its rows of Tables 1-2 and, for the variants that take part,
-Table 3 (mode homogeneity, with our style purity beside it) and Table 4 (end-point control)). A
+:class:`ExperimentConfig` holds every knob of the chapter (the base model's sizes, the training schedule, the
+sizes of the sample sets and which variant takes part in which table); :data:`VARIANTS` lists the seven models
+as changes to the base model's config; :func:`runs` gives one :class:`~motionlab.train.run.Run` per variant,
+and :func:`train_all` trains them on both cores, measuring each in a worker as soon as it is trained
+(:func:`measure_variant`: its samplers, its rows of Tables 1-2 and, for the variants that take part, Table 3
+(mode homogeneity, with our style purity beside it) and Table 4 (end-point control)). A
 measurement loads its model from the checkpoint cache and every table is seeded by the config alone, so
 the numbers equal in-process calls of :mod:`~motionlab.models.odmo.evaluate`, wherever and whenever they ran.
 """
@@ -14,17 +14,21 @@ from __future__ import annotations
 
 import numbers
 import re
+from collections.abc import Mapping
 from dataclasses import dataclass, field, replace
 from functools import partial
+from typing import Any
 
 import numpy as np
 import torch
+from torch import nn
 
 from motionlab import config
+from motionlab.evaluation.benchmark import benchmark_evaluator, load_benchmark
 from motionlab.evaluation.evaluator import Evaluator, data_fingerprint
 from motionlab.evaluation.real import Protocol, table2_row
 from motionlab.metrics import Interval
-from motionlab.models.odmo.data import BalancedBatches, ODMOData, to_positions
+from motionlab.models.odmo.data import BalancedBatches, ODMOData, prepare, to_positions
 from motionlab.models.odmo.evaluate import (
     Reference,
     end_point_control,
@@ -35,8 +39,9 @@ from motionlab.models.odmo.evaluate import (
 from motionlab.models.odmo.losses import joint_objective
 from motionlab.models.odmo.model import ODMO, ODMOConfig
 from motionlab.models.odmo.sampling import ODMOSampler, encode_clips
-from motionlab.train import LinearRamp, TrainConfig, TrainResult, is_cached, train_or_load
+from motionlab.train import LinearRamp, TrainConfig
 from motionlab.train.many import Trained, train_many
+from motionlab.train.run import Run, given
 from motionlab.validation import check_choice, check_scalar
 
 #: The chapter's models, as changes to the base config (the base is ODMO as the chapter uses it: the paper's,
@@ -173,9 +178,9 @@ class ExperimentConfig(config.ProfileConfig):
 
     @classmethod
     def long(cls) -> ExperimentConfig:
-        """A longer, larger run for the training command (``python -m motionlab.train odmo --config long``):
-        20 times the full profile's steps (6,000) and generators of the paper's width (128 LSTM units, one
-        layer where the paper has two); the same sample sets as :meth:`full`."""
+        """A longer, larger run for the training command (``python -m motionlab.apps.training odmo --config
+        long``): 20 times the full profile's steps (6,000) and generators of the paper's width (128 LSTM
+        units, one layer where the paper has two); the same sample sets as :meth:`full`."""
         return cls(model=chapter_model(trajectory_hidden=128, motion_hidden=128), steps=6_000)
 
     def train_config(self) -> TrainConfig:
@@ -193,58 +198,47 @@ class ExperimentConfig(config.ProfileConfig):
         )
 
 
-@dataclass(frozen=True, eq=False)
-class ODMORun:
-    """One variant's training run (a :class:`~motionlab.train.many.Run`), cached as ``name``.
+def build_odmo(cfg: ODMOConfig, data: ODMOData, seed: int) -> ODMO:
+    """ODMO of ``cfg``, its weights drawn after seeding torch's global generator with ``seed``, its
+    standardiser fitted on ``data``."""
+    torch.manual_seed(seed)
+    return ODMO(cfg).fit_standardizer(data.features)
 
-    :meth:`train` builds the model of ``cfg`` (seeded by ``training.seed``), fits its standardiser on
-    ``data`` and trains it on class-balanced batches, or loads it from the checkpoint cache.
-    """
 
-    name: str
-    cfg: ODMOConfig
-    training: TrainConfig
-    data: ODMOData
+def balanced_batches(data: ODMOData, model: nn.Module) -> BalancedBatches:
+    """Class-balanced batches of the training clips."""
+    return BalancedBatches(data.features, data.action, model.cfg.n_classes)
 
-    def __post_init__(self) -> None:
-        shape = tuple(self.data.features.shape[1:])
-        if shape != (self.cfg.n_frames, self.cfg.feature_dim):
-            raise ValueError(
-                f"ODMORun: the config expects clips of {self.cfg.n_frames} frames x {self.cfg.feature_dim} "
-                f"features, the data has {shape}"
-            )
 
-    def data_config(self) -> dict:
-        """What defines the training data (part of the cache key)."""
-        return {
-            "features": data_fingerprint(self.data.features),
-            "action": data_fingerprint(self.data.action.float()),
-            "frame_stride": self.data.frame_stride,
-        }
-
-    def is_cached(self) -> bool:
-        return is_cached(self.name, self.cfg, self.training, self.data_config())
-
-    def train(self, progress: bool | None = None) -> tuple[ODMO, TrainResult]:
-        torch.manual_seed(self.training.seed)
-        model = ODMO(self.cfg).fit_standardizer(self.data.features)
-        batches = BalancedBatches(self.data.features, self.data.action, self.cfg.n_classes)
-        result = train_or_load(
-            self.name,
-            self.cfg,
-            model,
-            joint_objective,
-            batches,
-            self.training,
-            data_config=self.data_config(),
-            progress=progress,
+def odmo_run(name: str, cfg: ODMOConfig, train_config: TrainConfig, data: ODMOData) -> Run:
+    """A variant's :class:`~motionlab.train.run.Run`, cached as ``name``: ODMO of ``cfg`` (seeded by
+    ``train_config.seed``) on class-balanced batches of ``data`` (its fingerprints and frame stride are the
+    cache key's data part)."""
+    shape = tuple(data.features.shape[1:])
+    if shape != (cfg.n_frames, cfg.feature_dim):
+        raise ValueError(
+            f"odmo_run: the config expects clips of {cfg.n_frames} frames x {cfg.feature_dim} features, the "
+            f"data has {shape}"
         )
-        return model, result
+    return Run(
+        name,
+        cfg,
+        partial(build_odmo, cfg, data),
+        given(joint_objective),
+        partial(balanced_batches, data),
+        train_config,
+        {
+            "features": data_fingerprint(data.features),
+            "action": data_fingerprint(data.action.float()),
+            "frame_stride": data.frame_stride,
+        },
+    )
 
 
-def runs(cfg: ExperimentConfig, data: ODMOData) -> dict[str, ODMORun]:
+def runs(cfg: ExperimentConfig, data: ODMOData | ChapterData) -> dict[str, Run]:
     """Every variant's run, by variant name, in the order to start them: ``-L_es`` last, because its
     measurement is the shortest (one table row), so the other core waits least at the end."""
+    data = data.train if isinstance(data, ChapterData) else data
     if data.frame_stride != cfg.frame_stride:
         raise ValueError(
             f"runs: the data was prepared with frame_stride {data.frame_stride}, the config has "
@@ -253,7 +247,7 @@ def runs(cfg: ExperimentConfig, data: ODMOData) -> dict[str, ODMORun]:
     order = [name for name in VARIANTS if name != "-L_es"] + ["-L_es"]
     training = cfg.train_config()
     return {
-        name: ODMORun(cache_name(name), variant_config(name, cfg.model), training, data) for name in order
+        name: odmo_run(cache_name(name), variant_config(name, cfg.model), training, data) for name in order
     }
 
 
@@ -321,6 +315,46 @@ def train_all(
     measure = partial(measure_variant, data=data, reference=reference, cfg=cfg)
     trained = train_many(runs(cfg, data), then=measure, processes=processes, progress=progress)
     return {name: trained[name] for name in VARIANTS}
+
+
+#: The chapter that trains this family, and its main run (the training command's default).
+CHAPTER, DEFAULT_RUN = "08_contrastive_mode_discovery", "ODMO"
+
+
+@dataclass(frozen=True)
+class ChapterData:
+    """What the chapter's runs train on and are measured with: the prepared training clips ``train`` and the
+    benchmark's evaluator ``reference`` (:class:`~.evaluate.Reference`)."""
+
+    train: ODMOData
+    reference: Reference
+
+
+def load_data(cfg: ExperimentConfig) -> ChapterData:
+    """The benchmark's training clips prepared at ``cfg.frame_stride`` and the GRU evaluator's reference."""
+    benchmark = load_benchmark()
+    train = prepare(benchmark.train, cfg.frame_stride)
+    evaluator = benchmark_evaluator("gru", progress=False)
+    return ChapterData(
+        train, Reference.build(evaluator, benchmark.train, benchmark.val, train.floor_clearance)
+    )
+
+
+def measure(cfg: ExperimentConfig, data: ChapterData, name: str, model: nn.Module) -> dict[str, Any]:
+    """The training command's measurement of variant ``name``: its Tables 1-2 rows, and Tables 3-4 where
+    the chapter has them (:func:`measure_variant`)."""
+    measured = measure_variant(name, model, data.train, data.reference, cfg)
+    return {
+        "rows": measured.rows,
+        "mode_homogeneity": measured.homogeneity,
+        "style_purity": measured.purity,
+        "end_point": measured.end_point,
+    }
+
+
+def with_steps(cfg: ExperimentConfig, name: str, steps: int) -> ExperimentConfig:
+    """``cfg`` with every variant (``name`` too) trained for ``steps`` steps."""
+    return replace(cfg, steps=steps)
 
 
 # ----------------------------------------------------------------------------------------------------
@@ -407,7 +441,7 @@ class RealExperimentConfig(ExperimentConfig):
         return cls(steps=1000, draws=8, variants=REAL_VARIANTS)
 
 
-def real_runs(cfg: RealExperimentConfig, data: ODMOData) -> dict[str, ODMORun]:
+def real_runs(cfg: RealExperimentConfig, data: ODMOData) -> dict[str, Run]:
     """The runs of ``cfg.variants`` on prepared real windows, cached as ``real_<cache name>``."""
     if data.frame_stride != cfg.frame_stride:
         raise ValueError(
@@ -416,7 +450,7 @@ def real_runs(cfg: RealExperimentConfig, data: ODMOData) -> dict[str, ODMORun]:
         )
     training = cfg.train_config()
     return {
-        name: ODMORun(f"real_{cache_name(name)}", variant_config(name, cfg.model), training, data)
+        name: odmo_run(f"real_{cache_name(name)}", variant_config(name, cfg.model), training, data)
         for name in cfg.variants
     }
 
@@ -464,7 +498,11 @@ def train_real(
     protocol: Protocol,
     processes: int = 2,
     progress: bool | None = None,
+    alongside: Mapping[str, Run] | None = None,
 ) -> dict[str, Trained[RealMeasured]]:
-    """Train (or load) ``cfg.variants`` on real windows and measure each as soon as it is trained."""
+    """Train (or load) ``cfg.variants`` on real windows and measure each as soon as it is trained; the runs
+    ``alongside`` (chapter 10's locomotion models) train on the same workers behind them."""
     measure = partial(measure_real, data=data, evaluator=evaluator, protocol=protocol, cfg=cfg)
-    return train_many(real_runs(cfg, data), then=measure, processes=processes, progress=progress)
+    return train_many(
+        real_runs(cfg, data), then=measure, processes=processes, progress=progress, alongside=alongside
+    )

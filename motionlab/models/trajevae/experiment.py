@@ -7,7 +7,7 @@
   frames, one encoder ``q(z | Y)`` pulled towards ``N(0, I)``, no augmentation), **+ DCT**, **+ learnable
   prior** (posterior ``q_pose(z | X)`` and prior ``p_traj(z | Y)``), **+ augmentation** (random yaw),
   **+ masked future poses** (the posterior sees ``X ⊙ (1 - M)``), which is the full TrajeVAE.
-* :class:`CompletionRun` is one training run (a :class:`~motionlab.train.many.Run`); :func:`runs` names the
+* :func:`completion_run` is one training run (a :class:`~motionlab.train.run.Run`); :func:`runs` names the
   chapter's seven: the five rungs and the GRU and CVAE-RNN baselines.
 * :func:`train_all` trains them on both cores and sweeps every model over the number of given trajectories
   in a worker as soon as it is trained (:func:`sweep`), so the sweeps fill the core that the last training
@@ -21,6 +21,7 @@ import numbers
 from collections.abc import Sequence
 from dataclasses import dataclass, replace
 from functools import partial
+from typing import Any
 
 import numpy as np
 import torch
@@ -54,9 +55,10 @@ from motionlab.models.trajevae.evaluate import (
 from motionlab.models.trajevae.losses import cvae_rnn_loss, gru_loss, trajevae_loss
 from motionlab.models.trajevae.masks import first_joints
 from motionlab.models.trajevae.model import TrajeVAE, TrajeVAEConfig
-from motionlab.train import PiecewiseLinear, TrainConfig, TrainResult, is_cached, train_or_load
+from motionlab.train import PiecewiseLinear, TrainConfig
 from motionlab.train.loop import LossFn
 from motionlab.train.many import Trained, train_many
+from motionlab.train.run import Run
 from motionlab.validation import check_scalar
 
 #: A completion model's config: TrajeVAE (any rung of the ladder) or a recurrent baseline.
@@ -167,9 +169,10 @@ class ExperimentConfig(config.ProfileConfig):
 
     @classmethod
     def long(cls) -> ExperimentConfig:
-        """A longer, larger run for the training command (``python -m motionlab.train trajevae --config
-        long``): 20 times the full profile's steps (8,000, batches of 64), TrajeVAE twice as wide (64, latent
-        16, 16 DCT components, 4 heads) and the baselines too; the same test windows as :meth:`full`."""
+        """A longer, larger run for the training command (``python -m motionlab.apps.training trajevae
+        --config long``): 20 times the full profile's steps (8,000, batches of 64), TrajeVAE twice as wide
+        (64, latent 16, 16 DCT components, 4 heads) and the baselines too; the same test windows as
+        :meth:`full`."""
         return cls(
             trajevae=TrajeVAEConfig(n_frames=60, width=64, latent_dim=16, dct_components=16, heads=4),
             gru=RecurrentConfig(n_frames=60, hidden=128),
@@ -197,77 +200,47 @@ def ladder(full: TrajeVAEConfig) -> dict[str, TrajeVAEConfig]:
     }
 
 
-@dataclass(frozen=True, eq=False)
-class CompletionRun:
-    """One training run of a completion model (a :class:`~motionlab.train.many.Run`; picklable).
+def build_model(model: ModelConfig, seed: int = 0) -> nn.Module:
+    """TrajeVAE for a :class:`TrajeVAEConfig`; the GRU (``latent_dim == 0``) or the CVAE-RNN for a
+    :class:`RecurrentConfig`. Their weights are drawn from the model config's own ``seed`` (part of the cache
+    key), so the training seed ``seed`` seeds only the batches and the loop."""
+    if isinstance(model, TrajeVAEConfig):
+        return TrajeVAE(model)
+    return CVAERNN(model) if model.latent_dim > 0 else GRUCompletion(model)
 
-    Attributes:
-        name: the checkpoint cache name, e.g. ``"trajevae_masked_future_poses"``.
-        model: the model's config (part of the cache key, with ``train`` and the clips' fingerprint).
-        train_config: steps, batch size, learning rate, ... of the one training loop.
-        positions, rotations: the training clips ``(N, T, J, 3)`` and ``(N, T, J, 4)`` at the chapter's frame
-            rate (:func:`~motionlab.models.trajevae.data.decimate`).
-    """
 
-    name: str
-    model: ModelConfig
-    train_config: TrainConfig
-    positions: Tensor
-    rotations: Tensor
+def loss_function(model: ModelConfig) -> LossFn:
+    """The model's training loss (see :mod:`motionlab.models.trajevae.losses`)."""
+    if isinstance(model, TrajeVAEConfig):
+        return trajevae_loss
+    return cvae_rnn_loss if model.latent_dim > 0 else gru_loss
 
-    def __post_init__(self) -> None:
-        where = "CompletionRun"
-        if not isinstance(self.model, (TrajeVAEConfig, RecurrentConfig)):
-            raise TypeError(
-                f"{where}: model must be a TrajeVAEConfig or RecurrentConfig, got {type(self.model).__name__}"
-            )
-        if not isinstance(self.train_config, TrainConfig):
-            raise TypeError(
-                f"{where}: train_config must be a TrainConfig, got {type(self.train_config).__name__}"
-            )
 
-    def build_model(self) -> nn.Module:
-        """TrajeVAE for a :class:`TrajeVAEConfig`; the GRU (``latent_dim == 0``) or the CVAE-RNN for a
-        :class:`RecurrentConfig` (seeded by the config)."""
-        if isinstance(self.model, TrajeVAEConfig):
-            return TrajeVAE(self.model)
-        return CVAERNN(self.model) if self.model.latent_dim > 0 else GRUCompletion(self.model)
+def _batches(batches: CompletionBatches, model: nn.Module) -> CompletionBatches:
+    return batches
 
-    def loss_function(self) -> LossFn:
-        """The model's training loss (see :mod:`motionlab.models.trajevae.losses`)."""
-        if isinstance(self.model, TrajeVAEConfig):
-            return trajevae_loss
-        return cvae_rnn_loss if self.model.latent_dim > 0 else gru_loss
 
-    def batches(self) -> CompletionBatches:
-        """The training batch source (masks and, if the config says so, the yaw augmentation)."""
-        return CompletionBatches(
-            self.positions, self.rotations, self.model.augment, self.model.keep_probability
+def completion_run(
+    name: str, model: ModelConfig, train_config: TrainConfig, positions: Tensor, rotations: Tensor
+) -> Run:
+    """The :class:`~motionlab.train.run.Run` of a completion model of config ``model`` on the training clips
+    ``positions`` ``(N, T, J, 3)`` and ``rotations`` ``(N, T, J, 4)`` at the chapter's frame rate
+    (:func:`~motionlab.models.trajevae.data.decimate`): masked batches (and, if the config says so, the yaw
+    augmentation); the clips' fingerprint and the frame step are the cache key's data part."""
+    if not isinstance(model, (TrajeVAEConfig, RecurrentConfig)):
+        raise TypeError(
+            f"completion_run: model must be a TrajeVAEConfig or RecurrentConfig, got {type(model).__name__}"
         )
-
-    def is_cached(self) -> bool:
-        return is_cached(self.name, self.model, self.train_config, self._data_config(self.batches()))
-
-    def train(self, progress: bool | None = None) -> tuple[nn.Module, TrainResult]:
-        """Train the model (or load it from the checkpoint cache); returns it in eval mode."""
-        model = self.build_model()
-        batches = self.batches()
-        result = train_or_load(
-            self.name,
-            self.model,
-            model,
-            self.loss_function(),
-            batches,
-            self.train_config,
-            data_config=self._data_config(batches),
-            progress=progress,
-        )
-        return model, result
-
-    @staticmethod
-    def _data_config(batches: CompletionBatches) -> dict:
-        """What defines the training data (part of the cache key): the clips' fingerprint, the frame step."""
-        return {"clips": data_fingerprint(batches.positions), "frame_step": FRAME_STEP}
+    batches = CompletionBatches(positions, rotations, model.augment, model.keep_probability)
+    return Run(
+        name,
+        model,
+        partial(build_model, model),
+        partial(loss_function, model),
+        partial(_batches, batches),
+        train_config,
+        {"clips": data_fingerprint(batches.positions), "frame_step": FRAME_STEP},
+    )
 
 
 def load_data(cfg: ExperimentConfig) -> CompletionData:
@@ -288,14 +261,14 @@ def load_data(cfg: ExperimentConfig) -> CompletionData:
     )
 
 
-def runs(cfg: ExperimentConfig, data: CompletionData) -> dict[str, CompletionRun]:
+def runs(cfg: ExperimentConfig, data: CompletionData) -> dict[str, Run]:
     """The chapter's seven runs ``{name: run}`` in :data:`START_ORDER`: the rungs of :func:`ladder` (named by
     :data:`RUNGS`), ``"GRU"`` and ``"CVAE-RNN"``."""
     if not isinstance(cfg, ExperimentConfig):
         raise TypeError(f"runs: cfg must be an ExperimentConfig, got {type(cfg).__name__}")
     models: dict[str, ModelConfig] = {**ladder(cfg.trajevae), "GRU": cfg.gru, "CVAE-RNN": cfg.cvae_rnn}
     return {
-        name: CompletionRun(
+        name: completion_run(
             CACHE_NAMES[name], models[name], cfg.train, data.train_positions, data.train_rotations
         )
         for name in START_ORDER
@@ -319,6 +292,28 @@ def train_all(cfg: ExperimentConfig, data: CompletionData, processes: int = 2) -
     """
     then = partial(sweep, windows=data.test_windows, multimodal=data.multimodal)
     return train_many(runs(cfg, data), then=then, processes=processes)
+
+
+#: The chapter that trains this family, and its main run (the training command's default).
+CHAPTER, DEFAULT_RUN = "07_masked_trajectory_completion", RUNGS[-1]
+
+
+def measure(cfg: ExperimentConfig, data: CompletionData, name: str, model: nn.Module) -> dict[str, Any]:
+    """The training command's measurement of run ``name``: the chapter's :func:`sweep`, DLow metrics per
+    number ``k`` of given joint trajectories ``{"k=K": {metric: {"mean", "ci95"}}}``."""
+    table = sweep(name, model, data.test_windows, data.multimodal)
+    return {
+        "sweep": {
+            f"k={k}": {metric: {"mean": mean, "ci95": half} for metric, (mean, half) in row.items()}
+            for k, row in table.items()
+        }
+    }
+
+
+def with_steps(cfg: ExperimentConfig, name: str, steps: int) -> ExperimentConfig:
+    """``cfg`` with every run (``name`` too) trained for ``steps`` steps
+    (:meth:`~ExperimentConfig.with_train_steps`)."""
+    return cfg.with_train_steps(steps)
 
 
 #: Given trajectories of :func:`schedule_check`'s decoding errors.
@@ -346,7 +341,7 @@ def schedule_check(
     train = _train_config(steps, cfg.train.batch_size, cfg.train.checkpoint_every)
     model_cfg = replace(cfg.trajevae, reconstruction=reconstruction)
     name = f"trajevae_schedule_{reconstruction}_{steps}"
-    run = CompletionRun(name, model_cfg, train, data.train_positions, data.train_rotations)
+    run = completion_run(name, model_cfg, train, data.train_positions, data.train_rotations)
     model, result = run.train(progress=False)
     four = first_joints(4)
     start, trajectories = completion_task(data.test_windows, four)

@@ -14,7 +14,7 @@ from __future__ import annotations
 import math
 import numbers
 from dataclasses import dataclass
-from typing import TYPE_CHECKING
+from typing import Protocol
 
 import numpy as np
 import torch
@@ -30,8 +30,13 @@ from motionlab.models.vae.model import MLPVAE, LatentVariableModel
 from motionlab.models.vae.sampling import sample_clips
 from motionlab.validation import check_scalar, check_tensor
 
-if TYPE_CHECKING:
-    from motionlab.models.vae.experiment import ExperimentConfig
+
+class SampleSizes(Protocol):
+    """The sizes of the sample sets (the chapter's :class:`~.experiment.ExperimentConfig` has them):
+    ``per_action`` clips of every action per set, ``n_repeats`` sets."""
+
+    per_action: int
+    n_repeats: int
 
 
 @torch.no_grad()
@@ -144,7 +149,7 @@ def sample_clip_metrics(
     codec: ClipCodec,
     evaluator: Evaluator,
     reference_features: Tensor,
-    cfg: ExperimentConfig,
+    cfg: SampleSizes,
     seed: int,
     latent_std: float | None = None,
 ) -> dict[str, Interval]:
@@ -177,7 +182,7 @@ def real_window_metrics(
     test_action: Tensor,
     evaluator: Evaluator,
     reference_features: Tensor,
-    cfg: ExperimentConfig,
+    cfg: SampleSizes,
     seed: int,
 ) -> dict[str, Interval]:
     """The real-data row for 2-second windows: random held-out windows ``(W, L, 22, 3)``, ``cfg.per_action``

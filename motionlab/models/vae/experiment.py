@@ -16,15 +16,23 @@ from __future__ import annotations
 
 import math
 import numbers
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
+from functools import partial
+from typing import Any
+
+import torch
+from torch import nn
 
 from motionlab import config
+from motionlab.evaluation.benchmark import benchmark_evaluator, evaluator_runs, load_benchmark
 from motionlab.evaluation.evaluator import data_fingerprint
 from motionlab.models.vae.data import CLIP_FEATURES, POSE_FEATURES, BenchmarkClips, BenchmarkPoses
-from motionlab.models.vae.losses import elbo_loss, kl_weight
+from motionlab.models.vae.evaluate import sample_clip_metrics
+from motionlab.models.vae.losses import elbo_loss, elbo_terms, kl_weight
 from motionlab.models.vae.model import MLPVAE, VAEConfig
-from motionlab.train import TensorBatches, TrainConfig, TrainResult, build_seeded, is_cached, train_or_load
-from motionlab.train.many import PendingTraining, Trained, start_training, train_many
+from motionlab.train import TensorBatches, TrainConfig, build_seeded
+from motionlab.train.many import Trained, train_many
+from motionlab.train.run import Run, given
 from motionlab.validation import check_scalar
 
 
@@ -104,9 +112,9 @@ class ExperimentConfig(config.ProfileConfig):
 
     @classmethod
     def long(cls) -> ExperimentConfig:
-        """A longer, larger run for the training command (``python -m motionlab.train vae --config long``):
-        20 times the full profile's steps (16,000 for the pose models, 12,000 for the clip CVAEs) and twice
-        their width (256); data and evaluation as in :meth:`full`."""
+        """A longer, larger run for the training command (``python -m motionlab.apps.training vae --config
+        long``): 20 times the full profile's steps (16,000 for the pose models, 12,000 for the clip CVAEs) and
+        twice their width (256); data and evaluation as in :meth:`full`."""
         return cls(pose_hidden=256, pose_steps=16_000, clip_hidden=256, clip_steps=12_000)
 
     def pose_model(self, variational: bool = True, prior_var: float = 1.0) -> VAEConfig:
@@ -160,49 +168,31 @@ class ExperimentConfig(config.ProfileConfig):
         return BenchmarkClips(self.clip_length, self.clip_stride)
 
 
-@dataclass(frozen=True)
-class VAERun:
-    """One training run of an :class:`MLPVAE` (a :class:`~motionlab.train.many.Run`; picklable).
-
-    Attributes:
-        name: the run's checkpoint cache name, e.g. ``"vae03_cvae"``.
-        model: the model's config (part of the cache key).
-        train_config: how to train it (part of the cache key); its ``seed`` also initialises the weights.
-        data: the training data, built where the run trains (its fingerprint is part of the cache key).
-    """
-
-    name: str
-    model: VAEConfig
-    train_config: TrainConfig
-    data: BenchmarkPoses | BenchmarkClips
-
-    def _data_config(self) -> dict[str, str | None]:
-        x, label = self.data.training_inputs()
-        return {"x": data_fingerprint(x), "label": None if label is None else data_fingerprint(label.float())}
-
-    def is_cached(self) -> bool:
-        """Whether the checkpoint cache holds this run (then :meth:`train` loads it)."""
-        return is_cached(self.name, self.model, self.train_config, self._data_config())
-
-    def train(self, progress: bool | None = None) -> tuple[MLPVAE, TrainResult]:
-        """Build the model (initialised from the training seed) and train it, or load it from the cache."""
-        model = build_seeded(lambda: MLPVAE(self.model), self.train_config.seed)
-        x, label = self.data.training_inputs()
-        batches = TensorBatches((x,) if label is None else (x, label))
-        result = train_or_load(
-            self.name,
-            self.model,
-            model,
-            elbo_loss,
-            batches,
-            self.train_config,
-            data_config=self._data_config(),
-            progress=progress,
-        )
-        return model, result
+def training_batches(data: BenchmarkPoses | BenchmarkClips, model: nn.Module) -> TensorBatches:
+    """The batches of a run on ``data``: its training inputs, with the actions for the clip CVAEs."""
+    x, label = data.training_inputs()
+    return TensorBatches((x,) if label is None else (x, label))
 
 
-def runs(cfg: ExperimentConfig, n_actions: int) -> dict[str, VAERun]:
+def vae_run(
+    name: str, model: VAEConfig, train_config: TrainConfig, data: BenchmarkPoses | BenchmarkClips
+) -> Run:
+    """The :class:`~motionlab.train.run.Run` of an :class:`MLPVAE` of config ``model`` on ``data`` (built
+    where the run trains; its fingerprint is the cache key's data part), its weights drawn from
+    ``train_config.seed``."""
+    x, label = data.training_inputs()
+    return Run(
+        name,
+        model,
+        partial(build_seeded, partial(MLPVAE, model)),
+        given(elbo_loss),
+        partial(training_batches, data),
+        train_config,
+        {"x": data_fingerprint(x), "label": None if label is None else data_fingerprint(label.float())},
+    )
+
+
+def runs(cfg: ExperimentConfig, n_actions: int) -> dict[str, Run]:
     """The chapter's runs by name, the clip CVAEs (the longest) first.
 
     ``pose_ae`` and ``pose_vae`` (section 1), ``cvae`` and ``cvae_no_anneal`` (sections 3 and 4: the KL
@@ -212,15 +202,17 @@ def runs(cfg: ExperimentConfig, n_actions: int) -> dict[str, VAERun]:
     clip_cvae = cfg.clip_model(n_actions)
     clip_steps, pose_steps = cfg.clip_steps, cfg.pose_steps
     return {
-        "cvae": VAERun("vae03_cvae", clip_cvae, cfg.train_config(clip_steps, anneal=True), cfg.clips),
-        "cvae_no_anneal": VAERun(
+        "cvae": vae_run("vae03_cvae", clip_cvae, cfg.train_config(clip_steps, anneal=True), cfg.clips),
+        "cvae_no_anneal": vae_run(
             "vae03_cvae_no_anneal", clip_cvae, cfg.train_config(clip_steps, anneal=False), cfg.clips
         ),
-        "pose_ae": VAERun(
+        "pose_ae": vae_run(
             "vae03_pose_ae", cfg.pose_model(variational=False), cfg.train_config(pose_steps, True), cfg.poses
         ),
-        "pose_vae": VAERun("vae03_pose_vae", cfg.pose_model(), cfg.train_config(pose_steps, True), cfg.poses),
-        "pose_vae_small_prior": VAERun(
+        "pose_vae": vae_run(
+            "vae03_pose_vae", cfg.pose_model(), cfg.train_config(pose_steps, True), cfg.poses
+        ),
+        "pose_vae_small_prior": vae_run(
             "vae03_pose_vae_small_prior",
             cfg.pose_model(prior_var=cfg.small_prior_var),
             cfg.train_config(pose_steps, True),
@@ -232,12 +224,42 @@ def runs(cfg: ExperimentConfig, n_actions: int) -> dict[str, VAERun]:
 def train_all(
     cfg: ExperimentConfig, n_actions: int, processes: int = 2, progress: bool | None = None
 ) -> dict[str, Trained]:
-    """Train (or load from the cache) every run of :func:`runs` on ``processes`` worker processes;
-    ``{name: Trained}``, every model loaded here."""
-    return train_many(runs(cfg, n_actions), processes=processes, progress=progress)
+    """Train (or load from the cache) every run of :func:`runs` on ``processes`` worker processes, the
+    benchmark's two evaluators after them on the same workers (this is the first chapter that needs them;
+    :func:`~motionlab.evaluation.benchmark.benchmark_evaluator` loads them); ``{name: Trained}`` of the
+    chapter's runs, every model loaded here."""
+    return train_many(
+        runs(cfg, n_actions), processes=processes, progress=progress, alongside=evaluator_runs()
+    )
 
 
-def start_all(cfg: ExperimentConfig, n_actions: int, processes: int = 2) -> PendingTraining:
-    """:func:`train_all` without waiting: hand the runs that are not cached to the workers and return at once
-    (``.result()`` waits and returns ``{name: Trained}``), so the chapter can queue more work behind them."""
-    return start_training(runs(cfg, n_actions), processes)
+#: The chapter that trains this family, and its main run (the training command's default).
+CHAPTER, DEFAULT_RUN = "03_variational_autoencoders", "cvae"
+
+#: The runs on clip windows (the others model single poses).
+CLIP_RUNS = ("cvae", "cvae_no_anneal")
+
+
+def load_data(cfg: ExperimentConfig) -> int:
+    """What :func:`runs` needs besides ``cfg``: the number of actions the clip CVAEs are conditioned on (the
+    benchmark's; each run loads its poses or clips where it trains)."""
+    return len(load_benchmark().train.action_names)
+
+
+def measure(cfg: ExperimentConfig, n_actions: int, name: str, model: nn.Module) -> dict[str, Any]:
+    """The training command's measurement of run ``name``: for the clip CVAEs the chapter's sample metrics
+    (section 2), for the pose models the held-out reconstruction and KL terms of the negative ELBO."""
+    if name in CLIP_RUNS:
+        evaluator = benchmark_evaluator("gru", progress=False)
+        codec, train, _ = cfg.clips.load()
+        reference = evaluator.features(codec.to_positions(train.features))
+        return {"samples": sample_clip_metrics(model, codec, evaluator, reference, cfg, seed=10)}
+    with torch.no_grad():
+        terms = elbo_terms(model, cfg.poses.load().test, generator=torch.Generator().manual_seed(0))
+    return {"test_" + term: float(terms[term]) for term in ("recon", "kl")}
+
+
+def with_steps(cfg: ExperimentConfig, name: str, steps: int) -> ExperimentConfig:
+    """``cfg`` with run ``name`` trained for ``steps`` steps (the clip CVAEs share ``clip_steps``, the pose
+    models ``pose_steps``)."""
+    return replace(cfg, clip_steps=steps) if name in CLIP_RUNS else replace(cfg, pose_steps=steps)

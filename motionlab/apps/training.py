@@ -1,4 +1,5 @@
-"""``python -m motionlab.train FAMILY ...``: train one run of a chapter's model family, longer or elsewhere.
+"""``python -m motionlab.apps.training FAMILY ...``: train one run of a chapter's model family, longer or
+elsewhere.
 
 The command trains a chapter's run (``--run``, default the chapter's main model) from the chapter's own
 ``ExperimentConfig`` (``--config quick|full|long``, changed by ``--set key=value`` and ``--steps``), through
@@ -7,7 +8,7 @@ writes into ``--out``: ``run.json`` (what was trained, how, how long), ``history
 ``evaluation.json`` (the chapter's measurements) and ``checkpoints/<name>-<hash>.pt`` (the cache entry).
 
 Devices and processes: ``--device auto`` takes CUDA when there is one (bf16 mixed precision where the GPU
-supports it); ``torchrun --nproc-per-node N -m motionlab.train ...`` trains data-parallel
+supports it); ``torchrun --nproc-per-node N -m motionlab.apps.training ...`` trains data-parallel
 (:mod:`motionlab.train.runtime`; gloo on the CPU, nccl on CUDA), the first process logging and writing.
 
 Bad arguments end the command with one line on stderr and exit code 2.
@@ -25,12 +26,14 @@ import time
 import typing
 from collections.abc import Sequence
 from pathlib import Path
+from types import ModuleType
 from typing import Any
 
-from motionlab.train.families import FAMILIES, DataSet, Family, jsonable
+from motionlab.apps.families import FAMILIES, family, jsonable
+from motionlab.data.streaming import clip_files
 
 CONFIGS = ("quick", "full", "long")
-PROG = "python -m motionlab.train"
+PROG = "python -m motionlab.apps.training"
 
 
 class UsageError(Exception):
@@ -63,17 +66,16 @@ def _non_negative(text: str) -> int:
 
 
 def _help_epilog() -> str:
-    lines = ["families (chapter, default --run) and their data sets (--data; the first is the default):"]
-    for family in FAMILIES.values():
-        lines.append(f"  {family.name:12s} chapter {family.chapter}, run {family.default_run!r}")
-        for name, dataset in family.datasets.items():
-            lines.append(f"      --data {name:10s} {dataset.description}")
+    lines = ["families (each a chapter's experiment module; --run defaults to the module's DEFAULT_RUN):"]
+    lines += [f"  {name:12s} {module}" for name, module in FAMILIES.items()]
     lines += [
         "",
         "configs: quick (the tests' sizes: seconds), full (the chapter's reported runs), long (longer and",
         "  larger: see each family's ExperimentConfig.long()).",
         "",
-        "--data PATH: a folder of clips (.npy positions (T, J, 3), .bvh) for a data set that reads folders.",
+        "--data PATH: a folder of clips for a family that reads folders (odmo_cmu: a downloaded",
+        "Action2Motion folder); without it every family trains on its chapter's data (the course benchmark,",
+        "or the CMU clips of data_real/ for odmo_cmu).",
         "The model goes into the course's checkpoint cache ($MOTIONLAB_BUILD/checkpoints, default build/),",
         "where the chapter looks for it, and a copy into --out (README: 'Training longer or on your own",
         "data').",
@@ -105,7 +107,7 @@ def parser() -> argparse.ArgumentParser:
         metavar="KEY=VALUE",
         help="change a field of the ExperimentConfig (dotted for nested configs, e.g. model.code_dim=32)",
     )
-    p.add_argument("--data", help="a data set of the family (see below) or a folder of clips")
+    p.add_argument("--data", type=Path, help="a folder of clips, for a family that reads folders (see below)")
     p.add_argument("--steps", type=_positive, help="optimiser steps of the run (overrides the config)")
     p.add_argument("--device", choices=("cpu", "cuda", "auto"), default="auto")
     p.add_argument("--out", type=Path, help="output folder (default build/train/FAMILY-CONFIG-RUN)")
@@ -174,9 +176,9 @@ def set_field(cfg: Any, key: str, text: str) -> Any:
     return dataclasses.replace(cfg, **{head: value})
 
 
-def build_config(family: Family, dataset: DataSet, args: argparse.Namespace, run: str) -> Any:
-    """The family's ExperimentConfig of ``--config`` for ``dataset``, ``--set`` and ``--steps`` applied."""
-    cfg = family.config(args.config) if dataset.config is None else dataset.config(args.config)
+def build_config(experiment: ModuleType, args: argparse.Namespace, run: str) -> Any:
+    """The family's ExperimentConfig of ``--config``, ``--set`` and ``--steps`` applied."""
+    cfg = getattr(experiment.ExperimentConfig, args.config)()
     try:
         for item in args.set:
             key, sep, text = item.partition("=")
@@ -184,38 +186,25 @@ def build_config(family: Family, dataset: DataSet, args: argparse.Namespace, run
                 raise UsageError(f"--set expects KEY=VALUE, got {item!r}")
             cfg = set_field(cfg, key.strip(), text.strip())
         if args.steps is not None:
-            cfg = family.steps(cfg, run, args.steps)
+            cfg = experiment.with_steps(cfg, run, args.steps)
     except (ValueError, TypeError) as error:  # the config's own checks
         raise UsageError(f"invalid configuration: {error}") from None
     return cfg
 
 
 # --- data, device, processes -------------------------------------------------------------------------------
-def choose_data(family: Family, value: str | None) -> tuple[str, Path | None]:
-    """The data set's name and, for ``--data PATH``, the folder (checked: it exists and holds clips)."""
-    names = list(family.datasets)
-    if value is None or value in family.datasets:
-        name = value or names[0]
-        path = None
-    else:
-        readers = [name for name, dataset in family.datasets.items() if dataset.reads_folder]
-        path = Path(value)
-        if not path.exists():
-            raise UsageError(
-                f"--data {value}: neither a data set of {family.name} ({', '.join(names)}) nor a path"
-            )
-        if not readers:
-            raise UsageError(
-                f"--data {value}: {family.name} trains on its data sets ({', '.join(names)}), not on a folder"
-            )
-        from motionlab.data.streaming import clip_files
-
-        try:
-            clip_files(path)
-        except (FileNotFoundError, ValueError) as error:
-            raise UsageError(f"--data {value}: {error}") from None
-        name = readers[0]
-    return name, path
+def check_folder(name: str, experiment: ModuleType, path: Path | None) -> None:
+    """``--data PATH``: the family reads folders, and the folder exists and holds clips."""
+    if path is None:
+        return
+    if not getattr(experiment, "READS_FOLDER", False):
+        raise UsageError(f"--data {path}: {name} trains on its chapter's data, not on a folder")
+    if not path.exists():
+        raise UsageError(f"--data {path}: no such folder")
+    try:
+        clip_files(path)
+    except (FileNotFoundError, ValueError) as error:
+        raise UsageError(f"--data {path}: {error}") from None
 
 
 def choose_device(name: str) -> Any:
@@ -300,12 +289,11 @@ def _write_json(path: Path, payload: Any) -> None:
 def train_command(args: argparse.Namespace) -> dict[str, Any]:
     """Train and measure as ``args`` say; returns what ``run.json`` holds (``{}`` on the other processes)."""
     os.environ["MOTIONLAB_PROFILE"] = "quick" if args.config == "quick" else "full"
-    family = FAMILIES[args.family]
-    run_name = args.run or family.default_run
-    data_name, data_path = choose_data(family, args.data)
+    experiment = family(args.family)
+    run_name = args.run or experiment.DEFAULT_RUN
+    check_folder(args.family, experiment, args.data)
     device = choose_device(args.device)
-    dataset = family.datasets[data_name]
-    cfg = build_config(family, dataset, args, run_name)
+    cfg = build_config(experiment, args, run_name)
     tensorboard = TensorBoardLog(args.tensorboard) if args.tensorboard else None
 
     import torch
@@ -315,22 +303,21 @@ def train_command(args: argparse.Namespace) -> dict[str, Any]:
 
     config.setup(seed=0)
     rank, world_size, device = start_processes(device)
-    if data_path is None:
-        data = dataset.load(cfg)
+    if args.data is None:
+        data = experiment.load_data(cfg)
     else:
         try:
-            data = dataset.load(cfg, data_path)
-        except (FileNotFoundError, ValueError) as error:  # a folder the data set cannot read: say why
-            raise UsageError(f"--data {data_path}: {error}") from None
-    runs = (dataset.runs or family.runs)(cfg, data)
+            data = experiment.load_data(cfg, args.data)
+        except (FileNotFoundError, ValueError) as error:  # a folder the family cannot read: say why
+            raise UsageError(f"--data {args.data}: {error}") from None
+    runs = experiment.runs(cfg, data)
     if run_name not in runs:
-        raise UsageError(f"--run {run_name}: {family.name} has the runs {', '.join(map(repr, runs))}")
+        raise UsageError(f"--run {run_name}: {args.family} has the runs {', '.join(map(repr, runs))}")
     run = runs[run_name]
-    training = getattr(run, family.train_field)
     if args.seed is not None:
-        training = dataclasses.replace(training, seed=args.seed)
-        run = dataclasses.replace(run, **{family.train_field: training})
-    out = args.out or config.build_dir() / "train" / f"{family.name}-{args.config}-{_slug(run_name)}"
+        run = dataclasses.replace(run, train_config=dataclasses.replace(run.train_config, seed=args.seed))
+    training = run.train_config
+    out = args.out or config.build_dir() / "train" / f"{args.family}-{args.config}-{_slug(run_name)}"
     main = rank == 0
     interactive = main and sys.stderr.isatty()
     callbacks: list[Any] = []
@@ -349,7 +336,7 @@ def train_command(args: argparse.Namespace) -> dict[str, Any]:
     )
     if main:
         print(
-            f"{family.name}: run {run_name!r}, config {args.config}, data {data_name}, "
+            f"{args.family}: run {run_name!r}, config {args.config}, data {args.data or 'of the chapter'}, "
             f"{training.steps} steps of batch {training.batch_size}, device {device}"
             + (f", {world_size} processes" if world_size > 1 else "")
             + (", bf16 autocast" if execution.mixed_precision else ""),
@@ -373,17 +360,16 @@ def train_command(args: argparse.Namespace) -> dict[str, Any]:
     _write_json(out / "history.json", result.history.to_dict())
     evaluation_seconds = None
     if not args.skip_evaluation:
-        evaluate = dataset.evaluate or family.evaluate
         evaluation_started = time.perf_counter()
-        _write_json(out / "evaluation.json", evaluate(cfg, data, run_name, model))
+        _write_json(out / "evaluation.json", experiment.measure(cfg, data, run_name, model))
         evaluation_seconds = time.perf_counter() - evaluation_started
     steps = int(result.metrics["steps"])
     summary = {
-        "family": family.name,
-        "chapter": family.chapter,
+        "family": args.family,
+        "chapter": experiment.CHAPTER,
         "run": run_name,
         "config_profile": args.config,
-        "data": data_name if data_path is None else str(data_path),
+        "data": "the chapter's" if args.data is None else str(args.data),
         "experiment_config": cfg,
         "train_config": training.identity(),
         "device": str(device),
@@ -402,7 +388,7 @@ def train_command(args: argparse.Namespace) -> dict[str, Any]:
     }
     _write_json(out / "run.json", summary)
     how = "loaded from the checkpoint cache" if result.loaded_from_cache else f"trained in {seconds:.1f} s"
-    print(f"{family.name} {run_name!r}: {how}; results in {out}", file=sys.stderr, flush=True)
+    print(f"{args.family} {run_name!r}: {how}; results in {out}", file=sys.stderr, flush=True)
     return summary
 
 
@@ -424,3 +410,7 @@ def _end_processes() -> None:
 
     if dist.is_available() and dist.is_initialized():
         dist.destroy_process_group()
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -35,6 +35,17 @@ from motionlab.metrics import (
     jerk,
     mean_ci,
 )
+from motionlab.models.moglow import experiment as moglow
+from motionlab.models.moglow.data import clip_features, select_actions
+from motionlab.models.moglow.sampling import generate_motion, seed_features
+from motionlab.models.motion_cell import experiment as motion_cell
+from motionlab.models.odmo import experiment as odmo
+from motionlab.models.odmo.data import prepare
+from motionlab.models.odmo.sampling import ODMOSampler
+from motionlab.models.trajevae import experiment as trajevae
+from motionlab.models.trajevae.data import FPS as TRAJEVAE_FPS
+from motionlab.models.trajevae.data import completion_windows, decimate
+from motionlab.models.trajevae.masks import given_trajectories, joint_mask
 from motionlab.validation import check_scalar, check_tensor
 
 #: The actions of the common test set: locomotion, MoGlow's task (its chapter adds only wave), which every
@@ -97,8 +108,6 @@ class CommonTest:
 
 def common_test(benchmark: Benchmark) -> CommonTest:
     """The test and training clips of :data:`COMMON_ACTIONS` (labels keep the benchmark's action ids)."""
-    from motionlab.models.moglow.data import select_actions
-
     return CommonTest(
         select_actions(benchmark.test, COMMON_ACTIONS), select_actions(benchmark.train, COMMON_ACTIONS)
     )
@@ -138,12 +147,9 @@ def _select(n: int | None, count: int) -> slice:
 
 def motion_cell_methods(benchmark: Benchmark, test: CommonTest) -> dict[str, Method]:
     """Chapter 04's Motion Cell, given each test clip's action and body type."""
-    from motionlab.models.motion_cell.denoise import prepare_training_data
-    from motionlab.models.motion_cell.experiment import ExperimentConfig, runs
-
-    cfg = ExperimentConfig.current()
-    data = prepare_training_data(benchmark.train, benchmark.val, cfg, progress=False)
-    model, result = runs(cfg, data)["mcell"].train(progress=False)
+    cfg = motion_cell.ExperimentConfig.current()
+    data = motion_cell.prepare_training_data(benchmark.train, benchmark.val, cfg, progress=False)
+    model, result = motion_cell.runs(cfg, data)["mcell"].train(progress=False)
     model.eval()
     action = torch.as_tensor(test.clips.action, dtype=torch.int64)
     body = torch.as_tensor(test.clips.body, dtype=torch.int64)
@@ -171,17 +177,13 @@ def moglow_methods(benchmark: Benchmark, test: CommonTest, temperature: float = 
     """Chapter 06's MoGlow with the paper's history dropout 0.95 (``"MoGlow"``) and without dropout
     (``"MoGlow p=0"``, the chapter's better variant on our data), each given every test clip's root-velocity
     control and its first ``history`` frames as the seed; sampled at the chapter's ``temperature``."""
-    from motionlab.models.moglow.data import clip_features
-    from motionlab.models.moglow.experiment import ExperimentConfig, load_data, moglow_name, runs
-    from motionlab.models.moglow.sampling import generate_motion, seed_features
-
-    ex = ExperimentConfig.current()
-    data = load_data(ex, benchmark)
-    named = runs(ex, data)
+    ex = moglow.ExperimentConfig.current()
+    data = moglow.load_data(ex, benchmark)
+    named = moglow.runs(ex, data)
     raw = clip_features(test.clips, replace(ex.data, actions=COMMON_ACTIONS), augment=False)
 
     def method(name: str, dropout: float) -> Method:
-        model, result = named[moglow_name(dropout)].train(progress=False)
+        model, result = named[moglow.moglow_name(dropout)].train(progress=False)
         model.eval()
         history = model.cfg.history
         seed = seed_features(raw, range(raw.pose.shape[0]), history)
@@ -214,22 +216,11 @@ def moglow_methods(benchmark: Benchmark, test: CommonTest, temperature: float = 
 def trajevae_methods(benchmark: Benchmark, test: CommonTest) -> dict[str, Method]:
     """Chapter 07's TrajeVAE (the last rung), given each test clip's first pose and its pelvis trajectory
     (k = 1 joint), at its 15 fps; its completions are resampled to 30 fps."""
-    from motionlab.models.trajevae.data import FPS as TRAJEVAE_FPS
-    from motionlab.models.trajevae.data import completion_windows, decimate
-    from motionlab.models.trajevae.experiment import (
-        CACHE_NAMES,
-        RUNGS,
-        CompletionRun,
-        ExperimentConfig,
-        ladder,
-    )
-    from motionlab.models.trajevae.masks import given_trajectories, joint_mask
-
-    cfg = ExperimentConfig.current()
-    name = RUNGS[-1]
-    run = CompletionRun(
-        CACHE_NAMES[name],
-        ladder(cfg.trajevae)[name],
+    cfg = trajevae.ExperimentConfig.current()
+    name = trajevae.RUNGS[-1]
+    run = trajevae.completion_run(
+        trajevae.CACHE_NAMES[name],
+        trajevae.ladder(cfg.trajevae)[name],
         cfg.train,
         decimate(benchmark.train.positions),
         decimate(benchmark.train.rotations),
@@ -263,13 +254,9 @@ def trajevae_methods(benchmark: Benchmark, test: CommonTest) -> dict[str, Method
 def odmo_methods(benchmark: Benchmark, test: CommonTest) -> dict[str, Method]:
     """Chapter 08's ODMO with mode-preserving sampling, given each test clip's action and end point (its
     root's last position, in the clip's own start frame)."""
-    from motionlab.models.odmo.data import prepare
-    from motionlab.models.odmo.experiment import ExperimentConfig, runs
-    from motionlab.models.odmo.sampling import ODMOSampler
-
-    cfg = ExperimentConfig.current()
+    cfg = odmo.ExperimentConfig.current()
     train_data = prepare(benchmark.train, cfg.frame_stride)
-    model, result = runs(cfg, train_data)["ODMO"].train(progress=False)
+    model, result = odmo.runs(cfg, train_data)["ODMO"].train(progress=False)
     model.eval()
     sampler = ODMOSampler.from_data(model, train_data, kind="modes")
     end_points = prepare(test.clips, cfg.frame_stride, train_data.floor_clearance).end_point.numpy()
