@@ -4,8 +4,8 @@ Subpackages: :mod:`motionlab.geometry` (rotations and distances), :mod:`motionla
 (kinematic tree, forward kinematics), :mod:`motionlab.data` (synthetic motion, representations,
 BVH), :mod:`motionlab.metrics`, :mod:`motionlab.train` (the one training loop),
 :mod:`motionlab.evaluation`, :mod:`motionlab.models`, :mod:`motionlab.viz`, the applications
-(:mod:`motionlab.apps`: the training command, chapter 09's comparison) and the set-up
-(:mod:`motionlab.config`, :mod:`motionlab.checkpoints`) and the course's own tooling (:mod:`motionlab.course`).
+(:mod:`motionlab.apps`: the training command, chapter 09's comparison), the set-up (:mod:`motionlab.config`,
+:mod:`motionlab.checkpoints`) and the course's own tooling (:mod:`motionlab.course`).
 ARCHITECTURE.md draws the layers; ``lint-imports`` keeps the imports pointing down them.
 """
 
