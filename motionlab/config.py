@@ -23,6 +23,7 @@ import numpy as np
 import torch
 
 from motionlab import paths
+from motionlab.validation import Checked
 
 T = TypeVar("T")
 
@@ -59,9 +60,10 @@ def choose(quick: T, full: T) -> T:
 build_dir = paths.build_dir
 
 
-class ProfileConfig:
-    """Mixin for an experiment's config class with ``quick()`` and ``full()`` constructors: :meth:`current`
-    is the one of the active profile (:func:`profile`)."""
+class ProfileConfig(Checked):
+    """Base of an experiment's config dataclass with ``quick()`` and ``full()`` constructors: :meth:`current`
+    is the one of the active profile (:func:`profile`); the fields' declared limits are checked when it is
+    built (:class:`motionlab.validation.Checked`)."""
 
     @classmethod
     def current(cls):  # -> the subclass
