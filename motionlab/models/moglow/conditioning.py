@@ -23,7 +23,6 @@ inputs where one previous pose in twenty is visible adds up all ``tau`` of them 
 from __future__ import annotations
 
 import numbers
-from typing import Any
 
 import torch
 from torch import Tensor
@@ -59,13 +58,6 @@ def check_pose_control(
         raise ValueError(
             f"{where}: pose and control must have the same frames, got {pose.shape[1]} and {control.shape[1]}"
         )
-
-
-def check_history_config(cfg: Any, where: str, sizes: tuple[str, ...]) -> None:
-    """Check the positive integer sizes ``sizes`` of an autoregressive model's config and its dropout."""
-    for name in sizes:
-        check_scalar(getattr(cfg, name), name, where, kind=numbers.Integral, minimum=1)
-    check_scalar(cfg.dropout, "dropout", where, minimum=0.0, maximum=1.0, include_maximum=False)
 
 
 def history_keep_mask(

@@ -31,7 +31,6 @@ from motionlab.models.flows.invconv import InvertibleConv1x1
 from motionlab.models.flows.prior import StandardNormal
 from motionlab.models.moglow.conditioning import (
     autoregressive_conditioning,
-    check_history_config,
     check_pose_control,
     history_keep_mask,
 )
@@ -45,11 +44,11 @@ from motionlab.models.moglow.sampling import (
     sample_frames,
     sampling_setup,
 )
-from motionlab.validation import check_scalar
+from motionlab.validation import Checked, flag, integer, real
 
 
 @dataclass(frozen=True)
-class MoGlowConfig:
+class MoGlowConfig(Checked):
     """MoGlow (§4 of the paper): a next-frame Glow whose couplings are LSTMs over time.
 
     Attributes:
@@ -71,23 +70,14 @@ class MoGlowConfig:
             full-history input of generation; ``False`` zeroes without rescaling (the authors' code).
     """
 
-    pose_dim: int = POSE_DIM
-    control_dim: int = CONTROL_DIM
-    history: int = 5
-    steps: int = 8
-    hidden: int = 64
-    cond_features: int = 64
-    dropout: float = 0.95
-    dropout_rescale: bool = True
-
-    def __post_init__(self) -> None:
-        sizes = ("pose_dim", "control_dim", "history", "steps", "hidden", "cond_features")
-        check_history_config(self, "MoGlowConfig", sizes)
-        if not isinstance(self.dropout_rescale, bool):
-            raise TypeError(
-                f"MoGlowConfig: dropout_rescale must be a bool, got {type(self.dropout_rescale).__name__}"
-            )
-        check_scalar(self.pose_dim, "pose_dim (a coupling splits it)", "MoGlowConfig", minimum=2)
+    pose_dim: int = integer(POSE_DIM, minimum=2, note="a coupling splits it")
+    control_dim: int = integer(CONTROL_DIM, minimum=1)
+    history: int = integer(5, minimum=1)
+    steps: int = integer(8, minimum=1)
+    hidden: int = integer(64, minimum=1)
+    cond_features: int = integer(64, minimum=1)
+    dropout: float = real(0.95, minimum=0, below=1)
+    dropout_rescale: bool = flag(True)
 
     @property
     def cond_dim(self) -> int:
