@@ -580,17 +580,28 @@ def tuple_of(
     return declared(TupleOf(each, nonempty=nonempty, length=length), default)
 
 
+def _declaring_field(cls: type, name: str) -> dataclasses.Field | None:
+    """The field ``name`` as defined by the nearest class in ``cls``'s MRO that declares its constraint."""
+    for klass in cls.__mro__:
+        spec = getattr(klass, "__dataclass_fields__", {}).get(name)
+        if spec is not None and CHECK in spec.metadata:
+            return spec
+    return None
+
+
 def check_fields(obj: Any) -> None:
     """Check every field of the dataclass instance ``obj`` that declares a constraint, in field order.
 
     Messages name the class, the field (with its note) and the value, e.g. ``GlowConfig: levels must be at
-    least 1, got 0``; ``TypeError`` for a wrong type, ``ValueError`` for a wrong value.
+    least 1, got 0``; ``TypeError`` for a wrong type, ``ValueError`` for a wrong value. A subclass that
+    gives a field a new plain default (``steps: int = 200``) keeps the limit its base class declared.
     """
     where = type(obj).__name__
-    for spec in dataclasses.fields(obj):
-        constraint = spec.metadata.get(CHECK)
-        if constraint is None:
+    for own in dataclasses.fields(obj):
+        spec = _declaring_field(type(obj), own.name)
+        if spec is None:
             continue
+        constraint = spec.metadata[CHECK]
         value = getattr(obj, spec.name)
         if value is None and spec.metadata["optional"]:
             continue
