@@ -394,17 +394,7 @@ class Number:
     finite: bool = True
 
     def check(self, value: Any, name: str, where: str) -> None:
-        check_scalar(
-            value,
-            name,
-            where,
-            kind=self.kind,
-            minimum=self.minimum,
-            maximum=self.maximum,
-            include_minimum=self.include_minimum,
-            include_maximum=self.include_maximum,
-            finite=self.finite,
-        )
+        check_scalar(value, name, where, **vars(self))  # the fields are check_scalar's keywords
 
 
 @dataclass(frozen=True)

@@ -21,7 +21,7 @@ import numpy as np
 import torch
 from torch import Tensor
 
-from motionlab.data.augment import random_yaw
+from motionlab.data.augment import check_clips, random_yaw
 from motionlab.data.representations import to_trajevae
 from motionlab.models.trajevae.masks import (
     KEEP_PROBABILITY,
@@ -132,13 +132,8 @@ class CompletionBatches(Checked):
         where = "CompletionBatches"
         positions = torch.as_tensor(self.positions, dtype=torch.float32)
         rotations = torch.as_tensor(self.rotations, dtype=torch.float32)
-        check_tensor(positions, "positions", where, trailing=(None, 3), ndim=4)
-        check_tensor(rotations, "rotations", where, trailing=(None, 4), ndim=4)
-        if positions.shape[:-1] != rotations.shape[:-1]:
-            raise ValueError(
-                f"{where}: positions (N, T, J, 3) and rotations (N, T, J, 4) must share N, T, J; got "
-                f"{tuple(positions.shape)} and {tuple(rotations.shape)}"
-            )
+        check_tensor(positions, "positions", where, ndim=4, finite=False)  # (N, T, J, 3)
+        check_clips(positions, rotations, where)
         object.__setattr__(self, "positions", positions)
         object.__setattr__(self, "rotations", rotations)
 
