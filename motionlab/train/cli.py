@@ -27,14 +27,16 @@ from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
+from motionlab import cli
 from motionlab.train.families import FAMILIES, DataSet, Family, jsonable
 
 CONFIGS = ("quick", "full", "long")
 PROG = "python -m motionlab.train"
 
 
-class UsageError(Exception):
-    """A bad argument: reported in one line, exit code 2."""
+class UsageError(ValueError):
+    """A bad argument: reported in one line, exit code 2 (like every ``ValueError`` the command meets, e.g. a
+    configuration the data cannot serve; :func:`motionlab.cli.run`)."""
 
 
 class _Parser(argparse.ArgumentParser):
@@ -185,6 +187,8 @@ def build_config(family: Family, dataset: DataSet, args: argparse.Namespace, run
             cfg = set_field(cfg, key.strip(), text.strip())
         if args.steps is not None:
             cfg = family.steps(cfg, run, args.steps)
+    except UsageError:
+        raise
     except (ValueError, TypeError) as error:  # the config's own checks
         raise UsageError(f"invalid configuration: {error}") from None
     return cfg
@@ -302,6 +306,8 @@ def train_command(args: argparse.Namespace) -> dict[str, Any]:
     os.environ["MOTIONLAB_PROFILE"] = "quick" if args.config == "quick" else "full"
     family = FAMILIES[args.family]
     run_name = args.run or family.default_run
+    if args.out is not None and args.out.exists() and not args.out.is_dir():
+        raise UsageError(f"--out {args.out}: a file, not a folder")
     data_name, data_path = choose_data(family, args.data)
     device = choose_device(args.device)
     dataset = family.datasets[data_name]
@@ -408,15 +414,15 @@ def train_command(args: argparse.Namespace) -> dict[str, Any]:
 
 def main(argv: Sequence[str] | None = None) -> int:
     """The command; returns its exit code (2 for bad arguments)."""
+
+    def command() -> int:
+        train_command(parser().parse_args(argv))
+        return 0
+
     try:
-        args = parser().parse_args(argv)
-        train_command(args)
-    except UsageError as error:
-        print(f"{PROG}: error: {error}", file=sys.stderr)
-        return 2
+        return cli.run(PROG, command)
     finally:
         _end_processes()
-    return 0
 
 
 def _end_processes() -> None:
