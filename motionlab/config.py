@@ -16,6 +16,7 @@ import os
 import random
 from collections.abc import Iterator
 from contextlib import contextmanager
+from numbers import Integral
 from pathlib import Path
 from typing import TypeVar
 
@@ -23,7 +24,7 @@ import numpy as np
 import torch
 
 from motionlab import paths
-from motionlab.validation import Checked
+from motionlab.validation import Checked, check_scalar
 
 T = TypeVar("T")
 
@@ -87,9 +88,11 @@ def course_dir() -> Path:
 
 def set_threads(n: int | None = None) -> int:
     """Set torch's intra-op thread count (default :data:`DEFAULT_THREADS`); returns it."""
-    n = DEFAULT_THREADS if n is None else int(n)
-    if n < 1:
-        raise ValueError(f"thread count must be at least 1, got {n}")
+    n = (
+        DEFAULT_THREADS
+        if n is None
+        else check_scalar(n, "n (the thread count)", "set_threads", kind=Integral, minimum=1)
+    )
     if torch.get_num_threads() != n:
         torch.set_num_threads(n)
     return n
@@ -117,9 +120,7 @@ def seed_everything(seed: int) -> torch.Generator:
     Prefer passing the returned generator (or a ``numpy.random.default_rng(seed)``) explicitly;
     the global seeds are set too so that library code that draws from them is reproducible.
     """
-    if not isinstance(seed, (int, np.integer)) or seed < 0:
-        raise ValueError(f"seed must be a non-negative integer, got {seed!r}")
-    seed = int(seed)
+    seed = int(check_scalar(seed, "seed", "seed_everything", kind=Integral, minimum=0))
     random.seed(seed)
     np.random.seed(seed % 2**32)
     torch.manual_seed(seed)
