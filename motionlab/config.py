@@ -88,11 +88,9 @@ def course_dir() -> Path:
 
 def set_threads(n: int | None = None) -> int:
     """Set torch's intra-op thread count (default :data:`DEFAULT_THREADS`); returns it."""
-    n = (
-        DEFAULT_THREADS
-        if n is None
-        else check_scalar(n, "n (the thread count)", "set_threads", kind=Integral, minimum=1)
-    )
+    if n is None:
+        n = DEFAULT_THREADS
+    n = int(check_scalar(n, "n (the thread count)", "set_threads", kind=Integral, minimum=1))
     if torch.get_num_threads() != n:
         torch.set_num_threads(n)
     return n
