@@ -17,21 +17,13 @@ from __future__ import annotations
 
 import numbers
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, fields
 
 import numpy as np
 import torch
 
 from motionlab.geometry import quat_apply, quat_mul, quat_normalize
-from motionlab.validation import (
-    Checked,
-    check_choice,
-    check_finite,
-    check_finite_array,
-    check_scalar,
-    check_tensor,
-    real,
-)
+from motionlab.validation import check_choice, check_finite, check_finite_array, check_scalar, check_tensor
 
 #: The 22 joints, named and ordered like the SMPL body.
 JOINT_NAMES: tuple[str, ...] = (
@@ -70,35 +62,37 @@ BODY_TYPES: tuple[str, ...] = ("broad", "slender")
 
 
 @dataclass(frozen=True)
-class BodyMeasurements(Checked):
+class BodyMeasurements:
     """Lengths (metres) that define one body type's rest skeleton; widths are half-widths from the midline.
 
     The foot joint (SMPL's ``*_foot``) sits at the ball of the foot. The heel is not a joint; ``heel_back``
     and the floor give the point a flat foot rests on behind the ankle, which the generator needs.
     """
 
-    ball_height: float = real(
-        minimum=0
-    )  # foot joint (ball of the foot) above the floor when the foot is flat
-    foot_drop: float = real(minimum=0)  # ankle above the foot joint
-    foot_length: float = real(minimum=0)  # foot joint ahead of the ankle
-    heel_back: float = real(minimum=0)  # heel contact point behind the ankle (not a joint)
-    shank: float = real(minimum=0)  # knee to ankle
-    thigh: float = real(minimum=0)  # hip to knee
-    hip_drop: float = real(minimum=0)  # hip joints below the pelvis joint
-    hip_width: float = real(minimum=0)  # hip joints beside the midline
-    spine1: float = real(minimum=0)  # pelvis to spine1
-    spine2: float = real(minimum=0)  # spine1 to spine2
-    spine3: float = real(minimum=0)  # spine2 to spine3
-    neck: float = real(minimum=0)  # spine3 to neck
-    head: float = real(minimum=0)  # neck to head (the head joint is the middle of the head)
-    head_top: float = real(minimum=0)  # crown above the head joint (not a joint; gives the stature)
-    collar_out: float = real(minimum=0)  # collar joints beside the midline
-    collar_up: float = real(minimum=0)  # collar joints above spine3
-    shoulder_out: float = real(minimum=0)  # shoulder joints beside the collar joints
-    shoulder_drop: float = real(minimum=0)  # shoulder joints below the collar joints
-    upper_arm: float = real(minimum=0)  # shoulder to elbow
-    forearm: float = real(minimum=0)  # elbow to wrist
+    ball_height: float  # foot joint (ball of the foot) above the floor when the foot is flat
+    foot_drop: float  # ankle above the foot joint
+    foot_length: float  # foot joint ahead of the ankle
+    heel_back: float  # heel contact point behind the ankle (not a joint)
+    shank: float  # knee to ankle
+    thigh: float  # hip to knee
+    hip_drop: float  # hip joints below the pelvis joint
+    hip_width: float  # hip joints beside the midline
+    spine1: float  # pelvis to spine1
+    spine2: float  # spine1 to spine2
+    spine3: float  # spine2 to spine3
+    neck: float  # spine3 to neck
+    head: float  # neck to head (the head joint is the middle of the head)
+    head_top: float  # crown above the head joint (not a joint; gives the stature)
+    collar_out: float  # collar joints beside the midline
+    collar_up: float  # collar joints above spine3
+    shoulder_out: float  # shoulder joints beside the collar joints
+    shoulder_drop: float  # shoulder joints below the collar joints
+    upper_arm: float  # shoulder to elbow
+    forearm: float  # elbow to wrist
+
+    def __post_init__(self) -> None:
+        for f in fields(self):
+            check_scalar(getattr(self, f.name), f.name, "BodyMeasurements", minimum=0)
 
     @property
     def ankle_height(self) -> float:

@@ -73,7 +73,6 @@ def _check_arguments(seed: int, n_per_mode: int, seconds: float, fps: int, split
     check_scalar(n_per_mode, "n_per_mode", "generate", kind=numbers.Integral, minimum=1)
     check_scalar(fps, "fps", "generate", kind=numbers.Integral, minimum=MIN_FPS)
     check_scalar(seconds, "seconds", "generate", minimum=MIN_SECONDS)
-    check_scalar(seconds * fps, "seconds * fps (the frames per clip)", "generate")  # finite
     check_choice(split, "split", "generate", SPLITS)
 
 
