@@ -24,11 +24,11 @@ from motionlab.models.gaussian import reparameterize
 from motionlab.models.trajevae.data import check_batch, check_task
 from motionlab.models.trajevae.masks import KEEP_PROBABILITY, given_trajectories
 from motionlab.models.trajevae.model import RECONSTRUCTIONS, Gaussian, WindowShape
-from motionlab.validation import Checked, choice, flag, integer, real
+from motionlab.validation import choice, flag, integer, real
 
 
 @dataclass(frozen=True)
-class RecurrentConfig(WindowShape, Checked):
+class RecurrentConfig(WindowShape):
     """A recurrent completion baseline.
 
     Attributes:
@@ -42,8 +42,7 @@ class RecurrentConfig(WindowShape, Checked):
         seed: seeds the weight initialisation.
     """
 
-    n_joints: int = integer(22, minimum=1)
-    n_frames: int = integer(60, minimum=2)
+    n_frames: int = 60
     hidden: int = integer(64, minimum=1)
     latent_dim: int = integer(0, minimum=0)
     beta: float = real(0.01, minimum=0)

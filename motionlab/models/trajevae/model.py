@@ -49,11 +49,13 @@ from motionlab.validation import Checked, check_scalar, choice, flag, integer, r
 RECONSTRUCTIONS: tuple[str, ...] = ("sum", "mean")
 
 
-class WindowShape:
-    """The window geometry every completion model's config shares (needs ``n_joints`` and ``n_frames``)."""
+@dataclass(frozen=True)
+class WindowShape(Checked):
+    """The window geometry every completion model's config shares: ``n_joints`` joints, ``n_frames`` frames
+    (the initial pose included)."""
 
-    n_joints: int
-    n_frames: int
+    n_joints: int = integer(22, minimum=1)
+    n_frames: int = integer(120, minimum=2)
 
     @property
     def n_channels(self) -> int:
@@ -67,7 +69,7 @@ class WindowShape:
 
 
 @dataclass(frozen=True)
-class TrajeVAEConfig(WindowShape, Checked):
+class TrajeVAEConfig(WindowShape):
     """TrajeVAE's architecture, loss weight and the four ablation switches.
 
     Windows have ``n_frames`` frames: frame 0 is the initial pose, frames ``1 .. n_frames - 1`` are completed.
@@ -93,8 +95,6 @@ class TrajeVAEConfig(WindowShape, Checked):
         seed: seeds the weight initialisation.
     """
 
-    n_joints: int = integer(22, minimum=1)
-    n_frames: int = integer(120, minimum=2)
     width: int = integer(64, minimum=1)
     latent_dim: int = integer(32, minimum=1)
     dct_components: int = integer(40, minimum=1)
