@@ -4,8 +4,8 @@ motionlab.bench``).
 A bad argument ends a command with a one-line message on stderr and exit status 2, never a traceback:
 the ``type=`` functions here make argparse reject bad values while parsing (argparse prints its usage and
 ``error: argument --x: ...``), and :func:`run` turns the user errors that only show later (a ``ValueError``
-from a library check, an ``OSError`` from writing the output, a ``MemoryError`` from asking for more data
-than the machine holds) into ``<prog>: error: ...``.
+from a library check, an ``OSError`` from writing the output, a ``MemoryError`` or ``OverflowError`` from
+asking for more data than the machine holds or a float can count) into ``<prog>: error: ...``.
 """
 
 from __future__ import annotations
@@ -21,7 +21,7 @@ from typing import TypeVar
 N = TypeVar("N", int, float)
 
 #: The exceptions :func:`run` reports as a user error; anything else is a bug and keeps its traceback.
-USER_ERRORS = (ValueError, OSError, MemoryError)
+USER_ERRORS = (ValueError, OSError, MemoryError, OverflowError)
 
 
 def _at_least(parse: Callable[[str], N], what: str, minimum: N) -> Callable[[str], N]:

@@ -16,6 +16,7 @@ import os
 import random
 from collections.abc import Iterator
 from contextlib import contextmanager
+from numbers import Integral
 from pathlib import Path
 from typing import TypeVar
 
@@ -23,6 +24,7 @@ import numpy as np
 import torch
 
 from motionlab import paths
+from motionlab.validation import Checked, check_scalar
 
 T = TypeVar("T")
 
@@ -59,9 +61,10 @@ def choose(quick: T, full: T) -> T:
 build_dir = paths.build_dir
 
 
-class ProfileConfig:
-    """Mixin for an experiment's config class with ``quick()`` and ``full()`` constructors: :meth:`current`
-    is the one of the active profile (:func:`profile`)."""
+class ProfileConfig(Checked):
+    """Base of an experiment's config dataclass with ``quick()`` and ``full()`` constructors: :meth:`current`
+    is the one of the active profile (:func:`profile`); the fields' declared limits are checked when it is
+    built (:class:`motionlab.validation.Checked`)."""
 
     @classmethod
     def current(cls):  # -> the subclass
@@ -85,9 +88,9 @@ def course_dir() -> Path:
 
 def set_threads(n: int | None = None) -> int:
     """Set torch's intra-op thread count (default :data:`DEFAULT_THREADS`); returns it."""
-    n = DEFAULT_THREADS if n is None else int(n)
-    if n < 1:
-        raise ValueError(f"thread count must be at least 1, got {n}")
+    if n is None:
+        n = DEFAULT_THREADS
+    n = int(check_scalar(n, "n (the thread count)", "set_threads", kind=Integral, minimum=1))
     if torch.get_num_threads() != n:
         torch.set_num_threads(n)
     return n
@@ -115,9 +118,7 @@ def seed_everything(seed: int) -> torch.Generator:
     Prefer passing the returned generator (or a ``numpy.random.default_rng(seed)``) explicitly;
     the global seeds are set too so that library code that draws from them is reproducible.
     """
-    if not isinstance(seed, (int, np.integer)) or seed < 0:
-        raise ValueError(f"seed must be a non-negative integer, got {seed!r}")
-    seed = int(seed)
+    seed = int(check_scalar(seed, "seed", "seed_everything", kind=Integral, minimum=0))
     random.seed(seed)
     np.random.seed(seed % 2**32)
     torch.manual_seed(seed)

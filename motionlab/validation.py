@@ -1,7 +1,9 @@
 """Argument checks for the whole package: one scalar check, one tensor check, one exception policy.
 
-Every public function and every config's ``__post_init__`` checks its arguments through these, in the spirit
-of scikit-learn's ``check_scalar``. The policy:
+Every public function checks its arguments through these, in the spirit of scikit-learn's ``check_scalar``;
+every config dataclass declares its fields' limits where it defines them (:func:`integer`, :func:`real`,
+:func:`flag`, :func:`choice`, :func:`instance`, :func:`tuple_of`; :class:`Checked` checks them when the
+object is built) and keeps as code only the rules that tie several fields together. The policy:
 
 * ``TypeError`` when an argument has the wrong *type* (not a number, not a tensor, a bool where a number is
   meant) or the wrong *dtype* (an integer tensor where a floating one is meant);
@@ -21,9 +23,11 @@ same policy.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import numbers
 from collections.abc import Collection, Sequence
+from dataclasses import dataclass
 from typing import Any, TypeVar
 
 import numpy as np
@@ -353,3 +357,254 @@ def as_rng(rng: RngLike, where: str) -> np.random.Generator:
     if rng < 0:
         raise ValueError(f"{where}: rng must be a non-negative integer seed, got {rng!r}")
     return np.random.default_rng(int(rng))
+
+
+# --- Declared constraints of config dataclasses -------------------------------------------------------------
+#
+# A config dataclass declares each field's limits where the field is defined, and one function checks them
+# all (in the spirit of scikit-learn's ``_parameter_constraints``)::
+#
+#     @dataclass(frozen=True)
+#     class GlowConfig(Checked):
+#         channels: int = integer(minimum=1)
+#         dropout: float = real(0.0, minimum=0, below=1)
+#         kind: str = choice(("conv", "gru"), "gru")
+#
+#         def __post_init__(self) -> None:
+#             super().__post_init__()  # the declared limits; then the rules that tie fields together
+#             ...
+#
+# The limits ride in the field's metadata (key :data:`CHECK`), so they survive inheritance and
+# ``dataclasses.replace`` (which builds a new object, checked again) and leave the fields' values, and so
+# the configs' hashes, untouched.
+
+CHECK = "check"
+"""The key of a field's declared constraint in ``dataclasses.Field.metadata``."""
+
+
+@dataclass(frozen=True)
+class Number:
+    """A number: :func:`check_scalar`'s ``kind``, bounds and ``finite``."""
+
+    kind: type | tuple[type, ...] = numbers.Real
+    minimum: float | None = None
+    maximum: float | None = None
+    include_minimum: bool = True
+    include_maximum: bool = True
+    finite: bool = True
+
+    def check(self, value: Any, name: str, where: str) -> None:
+        check_scalar(value, name, where, **vars(self))  # the fields are check_scalar's keywords
+
+
+@dataclass(frozen=True)
+class OneOf:
+    """One of a few values (:func:`check_choice`)."""
+
+    choices: tuple[Any, ...]
+
+    def check(self, value: Any, name: str, where: str) -> None:
+        check_choice(value, name, where, self.choices)
+
+
+@dataclass(frozen=True)
+class InstanceOf:
+    """An instance of a type (a bool switch, a string, a nested config); ``TypeError`` otherwise."""
+
+    kind: type
+
+    def check(self, value: Any, name: str, where: str) -> None:
+        if not isinstance(value, self.kind):
+            article = "an" if self.kind.__name__[0] in "AEIOU" else "a"
+            raise TypeError(
+                f"{where}: {name} must be {article} {self.kind.__name__}, "
+                f"got {value!r} ({type(value).__name__})"
+            )
+
+
+@dataclass(frozen=True)
+class TupleOf:
+    """A tuple whose every entry meets ``each`` (entries named ``name[i]`` in messages), optionally non-empty
+    or of a fixed length."""
+
+    each: Number | OneOf | InstanceOf
+    nonempty: bool = False
+    length: int | None = None
+
+    def check(self, value: Any, name: str, where: str) -> None:
+        if not isinstance(value, tuple):
+            raise TypeError(f"{where}: {name} must be a tuple, got {value!r} ({type(value).__name__})")
+        if self.nonempty and not value:
+            raise ValueError(f"{where}: {name} must be a non-empty tuple, got ()")
+        if self.length is not None and len(value) != self.length:
+            raise ValueError(f"{where}: {name} must be a tuple of {self.length} entries, got {value!r}")
+        for index, entry in enumerate(value):
+            self.each.check(entry, f"{name}[{index}]", where)
+
+
+Constraint = Number | OneOf | InstanceOf | TupleOf
+"""What a field may declare."""
+
+
+def declared(
+    constraint: Constraint,
+    default: Any = dataclasses.MISSING,
+    *,
+    default_factory: Any = dataclasses.MISSING,
+    optional: bool = False,
+    note: str | None = None,
+) -> Any:
+    """A dataclass field carrying ``constraint`` (checked by :func:`check_fields`).
+
+    Args:
+        constraint: what the value must be.
+        default, default_factory: as for ``dataclasses.field`` (neither: a required field).
+        optional: ``None`` passes too (e.g. "no limit", "not set").
+        note: a few words the messages add after the field's name, e.g. ``"a coupling splits it"``.
+    """
+    return dataclasses.field(
+        default=default,
+        default_factory=default_factory,
+        metadata={CHECK: constraint, "optional": optional, "note": note},
+    )
+
+
+def _number(
+    kind: type | tuple[type, ...],
+    minimum: float | None,
+    maximum: float | None,
+    above: float | None,
+    below: float | None,
+    finite: bool = True,
+) -> Number:
+    if (minimum is not None and above is not None) or (maximum is not None and below is not None):
+        raise ValueError(
+            "a bound is either inclusive (minimum, maximum) or exclusive (above, below), not both"
+        )
+    return Number(
+        kind,
+        minimum if above is None else above,
+        maximum if below is None else below,
+        include_minimum=above is None,
+        include_maximum=below is None,
+        finite=finite,
+    )
+
+
+def integer(
+    default: Any = dataclasses.MISSING,
+    *,
+    minimum: int | None = None,
+    maximum: int | None = None,
+    kind: type | tuple[type, ...] = numbers.Integral,
+    optional: bool = False,
+    note: str | None = None,
+) -> Any:
+    """A field holding an integer within the inclusive bounds ``[minimum, maximum]`` (``None``: no bound).
+    ``kind=int`` refuses NumPy integers (for fields that go into a JSON cache key)."""
+    return declared(_number(kind, minimum, maximum, None, None), default, optional=optional, note=note)
+
+
+def real(
+    default: Any = dataclasses.MISSING,
+    *,
+    minimum: float | None = None,
+    maximum: float | None = None,
+    above: float | None = None,
+    below: float | None = None,
+    finite: bool = True,
+    kind: type | tuple[type, ...] = numbers.Real,
+    optional: bool = False,
+    note: str | None = None,
+) -> Any:
+    """A field holding a real number: at least ``minimum`` / at most ``maximum`` (inclusive bounds), greater
+    than ``above`` / less than ``below`` (exclusive ones); finite unless ``finite=False`` (NaN never passes).
+    ``kind=(int, float)`` refuses NumPy numbers."""
+    return declared(
+        _number(kind, minimum, maximum, above, below, finite), default, optional=optional, note=note
+    )
+
+
+def flag(default: Any = dataclasses.MISSING) -> Any:
+    """A field holding a bool (a switch: ``1`` is not ``True``)."""
+    return declared(InstanceOf(bool), default)
+
+
+def choice(choices: Collection[Any], default: Any = dataclasses.MISSING, *, note: str | None = None) -> Any:
+    """A field holding one of ``choices``."""
+    return declared(OneOf(tuple(choices)), default, note=note)
+
+
+def instance(
+    kind: type,
+    default: Any = dataclasses.MISSING,
+    *,
+    default_factory: Any = dataclasses.MISSING,
+    optional: bool = False,
+) -> Any:
+    """A field holding an instance of ``kind`` (e.g. a nested config)."""
+    return declared(InstanceOf(kind), default, default_factory=default_factory, optional=optional)
+
+
+def tuple_of(
+    default: Any = dataclasses.MISSING,
+    *,
+    kind: type | tuple[type, ...] = numbers.Real,
+    minimum: float | None = None,
+    maximum: float | None = None,
+    above: float | None = None,
+    below: float | None = None,
+    choices: Collection[Any] | None = None,
+    nonempty: bool = False,
+    length: int | None = None,
+) -> Any:
+    """A field holding a tuple. Its entries are ``choices`` when given, else numbers of ``kind`` within the
+    bounds (as in :func:`real`) when ``kind`` is numeric, else instances of ``kind`` (e.g. ``str``)."""
+    each: Number | OneOf | InstanceOf
+    if choices is not None:
+        each = OneOf(tuple(choices))
+    elif kind in (numbers.Real, numbers.Integral) or isinstance(kind, tuple):
+        each = _number(kind, minimum, maximum, above, below)
+    else:
+        each = InstanceOf(kind)
+    return declared(TupleOf(each, nonempty=nonempty, length=length), default)
+
+
+def _declaring_field(cls: type, name: str) -> dataclasses.Field | None:
+    """The field ``name`` as defined by the nearest class in ``cls``'s MRO that declares its constraint."""
+    for klass in cls.__mro__:
+        spec = getattr(klass, "__dataclass_fields__", {}).get(name)
+        if spec is not None and CHECK in spec.metadata:
+            return spec
+    return None
+
+
+def check_fields(obj: Any) -> None:
+    """Check every field of the dataclass instance ``obj`` that declares a constraint, in field order.
+
+    Messages name the class, the field (with its note) and the value, e.g. ``GlowConfig: levels must be at
+    least 1, got 0``; ``TypeError`` for a wrong type, ``ValueError`` for a wrong value. A subclass that
+    gives a field a new plain default (``steps: int = 200``) keeps the limit its base class declared.
+    """
+    where = type(obj).__name__
+    for own in dataclasses.fields(obj):
+        spec = _declaring_field(type(obj), own.name)
+        if spec is None:
+            continue
+        constraint = spec.metadata[CHECK]
+        value = getattr(obj, spec.name)
+        if value is None and spec.metadata["optional"]:
+            continue
+        note = spec.metadata["note"]
+        constraint.check(value, spec.name if note is None else f"{spec.name} ({note})", where)
+
+
+class Checked:
+    """Base of a config dataclass with declared field constraints: checks them when the object is built.
+
+    A subclass with rules that tie several fields together overrides ``__post_init__``, calls
+    ``super().__post_init__()`` first, then states those rules as code.
+    """
+
+    def __post_init__(self) -> None:
+        check_fields(self)

@@ -70,6 +70,7 @@ def folder(tmp_path: Path) -> Path:
             "argument --seconds: must be a finite number of at least 1, got 'nan'",
         ),
         (["--seed", "0", "--fps", "5"], "argument --fps: must be an integer of at least 10, got '5'"),
+        (["--seed", "0", "--seconds", "1e308"], "cannot convert float infinity to integer"),
         (["--seed", "0", "--split", "dev"], "argument --split: invalid choice: 'dev'"),
         (["--seed", "0", "--checksums", "{folder}/missing/sums.json"], "argument --checksums: directory"),
     ],
@@ -212,6 +213,7 @@ def test_the_real_commands_print_one_line(tmp_path: Path, module: str, argv: lis
         ValueError("bad\nvalue"),
         FileNotFoundError(2, "No such file", "f.npz"),
         MemoryError("Unable to allocate 8 TiB"),
+        OverflowError("cannot convert float infinity to integer"),
     ],
 )
 def test_run_reports_user_errors_on_one_line(capsys: pytest.CaptureFixture[str], error: Exception) -> None:

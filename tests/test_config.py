@@ -38,9 +38,11 @@ def test_seed_everything_is_reproducible():
         assert np.array_equal(np.asarray(x), np.asarray(y))
 
 
-@pytest.mark.parametrize("bad", [-1, 1.5, "3"])
-def test_seed_must_be_a_non_negative_integer(bad):
-    with pytest.raises(ValueError, match="seed"):
+@pytest.mark.parametrize(
+    "bad, error", [(-1, ValueError), (1.5, TypeError), ("3", TypeError), (True, TypeError)]
+)
+def test_seed_must_be_a_non_negative_integer(bad, error):
+    with pytest.raises(error, match="seed_everything: seed must be"):
         config.seed_everything(bad)
 
 
@@ -49,6 +51,8 @@ def test_set_threads():
     assert torch.get_num_threads() == 1
     with pytest.raises(ValueError, match="thread"):
         config.set_threads(0)
+    with pytest.raises(TypeError, match=r"set_threads: n \(the thread count\) must be an integer"):
+        config.set_threads(1.5)
 
 
 def test_threads_sets_the_count_for_a_block_and_restores_it():

@@ -73,8 +73,12 @@ def test_cell_limits_come_from_the_chapter_budget(monkeypatch):
     assert course.cell_limits("99_extra").cell_seconds == course.DEFAULT_CELL_SECONDS
     monkeypatch.setenv("MOTIONLAB_PROFILE", "quick")
     assert course.cell_limits("01_rotation_geometry").cell_seconds == course.CELL_BUDGET_FACTOR * 20
-    with pytest.raises(ValueError, match="cell_seconds"):
+    with pytest.raises(ValueError, match="CellLimits: cell_seconds must be greater than 0, got 0"):
         CellLimits(cell_seconds=0)
+    with pytest.raises(ValueError, match="CellLimits: answer_seconds must be a finite number, got inf"):
+        CellLimits(cell_seconds=1, answer_seconds=float("inf"))
+    with pytest.raises(TypeError, match=r"CellLimits: cell_seconds must be a real number, got '60' \(str\)"):
+        CellLimits(cell_seconds="60")
 
 
 def _chapter(tmp_path: Path, name: str, *sources: str) -> Path:

@@ -41,3 +41,14 @@ def test_a_command_that_cannot_start_is_reported_in_one_line(tmp_path: Path, cap
 def test_bad_arguments_get_a_usage_line(argv: list[str], capsys) -> None:
     assert runlog.main(argv) == 2
     assert "Traceback" not in capsys.readouterr().err
+
+
+def test_a_log_folder_that_cannot_be_made_is_reported_in_one_line(
+    tmp_path: Path, monkeypatch, capsys
+) -> None:
+    not_a_folder = tmp_path / "build"
+    not_a_folder.write_text("a file")
+    monkeypatch.setenv("MOTIONLAB_BUILD", str(not_a_folder))
+    assert runlog.main(["test", "--", "echo"]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("runlog: ") and err.count("\n") == 1

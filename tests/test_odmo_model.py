@@ -90,9 +90,11 @@ def test_config_checks_the_encoder_frame_decoder_input_and_hips():
         ODMOConfig(encoder_frame="body")
     with pytest.raises(ValueError, match="decoder_trajectory"):
         ODMOConfig(decoder_trajectory="never")
-    for hips in ((0, 2), (1, 1), (1, 22), [1, 2]):
+    for hips in ((0, 2), (1, 1), (1, 22), (1, 2, 3)):
         with pytest.raises(ValueError, match="hips"):
             ODMOConfig(hips=hips)
+    with pytest.raises(TypeError, match=r"ODMOConfig: hips must be a tuple, got \[1, 2\]"):
+        ODMOConfig(hips=[1, 2])
 
 
 def test_heading_frame_turns_every_frame_to_face_x():

@@ -247,7 +247,7 @@ def test_experiment_config_profiles_and_runs(data, monkeypatch):
     assert chapter["-L_traj"].model.use_trajectory_loss is False
     with pytest.raises(ValueError, match="frame_stride"):
         runs(ExperimentConfig(model=CFG), data)
-    with pytest.raises(ValueError, match="ExperimentConfig: homogeneity must be one of"):
+    with pytest.raises(ValueError, match=r"ExperimentConfig: homogeneity\[0\] must be one of"):
         ExperimentConfig(homogeneity=("odmo",))
     with pytest.raises(TypeError, match="ExperimentConfig: steps must be an integer"):
         ExperimentConfig(steps=2.5)

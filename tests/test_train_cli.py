@@ -82,6 +82,8 @@ def test_every_family_trains_and_is_measured_in_the_quick_config(name, tmp_path,
         (["vae", "--data", "."], "not on a folder"),
         (["vae", "--steps", "0"], "expected a positive integer, got 0"),
         (["vae", "--run", "gan", "--config", "quick"], "vae has the runs"),
+        (["vae", "--config", "quick", "--out", __file__], "a file, not a folder"),
+        (["odmo", "--config", "quick", "--set", "frame_stride=7"], "the config expects clips of 40 frames"),
     ],
 )
 def test_bad_arguments_get_one_line_and_exit_code_2(argv, message, monkeypatch, capsys):

@@ -29,6 +29,7 @@ from pathlib import Path
 from types import ModuleType
 from typing import Any
 
+from motionlab import arguments
 from motionlab.apps.families import FAMILIES, family, jsonable
 from motionlab.data.streaming import clip_files
 
@@ -36,8 +37,9 @@ CONFIGS = ("quick", "full", "long")
 PROG = "python -m motionlab.apps.training"
 
 
-class UsageError(Exception):
-    """A bad argument: reported in one line, exit code 2."""
+class UsageError(ValueError):
+    """A bad argument: reported in one line, exit code 2 (like every ``ValueError`` the command meets, e.g. a
+    configuration the data cannot serve; :func:`motionlab.arguments.run`)."""
 
 
 class _Parser(argparse.ArgumentParser):
@@ -187,6 +189,8 @@ def build_config(experiment: ModuleType, args: argparse.Namespace, run: str) -> 
             cfg = set_field(cfg, key.strip(), text.strip())
         if args.steps is not None:
             cfg = experiment.with_steps(cfg, run, args.steps)
+    except UsageError:
+        raise
     except (ValueError, TypeError) as error:  # the config's own checks
         raise UsageError(f"invalid configuration: {error}") from None
     return cfg
@@ -292,6 +296,8 @@ def train_command(args: argparse.Namespace) -> dict[str, Any]:
     experiment = family(args.family)
     run_name = args.run or experiment.DEFAULT_RUN
     check_folder(args.family, experiment, args.data)
+    if args.out is not None and args.out.exists() and not args.out.is_dir():
+        raise UsageError(f"--out {args.out}: a file, not a folder")
     device = choose_device(args.device)
     cfg = build_config(experiment, args, run_name)
     tensorboard = TensorBoardLog(args.tensorboard) if args.tensorboard else None
@@ -394,15 +400,15 @@ def train_command(args: argparse.Namespace) -> dict[str, Any]:
 
 def main(argv: Sequence[str] | None = None) -> int:
     """The command; returns its exit code (2 for bad arguments)."""
+
+    def command() -> int:
+        train_command(parser().parse_args(argv))
+        return 0
+
     try:
-        args = parser().parse_args(argv)
-        train_command(args)
-    except UsageError as error:
-        print(f"{PROG}: error: {error}", file=sys.stderr)
-        return 2
+        return arguments.run(PROG, command)
     finally:
         _end_processes()
-    return 0
 
 
 def _end_processes() -> None:

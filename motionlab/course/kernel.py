@@ -37,6 +37,8 @@ from nbclient.exceptions import CellExecutionComplete, CellTimeoutError, DeadKer
 from nbclient.util import ensure_async
 from nbformat import NotebookNode
 
+from motionlab.validation import Checked, real
+
 #: How often the reply channel is polled while a cell runs (seconds).
 POLL_SECONDS = 1.0
 
@@ -45,7 +47,7 @@ STALL_SECONDS = 2.0
 
 
 @dataclass(frozen=True)
-class CellLimits:
+class CellLimits(Checked):
     """Time limits for the cells of one notebook.
 
     ``cell_seconds``: the longest any one cell may run. ``answer_seconds``: how long the kernel may take
@@ -53,16 +55,8 @@ class CellLimits:
     either in milliseconds, so a few tens of seconds only ever trip on a kernel that stopped answering.
     """
 
-    cell_seconds: float
-    answer_seconds: float = 30.0
-
-    def __post_init__(self) -> None:
-        for name in ("cell_seconds", "answer_seconds"):
-            value = getattr(self, name)
-            if isinstance(value, bool) or not isinstance(value, (int, float)) or not 0 < value < float("inf"):
-                raise ValueError(
-                    f"CellLimits.{name} must be a positive finite number of seconds, got {value!r}"
-                )
+    cell_seconds: float = real(above=0)
+    answer_seconds: float = real(30.0, above=0)
 
 
 class KernelNotAnswering(RuntimeError):

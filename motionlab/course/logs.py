@@ -104,7 +104,7 @@ def main(argv: list[str] | None = None) -> int:
         return 2
     try:
         return run_logged(argv[0], argv[2:])
-    except ValueError as exc:
+    except (ValueError, OSError) as exc:  # a bad name, or a log folder that cannot be made
         print(f"motionlab.course.logs: {exc}", file=sys.stderr)
         return 2
 

@@ -92,7 +92,9 @@ def mirror_rotations(rotations: Tensor, permutation: Tensor | None = None) -> Te
     return reflected[..., permutation, :]
 
 
-def _check_clips(positions: Tensor, rotations: Tensor, func: str) -> None:
+def check_clips(positions: Tensor, rotations: Tensor, func: str) -> None:
+    """Check clips' global positions ``(..., T, J, 3)`` and local quaternions ``(..., T, J, 4)`` of the same
+    ``(..., T, J)`` (``func`` names the caller in the messages)."""
     check_tensor(positions, "positions", func, trailing=(None, 3), min_leading=1)
     check_tensor(rotations, "rotations", func, trailing=(None, 4), min_leading=1)
     if positions.shape[:-1] != rotations.shape[:-1]:
@@ -117,7 +119,7 @@ def random_mirror(
             number is below ``p``.
         permutation: the left/right swap, :data:`DEFAULT_MIRROR` by default.
     """
-    _check_clips(positions, rotations, "random_mirror")
+    check_clips(positions, rotations, "random_mirror")
     check_scalar(p, "p (a probability)", "random_mirror", minimum=0, maximum=1)
     flip = torch.rand(positions.shape[:-3], generator=generator) < p
     flip = flip.to(positions.device)[..., None, None, None]
@@ -134,7 +136,7 @@ def rotate_yaw(positions: Tensor, rotations: Tensor, angle: Tensor) -> tuple[Ten
         rotations: ``(..., T, J, 4)``; only joint 0 (the root's global orientation) changes, to
             ``yaw_to_quat(angle) ⊗ q_root``.
     """
-    _check_clips(positions, rotations, "rotate_yaw")
+    check_clips(positions, rotations, "rotate_yaw")
     angle = check_tensor(
         torch.as_tensor(angle, dtype=positions.dtype, device=positions.device), "angle", "rotate_yaw"
     )
@@ -157,7 +159,7 @@ def random_yaw(positions: Tensor, rotations: Tensor, generator: torch.Generator)
     ``generator`` draws ``torch.rand(...)`` once, one number ``u`` per clip, and the angle is
     ``(2 u - 1) pi``.
     """
-    _check_clips(positions, rotations, "random_yaw")
+    check_clips(positions, rotations, "random_yaw")
     angle = (
         2.0 * torch.rand(positions.shape[:-3], generator=generator, dtype=positions.dtype) - 1.0
     ) * math.pi

@@ -59,12 +59,16 @@ from motionlab.paths import REPO_ROOT
 from motionlab.skeleton import Skeleton
 from motionlab.validation import (
     ArrayLike,
+    Checked,
     RngLike,
     as_labels,
     as_rng,
     check_array,
     check_choice,
     check_scalar,
+    flag,
+    integer,
+    real,
 )
 
 FPS = 12.0
@@ -167,7 +171,7 @@ FEET = (JOINT["left_ankle"], JOINT["left_toe"], JOINT["right_ankle"], JOINT["rig
 
 
 @dataclass(frozen=True)
-class LoadConfig:
+class LoadConfig(Checked):
     """What :func:`load_cmu_mocap` accepts.
 
     Attributes:
@@ -176,17 +180,12 @@ class LoadConfig:
         verify: check the compact copy against its SHA-256 checksums (about 0.3 s of a 0.8 s load).
     """
 
-    min_frames: int = 2
-    verify: bool = True
-
-    def __post_init__(self) -> None:
-        check_scalar(self.min_frames, "min_frames", "LoadConfig", kind=numbers.Integral, minimum=1)
-        if not isinstance(self.verify, bool):
-            raise TypeError(f"LoadConfig: verify must be a bool, got {self.verify!r}")
+    min_frames: int = integer(2, minimum=1)
+    verify: bool = flag(True)
 
 
 @dataclass(frozen=True, eq=False)
-class MocapClips:
+class MocapClips(Checked):
     """Clips of different lengths with their labels.
 
     Attributes:
@@ -204,20 +203,20 @@ class MocapClips:
     clip_id: tuple[str, ...]
     action_names: tuple[str, ...]
     parents: tuple[int, ...] = PARENTS
-    fps: float = FPS
+    fps: float = real(FPS, above=0)
 
     def __post_init__(self) -> None:
+        super().__post_init__()
         where = "MocapClips"
         object.__setattr__(self, "positions", tuple(self.positions))
         object.__setattr__(self, "clip_id", tuple(str(c) for c in self.clip_id))
         object.__setattr__(self, "action_names", tuple(str(a) for a in self.action_names))
         action = np.asarray(self.action)
-        if action.ndim != 1 or action.dtype.kind not in "iu":
-            raise ValueError(
-                f"{where}: action must be a 1-D integer array, got {action.dtype} {action.shape}"
-            )
+        if action.dtype.kind not in "iu":
+            raise TypeError(f"{where}: action must be a 1-D integer array, got dtype {action.dtype}")
+        if action.ndim != 1:
+            raise ValueError(f"{where}: action must be a 1-D integer array, got shape {action.shape}")
         object.__setattr__(self, "action", action.astype(np.int64))
-        check_scalar(self.fps, "fps", where, minimum=0, include_minimum=False)
         object.__setattr__(self, "parents", tuple(int(p) for p in self.parents))
         if not len(self.positions) == len(self.action) == len(self.clip_id):
             raise ValueError(
@@ -230,8 +229,15 @@ class MocapClips:
                     f"{where}: clip {clip}: unknown label {action_index} "
                     f"(classes 0..{len(self.action_names) - 1})"
                 )
-            if not isinstance(positions, np.ndarray) or positions.ndim != 3 or positions.shape[2] != 3:
-                raise ValueError(f"{where}: clip {clip}: positions must be an array (T, J, 3)")
+            if not isinstance(positions, np.ndarray):
+                raise TypeError(
+                    f"{where}: clip {clip}: positions must be a NumPy array (T, J, 3), "
+                    f"got {type(positions).__name__}"
+                )
+            if positions.ndim != 3 or positions.shape[2] != 3:
+                raise ValueError(
+                    f"{where}: clip {clip}: positions must be an array (T, J, 3), got shape {positions.shape}"
+                )
 
     @property
     def n_clips(self) -> int:
@@ -441,9 +447,9 @@ def random_windows(clips: MocapClips, length: int = 100, rng: RngLike = 0) -> Wi
     starts = np.array([generator.integers(0, max(t - length, 0) + 1) for t in lengths], dtype=np.int64)
     n_real = np.minimum(lengths, length)
     out = np.empty((clips.n_clips, length) + clips.positions[0].shape[1:], dtype=np.float32)
-    for i, (positions, start, real) in enumerate(zip(clips.positions, starts, n_real)):
-        out[i, :real] = positions[start : start + real]
-        out[i, real:] = positions[start + real - 1]
+    for i, (positions, start, n) in enumerate(zip(clips.positions, starts, n_real)):
+        out[i, :n] = positions[start : start + n]
+        out[i, n:] = positions[start + n - 1]
     return Windows(
         first_root_at_origin(out),
         clips.action.copy(),

@@ -30,7 +30,7 @@ import numpy as np
 import torch
 
 from motionlab.skeleton import forward_kinematics
-from motionlab.validation import check_finite, check_scalar
+from motionlab.validation import Checked, check_finite, check_scalar, real
 
 #: BVH channel names (canonical spelling); a joint lists a subset of them, each at most once.
 POSITION_CHANNELS = ("Xposition", "Yposition", "Zposition")
@@ -137,7 +137,7 @@ def _check_end_sites(end_sites: Sequence[EndSite], num_joints: int) -> tuple[End
 
 
 @dataclass(frozen=True, eq=False, repr=False)
-class Motion:
+class Motion(Checked):
     """One motion clip: local joint rotations, root translation and the skeleton they pose.
 
     Args:
@@ -165,12 +165,13 @@ class Motion:
     offsets: torch.Tensor
     rotations: torch.Tensor
     root_positions: torch.Tensor
-    fps: float
+    fps: float = real(above=0)
     channels: tuple[tuple[str, ...], ...] | None = None
     end_sites: tuple[EndSite, ...] | None = None
     joint_translations: torch.Tensor | None = None
 
     def __post_init__(self) -> None:
+        super().__post_init__()
         names = _check_names(self.joint_names)
         num_joints = len(names)
         set_field = object.__setattr__
@@ -199,9 +200,7 @@ class Motion:
         _check_shape(root, "root_positions", (num_frames, 3), f"({num_frames}, 3) (T from rotations)")
         set_field(self, "root_positions", root)
 
-        set_field(
-            self, "fps", float(check_scalar(self.fps, "fps", "Motion", minimum=0, include_minimum=False))
-        )
+        set_field(self, "fps", float(self.fps))
 
         if self.channels is not None:
             set_field(self, "channels", _check_channels(self.channels, num_joints))

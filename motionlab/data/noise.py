@@ -26,31 +26,21 @@ import numpy as np
 import torch
 
 from motionlab.geometry import axis_angle_to_quat, quat_mul
-from motionlab.validation import as_rng, check_array, check_scalar
+from motionlab.validation import Checked, as_rng, check_array, check_scalar, real, tuple_of
 
 
 @dataclass(frozen=True)
-class NoiseConfig:
+class NoiseConfig(Checked):
     """Noise levels; lengths in metres for positions and angles in radians for rotations."""
 
-    jitter: float = 0.01
-    spike_rate: float = 0.002
-    spike_frames: tuple[int, int] = (2, 5)
-    spike_size: float = 0.15
+    jitter: float = real(0.01, minimum=0)
+    spike_rate: float = real(0.002, minimum=0, maximum=1, note="a probability per frame and joint")
+    spike_frames: tuple[int, int] = tuple_of((2, 5), kind=numbers.Integral, minimum=1, length=2)
+    spike_size: float = real(0.15, minimum=0)
 
     def __post_init__(self) -> None:
-        check_scalar(self.jitter, "jitter", "NoiseConfig", minimum=0)
-        check_scalar(
-            self.spike_rate,
-            "spike_rate (a probability per frame and joint)",
-            "NoiseConfig",
-            minimum=0,
-            maximum=1,
-        )
-        check_scalar(self.spike_size, "spike_size", "NoiseConfig", minimum=0)
-        lo, hi = self.spike_frames
-        check_scalar(lo, "spike_frames[0]", "NoiseConfig", kind=numbers.Integral, minimum=1)
-        check_scalar(hi, "spike_frames[1]", "NoiseConfig", kind=numbers.Integral, minimum=lo)
+        super().__post_init__()
+        check_scalar(self.spike_frames[1], "spike_frames[1]", "NoiseConfig", minimum=self.spike_frames[0])
 
 
 #: Defaults for rotations: 0.02 rad jitter, spikes of about 0.5 rad (29 degrees).

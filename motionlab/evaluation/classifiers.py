@@ -15,19 +15,19 @@ output head per label (``action``, ``mode``, ``body``) on a shared trunk.
 from __future__ import annotations
 
 import numbers
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from typing import Literal
 
 import torch
 from torch import Tensor, nn
 
-from motionlab.validation import check_choice, check_scalar, check_tensor
+from motionlab.validation import Checked, check_scalar, check_tensor, choice, instance, integer
 
 HEADS = ("action", "mode", "body")
 
 
 @dataclass(frozen=True)
-class ClassifierConfig:
+class ClassifierConfig(Checked):
     """Architecture of an evaluation classifier.
 
     Attributes:
@@ -40,18 +40,16 @@ class ClassifierConfig:
         kernel_size: temporal kernel of the conv layers (odd).
     """
 
-    kind: Literal["conv", "gru"]
-    in_features: int
-    classes: dict[str, int] = field(default_factory=dict)
-    hidden: int = 128
-    feature_dim: int = 30
-    kernel_size: int = 5
+    kind: Literal["conv", "gru"] = choice(("conv", "gru"))
+    in_features: int = integer(minimum=1)
+    classes: dict[str, int] = instance(dict, default_factory=dict)
+    hidden: int = integer(128, minimum=1)
+    feature_dim: int = integer(30, minimum=1)
+    kernel_size: int = integer(5, minimum=1)
 
     def __post_init__(self) -> None:
+        super().__post_init__()
         where = "ClassifierConfig"
-        check_choice(self.kind, "kind", where, ("conv", "gru"))
-        for name in ("in_features", "hidden", "feature_dim", "kernel_size"):
-            check_scalar(getattr(self, name), name, where, kind=numbers.Integral, minimum=1)
         if not self.classes:
             raise ValueError(f"{where}: classes needs at least one head, got {self.classes}")
         for head, count in self.classes.items():

@@ -27,13 +27,14 @@ from motionlab.evaluation.classifiers import HEADS, ClassifierConfig, MotionClas
 from motionlab.evaluation.inputs import EVAL_FEATURES, body_frame_features
 from motionlab.train import TrainConfig, TrainResult
 from motionlab.train.run import Run, given
+from motionlab.validation import Checked, choice, integer, real
 
 #: Clips are evaluated in chunks of this many to bound memory.
 CHUNK = 256
 
 
 @dataclass(frozen=True)
-class EvaluatorConfig:
+class EvaluatorConfig(Checked):
     """How an evaluation classifier is built and trained.
 
     Attributes:
@@ -45,14 +46,14 @@ class EvaluatorConfig:
         seed: seeds initialisation and batch order.
     """
 
-    kind: Literal["conv", "gru"] = "gru"
-    steps: int = 300
-    batch_size: int = 64
-    lr: float = 2e-3
-    min_crop: int = 40
-    hidden: int = 128
-    feature_dim: int = 30
-    seed: int = 0
+    kind: Literal["conv", "gru"] = choice(("conv", "gru"), "gru")
+    steps: int = integer(300, minimum=1)
+    batch_size: int = integer(64, minimum=1)
+    lr: float = real(2e-3, above=0)
+    min_crop: int = integer(40, minimum=1)
+    hidden: int = integer(128, minimum=1)
+    feature_dim: int = integer(30, minimum=1)
+    seed: int = integer(0, minimum=0)
 
 
 def default_evaluator_config(kind: Literal["conv", "gru"]) -> EvaluatorConfig:

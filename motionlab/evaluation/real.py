@@ -52,7 +52,7 @@ from motionlab.evaluation.evaluator import Evaluator, data_fingerprint
 from motionlab.metrics import Interval, mean_ci
 from motionlab.train import TrainConfig, TrainResult
 from motionlab.train.run import Run, given
-from motionlab.validation import check_scalar
+from motionlab.validation import Checked, check_scalar, integer, real
 
 #: Columns of Table 2 that this protocol measures, in the paper's order.
 TABLE2_METRICS = ("accuracy", "fid", "diversity", "multimodality")
@@ -125,7 +125,7 @@ def canonical(positions: Tensor | np.ndarray) -> np.ndarray:
 
 
 @dataclass(frozen=True)
-class RealEvaluatorConfig:
+class RealEvaluatorConfig(Checked):
     """How the real-data classifier is built and trained.
 
     Attributes:
@@ -135,23 +135,21 @@ class RealEvaluatorConfig:
             feature layer (30); seed: initialisation, windows and batch order.
     """
 
-    window: int = 100
-    frame_stride: int = 2
-    steps: int = 300
-    batch_size: int = 64
-    lr: float = 2e-3
-    hidden: int = 128
-    feature_dim: int = 30
-    seed: int = 0
+    window: int = integer(100, minimum=1)
+    frame_stride: int = integer(2, minimum=1)
+    steps: int = integer(300, minimum=1)
+    batch_size: int = integer(64, minimum=1)
+    lr: float = real(2e-3, above=0)
+    hidden: int = integer(128, minimum=1)
+    feature_dim: int = integer(30, minimum=1)
+    seed: int = integer(0, minimum=0)
 
     def __post_init__(self) -> None:
-        where = "RealEvaluatorConfig"
-        for name in ("window", "frame_stride", "steps", "batch_size", "hidden", "feature_dim"):
-            check_scalar(getattr(self, name), name, where, kind=numbers.Integral, minimum=1)
-        check_scalar(self.seed, "seed", where, kind=numbers.Integral, minimum=0)
-        check_scalar(self.lr, "lr", where, minimum=0, include_minimum=False)
+        super().__post_init__()
         if self.frame_stride >= self.window:
-            raise ValueError(f"{where}: frame_stride {self.frame_stride} leaves one frame of {self.window}")
+            raise ValueError(
+                f"RealEvaluatorConfig: frame_stride {self.frame_stride} leaves one frame of {self.window}"
+            )
 
 
 class XYZEvaluator(Evaluator):

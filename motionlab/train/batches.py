@@ -23,6 +23,8 @@ import torch
 from torch import Tensor
 from torch.utils.data import DataLoader, RandomSampler, SubsetRandomSampler, WeightedRandomSampler
 
+from motionlab.validation import Checked, flag
+
 BatchSource = DataLoader | Callable[[int, torch.Generator, int], Iterable[Any]]
 
 _RANDOM_SAMPLERS = (RandomSampler, SubsetRandomSampler, WeightedRandomSampler)
@@ -70,7 +72,7 @@ def epoch_batches(
 
 
 @dataclass(frozen=True, eq=False)
-class TensorBatches:
+class TensorBatches(Checked):
     """In-memory tensors sharing a first dimension, served as shuffled minibatches.
 
     Called by the loop as ``batches(epoch, generator, batch_size)``; yields one tensor per batch when built
@@ -79,13 +81,18 @@ class TensorBatches:
     """
 
     tensors: tuple[Tensor, ...]
-    drop_last: bool = True
-    shuffle: bool = True
+    drop_last: bool = flag(True)
+    shuffle: bool = flag(True)
 
     def __post_init__(self) -> None:
+        super().__post_init__()
         tensors = (self.tensors,) if isinstance(self.tensors, Tensor) else tuple(self.tensors)
-        if not tensors or not all(isinstance(t, Tensor) for t in tensors):
-            raise TypeError("TensorBatches needs one or more tensors")
+        if not all(isinstance(t, Tensor) for t in tensors):
+            raise TypeError(
+                f"TensorBatches: tensors must be tensors, got {[type(t).__name__ for t in tensors]}"
+            )
+        if not tensors:
+            raise ValueError("TensorBatches needs one or more tensors, got none")
         sizes = {t.shape[0] if t.dim() else None for t in tensors}
         if len(sizes) != 1 or None in sizes:
             raise ValueError(

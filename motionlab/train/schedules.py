@@ -25,7 +25,7 @@ import numbers
 from dataclasses import dataclass
 from typing import Protocol, runtime_checkable
 
-from motionlab.validation import check_scalar
+from motionlab.validation import Checked, check_scalar, integer, real
 
 #: The types a schedule's numbers may have: plain Python numbers, since a schedule's fields go into the cache
 #: key of a training run (JSON).
@@ -95,13 +95,10 @@ class PiecewiseLinear:
 
 
 @dataclass(frozen=True)
-class Constant:
+class Constant(Checked):
     """The same value at every step."""
 
-    value: float
-
-    def __post_init__(self) -> None:
-        check_scalar(self.value, "value", "Constant", kind=_NUMBER)
+    value: float = real(kind=_NUMBER)
 
     def __call__(self, step: int) -> float:
         check_scalar(step, "step", "Constant", kind=numbers.Integral, minimum=0)
@@ -109,7 +106,7 @@ class Constant:
 
 
 @dataclass(frozen=True)
-class LinearRamp:
+class LinearRamp(Checked):
     """``begin`` for ``step < start``; linear to ``end`` at ``start + length``; ``end`` afterwards.
 
     ``length=0`` is a switch: ``end`` from ``start`` on. Rising or falling both work, e.g. a loss weight
@@ -117,16 +114,10 @@ class LinearRamp:
     decaying from 1 to 0.3 (``LinearRamp(0, 5000, 1.0, 0.3)``).
     """
 
-    start: int
-    length: int
-    begin: float
-    end: float
-
-    def __post_init__(self) -> None:
-        check_scalar(self.start, "start", "LinearRamp", kind=int, minimum=0)
-        check_scalar(self.length, "length", "LinearRamp", kind=int, minimum=0)
-        check_scalar(self.begin, "begin", "LinearRamp", kind=_NUMBER)
-        check_scalar(self.end, "end", "LinearRamp", kind=_NUMBER)
+    start: int = integer(minimum=0, kind=int)
+    length: int = integer(minimum=0, kind=int)
+    begin: float = real(kind=_NUMBER)
+    end: float = real(kind=_NUMBER)
 
     def __call__(self, step: int) -> float:
         return _interpolate(
@@ -135,7 +126,7 @@ class LinearRamp:
 
 
 @dataclass(frozen=True)
-class KLAnneal:
+class KLAnneal(Checked):
     """KL weight: 0 during warm-up, linear ramp to ``max_value`` during anneal, hold; optional cool-down.
 
     With ``W = warmup``, ``A = anneal``, ``C = cooldown_start``, ``D = cooldown`` and ``m = max_value``::
@@ -151,27 +142,21 @@ class KLAnneal:
     end of training so the last steps favour reconstruction; it must start after the anneal ends.
     """
 
-    max_value: float
-    warmup: int
-    anneal: int
-    cooldown_start: int | None = None
-    cooldown: int = 0
-    cooldown_value: float = 0.0
+    max_value: float = real(minimum=0, kind=_NUMBER)
+    warmup: int = integer(minimum=0, kind=int)
+    anneal: int = integer(minimum=0, kind=int)
+    cooldown_start: int | None = integer(None, minimum=0, kind=int, optional=True)
+    cooldown: int = integer(0, minimum=0, kind=int)
+    cooldown_value: float = real(0.0, minimum=0, kind=_NUMBER)
 
     def __post_init__(self) -> None:
-        check_scalar(self.max_value, "max_value", "KLAnneal", kind=_NUMBER, minimum=0)
-        for name in ("warmup", "anneal", "cooldown"):
-            check_scalar(getattr(self, name), name, "KLAnneal", kind=int, minimum=0)
-        check_scalar(
-            self.cooldown_value, "cooldown_value", "KLAnneal", kind=_NUMBER, minimum=0, maximum=self.max_value
-        )
-        if self.cooldown_start is not None:
-            check_scalar(self.cooldown_start, "cooldown_start", "KLAnneal", kind=int, minimum=0)
-            if self.cooldown_start < self.warmup + self.anneal:
-                raise ValueError(
-                    f"KLAnneal.cooldown_start ({self.cooldown_start}) must be >= warmup + anneal "
-                    f"({self.warmup + self.anneal})"
-                )
+        super().__post_init__()
+        check_scalar(self.cooldown_value, "cooldown_value", "KLAnneal", minimum=0, maximum=self.max_value)
+        if self.cooldown_start is not None and self.cooldown_start < self.warmup + self.anneal:
+            raise ValueError(
+                f"KLAnneal.cooldown_start ({self.cooldown_start}) must be >= warmup + anneal "
+                f"({self.warmup + self.anneal})"
+            )
 
     def __call__(self, step: int) -> float:
         points: tuple[tuple[int, float], ...] = (

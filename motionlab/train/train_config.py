@@ -3,12 +3,12 @@
 from __future__ import annotations
 
 import dataclasses
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from typing import Any
 
 from motionlab.checkpoints import config_dict
 from motionlab.train.schedules import Schedule
-from motionlab.validation import check_scalar
+from motionlab.validation import Checked, instance, integer, real, tuple_of
 
 #: The types of the numeric fields: plain Python numbers, since the fields go into the cache key (JSON).
 _NUMBER = (int, float)
@@ -29,7 +29,7 @@ def schedule_config(schedule: Schedule) -> dict[str, Any]:
 
 
 @dataclass(frozen=True)
-class TrainConfig:
+class TrainConfig(Checked):
     """How to train: length, optimiser (AdamW), clipping, schedules, and bookkeeping intervals.
 
     Attributes:
@@ -51,46 +51,26 @@ class TrainConfig:
     :meth:`identity`, so changing them does not invalidate a cached model.
     """
 
-    steps: int | None = None
-    epochs: int | None = None
-    batch_size: int = 64
-    lr: float = 1e-3
-    weight_decay: float = 0.0
-    betas: tuple[float, float] = (0.9, 0.999)
-    grad_clip: float | None = 1.0
-    schedules: dict[str, Schedule] = field(default_factory=dict)
+    steps: int | None = integer(None, minimum=1, kind=int, optional=True)
+    epochs: int | None = integer(None, minimum=1, kind=int, optional=True)
+    batch_size: int = integer(64, minimum=1, kind=int)
+    lr: float = real(1e-3, above=0, kind=_NUMBER)
+    weight_decay: float = real(0.0, minimum=0, kind=_NUMBER)
+    betas: tuple[float, float] = tuple_of((0.9, 0.999), minimum=0, below=1, kind=_NUMBER, length=2)
+    grad_clip: float | None = real(1.0, above=0, kind=_NUMBER, optional=True)
+    schedules: dict[str, Schedule] = instance(dict, default_factory=dict)
     lr_schedule: Schedule | None = None
-    val_every: int | None = None
-    log_every: int = 50
-    checkpoint_every: int | None = 500
-    seed: int = 0
+    val_every: int | None = integer(None, minimum=1, kind=int, optional=True)
+    log_every: int = integer(50, minimum=1, kind=int)
+    checkpoint_every: int | None = integer(500, minimum=1, kind=int, optional=True)
+    seed: int = integer(0, minimum=0, kind=int)
 
     def __post_init__(self) -> None:
+        super().__post_init__()
         if (self.steps is None) == (self.epochs is None):
             raise ValueError(
                 f"TrainConfig: set exactly one of steps and epochs, got steps={self.steps}, "
                 f"epochs={self.epochs}"
-            )
-        where = "TrainConfig"
-        optional = ("steps", "epochs", "val_every", "checkpoint_every")  # None: not set
-        for name in ("steps", "epochs", "batch_size", "val_every", "log_every", "checkpoint_every"):
-            value = getattr(self, name)
-            if value is not None or name not in optional:
-                check_scalar(value, name, where, kind=int, minimum=1)
-        check_scalar(self.seed, "seed", where, kind=int, minimum=0)
-        check_scalar(self.lr, "lr", where, kind=_NUMBER, minimum=0, include_minimum=False)
-        check_scalar(self.weight_decay, "weight_decay", where, kind=_NUMBER, minimum=0)
-        if len(self.betas) != 2:
-            raise ValueError(f"{where}: betas must be two numbers in [0, 1), got {self.betas!r}")
-        for index, beta in enumerate(self.betas):
-            check_scalar(
-                beta, f"betas[{index}]", where, kind=_NUMBER, minimum=0, maximum=1, include_maximum=False
-            )
-        if self.grad_clip is not None:
-            check_scalar(self.grad_clip, "grad_clip", where, kind=_NUMBER, minimum=0, include_minimum=False)
-        if not isinstance(self.schedules, dict):
-            raise TypeError(
-                f"TrainConfig.schedules must be a dict name -> schedule, got {type(self.schedules).__name__}"
             )
         for name, schedule in self.schedules.items():
             if not isinstance(name, str) or not name:

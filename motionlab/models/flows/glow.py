@@ -19,7 +19,6 @@ motion model of MoGlow's §3.4: one flow over a whole clip, with exact log-likel
 
 from __future__ import annotations
 
-import numbers
 from dataclasses import dataclass
 
 import torch
@@ -30,7 +29,7 @@ from motionlab.models.flows.base import FlowLayer, FlowSequence, check_cond, che
 from motionlab.models.flows.coupling import AffineCoupling
 from motionlab.models.flows.invconv import InvertibleConv1x1
 from motionlab.models.flows.prior import StandardNormal, check_temperature
-from motionlab.validation import check_scalar
+from motionlab.validation import Checked, integer
 
 
 def squeeze_time(x: Tensor) -> Tensor:
@@ -136,7 +135,7 @@ class GlowLevel(FlowLayer):
 
 
 @dataclass(frozen=True)
-class GlowConfig:
+class GlowConfig(Checked):
     """A multi-scale conditional Glow over fixed-length sequences.
 
     Attributes:
@@ -149,18 +148,16 @@ class GlowConfig:
         kernel_size: odd temporal kernel of the coupling networks.
     """
 
-    channels: int
-    length: int
-    cond_channels: int = 0
-    levels: int = 2
-    steps_per_level: int = 4
-    hidden: int = 64
-    kernel_size: int = 3
+    channels: int = integer(minimum=1)
+    length: int = integer(minimum=1)
+    cond_channels: int = integer(0, minimum=0)
+    levels: int = integer(2, minimum=1)
+    steps_per_level: int = integer(4, minimum=1)
+    hidden: int = integer(64, minimum=1)
+    kernel_size: int = integer(3, minimum=1)
 
     def __post_init__(self) -> None:
-        for name in ("channels", "length", "levels", "steps_per_level", "hidden", "kernel_size"):
-            check_scalar(getattr(self, name), name, "GlowConfig", kind=numbers.Integral, minimum=1)
-        check_scalar(self.cond_channels, "cond_channels", "GlowConfig", kind=numbers.Integral, minimum=0)
+        super().__post_init__()
         if self.length % 2**self.levels:
             raise ValueError(
                 f"GlowConfig: length {self.length} must be divisible by 2**levels = {2**self.levels}"

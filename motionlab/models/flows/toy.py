@@ -20,7 +20,7 @@ from torch import Tensor, nn
 from motionlab.models.flows.base import FlowSequence
 from motionlab.models.flows.glow import GlowStep
 from motionlab.models.flows.prior import StandardNormal, check_temperature
-from motionlab.validation import check_scalar, check_tensor
+from motionlab.validation import Checked, check_scalar, check_tensor, integer
 
 #: Centre and scale that bring the two moons of :func:`two_moons` to roughly zero mean and unit spread.
 MOONS_CENTER = (0.5, 0.25)
@@ -46,15 +46,11 @@ def two_moons(n: int, noise: float = 0.06, seed: int = 0) -> Tensor:
 
 
 @dataclass(frozen=True)
-class ToyFlowConfig:
+class ToyFlowConfig(Checked):
     """A 2D flow: ``steps`` Glow steps (ActNorm, 1x1 conv, affine coupling) with per-point networks."""
 
-    steps: int = 8
-    hidden: int = 64
-
-    def __post_init__(self) -> None:
-        for name in ("steps", "hidden"):
-            check_scalar(getattr(self, name), name, "ToyFlowConfig", kind=numbers.Integral, minimum=1)
+    steps: int = integer(8, minimum=1)
+    hidden: int = integer(64, minimum=1)
 
 
 class ToyFlow(nn.Module):

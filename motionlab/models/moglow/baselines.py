@@ -15,42 +15,30 @@ from torch import Tensor, nn
 
 from motionlab.models.flows.coupling import zero_init
 from motionlab.models.moglow.conditioning import (
+    HistoryConfig,
     autoregressive_conditioning,
-    check_history_config,
     check_pose_control,
     history_keep_mask,
 )
-from motionlab.models.moglow.data import CONTROL_DIM, POSE_DIM
 from motionlab.models.moglow.linear import LinearPredictor
 from motionlab.models.moglow.sampling import autoregressive_sample, sampling_setup
+from motionlab.validation import integer, real
 
 #: Bounds on the predicted log standard deviation (standard units), to keep the likelihood finite.
 LOG_STD_RANGE = (-15.0, 5.0)
 
 
 @dataclass(frozen=True)
-class GaussianARConfig:
+class GaussianARConfig(HistoryConfig):
     """The baseline: an LSTM over MoGlow's conditioning that outputs a diagonal Gaussian for the next pose.
 
-    Attributes: as :class:`~.model.MoGlowConfig`; ``hidden`` is the LSTM width, ``layers`` its depth.
+    Attributes: the conditioning of :class:`~.conditioning.HistoryConfig`; ``hidden`` is the LSTM width,
+    ``layers`` its depth, ``dropout`` the history dropout (as in :class:`~.model.MoGlowConfig`).
     """
 
-    pose_dim: int = POSE_DIM
-    control_dim: int = CONTROL_DIM
-    history: int = 5
-    hidden: int = 256
-    layers: int = 1
-    dropout: float = 0.0
-
-    def __post_init__(self) -> None:
-        check_history_config(
-            self, "GaussianARConfig", ("pose_dim", "control_dim", "history", "hidden", "layers")
-        )
-
-    @property
-    def cond_dim(self) -> int:
-        """Conditioning features per frame: ``tau`` poses and ``tau + 1`` controls."""
-        return self.history * self.pose_dim + (self.history + 1) * self.control_dim
+    hidden: int = integer(256, minimum=1)
+    layers: int = integer(1, minimum=1)
+    dropout: float = real(0.0, minimum=0, below=1)
 
 
 class GaussianAR(nn.Module):

@@ -23,12 +23,35 @@ inputs where one previous pose in twenty is visible adds up all ``tau`` of them 
 from __future__ import annotations
 
 import numbers
-from typing import Any
+from dataclasses import dataclass
 
 import torch
 from torch import Tensor
 
-from motionlab.validation import check_scalar, check_tensor
+from motionlab.models.moglow.data import CONTROL_DIM, POSE_DIM
+from motionlab.validation import Checked, check_scalar, check_tensor, integer
+
+
+@dataclass(frozen=True)
+class HistoryConfig(Checked):
+    """The conditioning sizes of an autoregressive model of MoGlow's features (the base of
+    :class:`~.model.MoGlowConfig` and :class:`~.baselines.GaussianARConfig`).
+
+    Attributes:
+        pose_dim: pose features per frame (64: root height and 21 joints' xyz).
+        control_dim: control features per frame (3: forward, sideways, yaw velocity).
+        history: ``tau``, the previous poses in the conditioning (with ``tau + 1`` control frames, the
+            current one included: zero-latency control).
+    """
+
+    pose_dim: int = integer(POSE_DIM, minimum=1)
+    control_dim: int = integer(CONTROL_DIM, minimum=1)
+    history: int = integer(5, minimum=1)
+
+    @property
+    def cond_dim(self) -> int:
+        """Conditioning features per frame: ``tau`` poses and ``tau + 1`` controls."""
+        return self.history * self.pose_dim + (self.history + 1) * self.control_dim
 
 
 def check_pose_control(
@@ -59,13 +82,6 @@ def check_pose_control(
         raise ValueError(
             f"{where}: pose and control must have the same frames, got {pose.shape[1]} and {control.shape[1]}"
         )
-
-
-def check_history_config(cfg: Any, where: str, sizes: tuple[str, ...]) -> None:
-    """Check the positive integer sizes ``sizes`` of an autoregressive model's config and its dropout."""
-    for name in sizes:
-        check_scalar(getattr(cfg, name), name, where, kind=numbers.Integral, minimum=1)
-    check_scalar(cfg.dropout, "dropout", where, minimum=0.0, maximum=1.0, include_maximum=False)
 
 
 def history_keep_mask(

@@ -34,7 +34,7 @@ from motionlab.data.representations import CONTROL_FEATURES, representation, to_
 from motionlab.data.store import MotionSet
 from motionlab.data.synthetic import generator_fingerprint
 from motionlab.evaluation.benchmark import Benchmark, benchmark_sizes
-from motionlab.validation import check_scalar, check_tensor
+from motionlab.validation import Checked, check_scalar, check_tensor, flag, tuple_of
 
 #: The actions of the locomotion experiments.
 LOCOMOTION = ("walk", "jog")
@@ -52,7 +52,7 @@ class MoGlowFeatures(NamedTuple):
 
 
 @dataclass(frozen=True)
-class MoGlowDataConfig:
+class MoGlowDataConfig(Checked):
     """Which clips and which augmentation (part of the cache key of every model trained on them).
 
     Attributes:
@@ -61,20 +61,9 @@ class MoGlowDataConfig:
         reverse_time: add the time-reversed clips (of the mirrored ones too).
     """
 
-    actions: tuple[str, ...] = LOCOMOTION
-    mirror: bool = True
-    reverse_time: bool = True
-
-    def __post_init__(self) -> None:
-        if not isinstance(self.actions, tuple) or not all(isinstance(a, str) for a in self.actions):
-            raise TypeError(
-                f"MoGlowDataConfig: actions must be a tuple of action names, got {self.actions!r}"
-            )
-        if not self.actions:
-            raise ValueError("MoGlowDataConfig: actions must name at least one action, got ()")
-        for name in ("mirror", "reverse_time"):
-            if not isinstance(getattr(self, name), bool):
-                raise TypeError(f"MoGlowDataConfig: {name} must be a bool, got {getattr(self, name)!r}")
+    actions: tuple[str, ...] = tuple_of(LOCOMOTION, kind=str, nonempty=True)
+    mirror: bool = flag(True)
+    reverse_time: bool = flag(True)
 
 
 def select_actions(data: MotionSet, actions: Sequence[str]) -> MotionSet:

@@ -8,7 +8,6 @@ models. Every run goes through the course's one training loop and its checkpoint
 
 from __future__ import annotations
 
-import numbers
 from dataclasses import asdict, dataclass, replace
 from functools import partial
 from typing import Any
@@ -35,7 +34,7 @@ from motionlab.models.moglow.sampling import generate_motion
 from motionlab.train import PiecewiseLinear, TensorBatches, TrainConfig, build_seeded
 from motionlab.train.many import Trained, train_many
 from motionlab.train.run import Run, given
-from motionlab.validation import check_scalar
+from motionlab.validation import instance, integer, real, tuple_of
 
 #: The run name of the Gaussian autoregressive baseline in :func:`runs`.
 BASELINE = "Gaussian AR"
@@ -77,66 +76,32 @@ class ExperimentConfig(config.ProfileConfig):
         bench_batch: the large batch of the chapter's generation-speed measurement.
     """
 
-    data: MoGlowDataConfig = MoGlowDataConfig(actions=("walk", "jog", "wave"))
-    window: int = 45
-    stride: int = 10
-    dropout_rates: tuple[float, ...] = (0.0, 0.5, 0.95)
-    unscaled_rates: tuple[float, ...] = (0.95,)
-    moglow_steps: int = 4
-    moglow_hidden: int = 64
-    cond_features: int = 64
-    baseline_hidden: int = 256
-    moglow_train_steps: int = 400
-    moglow_lr: float = 2e-3
-    baseline_train_steps: int = 300
-    baseline_lr: float = 1e-3
-    batch_size: int = 32
-    grad_clip: float = 5.0
-    final_lr_factor: float = 0.05
-    glow_steps_per_level: int = 4
-    glow_hidden: int = 64
-    glow_train_steps: int = 300
-    n_commands: int = 8
-    piece_seconds: float = 3.0
-    n_long: int = 2
-    long_seconds: float = 20.0
-    long_seed: int = 1
-    n_repeats: int = 3
-    bench_batch: int = 256
-
-    def __post_init__(self) -> None:
-        where = "ExperimentConfig"
-        if not isinstance(self.data, MoGlowDataConfig):
-            raise TypeError(f"{where}: data must be a MoGlowDataConfig, got {type(self.data).__name__}")
-        for name in (
-            "window",
-            "stride",
-            "moglow_steps",
-            "moglow_hidden",
-            "cond_features",
-            "baseline_hidden",
-            "moglow_train_steps",
-            "baseline_train_steps",
-            "batch_size",
-            "glow_steps_per_level",
-            "glow_hidden",
-            "glow_train_steps",
-            "n_commands",
-            "n_long",
-            "n_repeats",
-            "bench_batch",
-        ):
-            check_scalar(getattr(self, name), name, where, kind=numbers.Integral, minimum=1)
-        check_scalar(self.long_seed, "long_seed", where, kind=numbers.Integral, minimum=0)
-        for name in ("moglow_lr", "baseline_lr", "grad_clip", "piece_seconds", "long_seconds"):
-            check_scalar(getattr(self, name), name, where, minimum=0.0, include_minimum=False)
-        check_scalar(self.final_lr_factor, "final_lr_factor", where, minimum=0.0)
-        if not isinstance(self.dropout_rates, tuple) or not self.dropout_rates:
-            raise TypeError(f"{where}: dropout_rates must be a non-empty tuple, got {self.dropout_rates!r}")
-        if not isinstance(self.unscaled_rates, tuple):
-            raise TypeError(f"{where}: unscaled_rates must be a tuple, got {self.unscaled_rates!r}")
-        for rate in self.dropout_rates + self.unscaled_rates:
-            check_scalar(rate, "dropout_rates[i]", where, minimum=0.0, maximum=1.0, include_maximum=False)
+    data: MoGlowDataConfig = instance(MoGlowDataConfig, MoGlowDataConfig(actions=("walk", "jog", "wave")))
+    window: int = integer(45, minimum=1)
+    stride: int = integer(10, minimum=1)
+    dropout_rates: tuple[float, ...] = tuple_of((0.0, 0.5, 0.95), minimum=0, below=1, nonempty=True)
+    unscaled_rates: tuple[float, ...] = tuple_of((0.95,), minimum=0, below=1)
+    moglow_steps: int = integer(4, minimum=1)
+    moglow_hidden: int = integer(64, minimum=1)
+    cond_features: int = integer(64, minimum=1)
+    baseline_hidden: int = integer(256, minimum=1)
+    moglow_train_steps: int = integer(400, minimum=1)
+    moglow_lr: float = real(2e-3, above=0)
+    baseline_train_steps: int = integer(300, minimum=1)
+    baseline_lr: float = real(1e-3, above=0)
+    batch_size: int = integer(32, minimum=1)
+    grad_clip: float = real(5.0, above=0)
+    final_lr_factor: float = real(0.05, minimum=0)
+    glow_steps_per_level: int = integer(4, minimum=1)
+    glow_hidden: int = integer(64, minimum=1)
+    glow_train_steps: int = integer(300, minimum=1)
+    n_commands: int = integer(8, minimum=1)
+    piece_seconds: float = real(3.0, above=0)
+    n_long: int = integer(2, minimum=1)
+    long_seconds: float = real(20.0, above=0)
+    long_seed: int = integer(1, minimum=0)
+    n_repeats: int = integer(3, minimum=1)
+    bench_batch: int = integer(256, minimum=1)
 
     @classmethod
     def full(cls) -> ExperimentConfig:
@@ -344,30 +309,26 @@ class RealLocomotionConfig(config.ProfileConfig):
         moglow_train_steps, baseline_train_steps, lr, batch_size: AdamW training of both.
     """
 
-    data: MoGlowDataConfig = MoGlowDataConfig(actions=("Walk", "Run"))
-    window: int = 20
-    stride: int = 20
-    history: int = 5
-    moglow_steps: int = 4
-    moglow_hidden: int = 64
-    cond_features: int = 64
-    dropout: float = 0.0
-    baseline_hidden: int = 128
-    moglow_train_steps: int = 300
-    baseline_train_steps: int = 300
-    lr: float = 2e-3
-    batch_size: int = 32
+    data: MoGlowDataConfig = instance(MoGlowDataConfig, MoGlowDataConfig(actions=("Walk", "Run")))
+    window: int = integer(20, minimum=1)
+    stride: int = integer(20, minimum=1)
+    history: int = integer(5, minimum=1)
+    moglow_steps: int = integer(4, minimum=1)
+    moglow_hidden: int = integer(64, minimum=1)
+    cond_features: int = integer(64, minimum=1)
+    dropout: float = real(0.0, minimum=0, below=1)
+    baseline_hidden: int = integer(128, minimum=1)
+    moglow_train_steps: int = integer(300, minimum=1)
+    baseline_train_steps: int = integer(300, minimum=1)
+    lr: float = real(2e-3, above=0)
+    batch_size: int = integer(32, minimum=1)
 
     def __post_init__(self) -> None:
-        where = "RealLocomotionConfig"
-        for name in ("window", "stride", "history", "moglow_steps", "moglow_hidden", "cond_features"):
-            check_scalar(getattr(self, name), name, where, kind=numbers.Integral, minimum=1)
-        for name in ("baseline_hidden", "moglow_train_steps", "baseline_train_steps", "batch_size"):
-            check_scalar(getattr(self, name), name, where, kind=numbers.Integral, minimum=1)
-        check_scalar(self.lr, "lr", where, minimum=0.0, include_minimum=False)
-        check_scalar(self.dropout, "dropout", where, minimum=0.0, maximum=1.0, include_maximum=False)
+        super().__post_init__()
         if self.window <= self.history:
-            raise ValueError(f"{where}: window {self.window} must be longer than history {self.history}")
+            raise ValueError(
+                f"RealLocomotionConfig: window {self.window} must be longer than history {self.history}"
+            )
 
     @classmethod
     def full(cls) -> RealLocomotionConfig:

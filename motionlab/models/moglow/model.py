@@ -30,13 +30,13 @@ from motionlab.models.flows.base import FlowSequence
 from motionlab.models.flows.invconv import InvertibleConv1x1
 from motionlab.models.flows.prior import StandardNormal
 from motionlab.models.moglow.conditioning import (
+    HistoryConfig,
     autoregressive_conditioning,
-    check_history_config,
     check_pose_control,
     history_keep_mask,
 )
 from motionlab.models.moglow.coupling import LSTMAffineCoupling
-from motionlab.models.moglow.data import CONTROL_DIM, POSE_DIM
+from motionlab.models.moglow.data import POSE_DIM
 from motionlab.models.moglow.linear import LinearPredictor
 from motionlab.models.moglow.sampling import (
     GenerationPlan,
@@ -45,18 +45,16 @@ from motionlab.models.moglow.sampling import (
     sample_frames,
     sampling_setup,
 )
-from motionlab.validation import check_scalar
+from motionlab.validation import flag, integer, real
 
 
 @dataclass(frozen=True)
-class MoGlowConfig:
+class MoGlowConfig(HistoryConfig):
     """MoGlow (§4 of the paper): a next-frame Glow whose couplings are LSTMs over time.
 
     Attributes:
-        pose_dim: output features per frame (64: root height and 21 joints' xyz).
-        control_dim: control features per frame (3: forward, sideways, yaw velocity).
-        history: ``tau``, the previous poses fed to every coupling (and ``tau + 1`` control frames, the
-            current one included: zero-latency control).
+        pose_dim, control_dim, history: as in :class:`~.conditioning.HistoryConfig` (the previous poses and
+            control frames fed to every coupling); a coupling splits the pose, so ``pose_dim`` is at least 2.
         steps: Glow steps ``K`` (ActNorm, 1x1 convolution, LSTM affine coupling).
         hidden: LSTM units in each coupling network.
         cond_features: size of the shared linear projection of the conditioning that every coupling reads
@@ -71,28 +69,12 @@ class MoGlowConfig:
             full-history input of generation; ``False`` zeroes without rescaling (the authors' code).
     """
 
-    pose_dim: int = POSE_DIM
-    control_dim: int = CONTROL_DIM
-    history: int = 5
-    steps: int = 8
-    hidden: int = 64
-    cond_features: int = 64
-    dropout: float = 0.95
-    dropout_rescale: bool = True
-
-    def __post_init__(self) -> None:
-        sizes = ("pose_dim", "control_dim", "history", "steps", "hidden", "cond_features")
-        check_history_config(self, "MoGlowConfig", sizes)
-        if not isinstance(self.dropout_rescale, bool):
-            raise TypeError(
-                f"MoGlowConfig: dropout_rescale must be a bool, got {type(self.dropout_rescale).__name__}"
-            )
-        check_scalar(self.pose_dim, "pose_dim (a coupling splits it)", "MoGlowConfig", minimum=2)
-
-    @property
-    def cond_dim(self) -> int:
-        """Conditioning features per frame: ``tau`` poses and ``tau + 1`` controls."""
-        return self.history * self.pose_dim + (self.history + 1) * self.control_dim
+    pose_dim: int = integer(POSE_DIM, minimum=2, note="a coupling splits it")
+    steps: int = integer(8, minimum=1)
+    hidden: int = integer(64, minimum=1)
+    cond_features: int = integer(64, minimum=1)
+    dropout: float = real(0.95, minimum=0, below=1)
+    dropout_rescale: bool = flag(True)
 
 
 class MoGlow(nn.Module):

@@ -52,7 +52,7 @@ from motionlab.models.flows.prior import check_temperature
 from motionlab.models.moglow.conditioning import check_pose_control, frame_conditioning
 from motionlab.models.moglow.coupling import FrameCoupling
 from motionlab.models.moglow.data import CONTROL_DIM, MoGlowFeatures, Scalers
-from motionlab.validation import check_scalar, check_tensor
+from motionlab.validation import Checked, check_scalar, check_tensor, real
 
 FrameStep = Callable[[int, Tensor, Any], tuple[Tensor, Any]]
 """``step(t, cond_t (B, cond_dim), state) -> (pose_t (B, P), state)``: generated frame ``t`` (0-based)."""
@@ -366,19 +366,14 @@ class AutoregressiveModel(Protocol):
 
 
 @dataclass(frozen=True)
-class Segment:
+class Segment(Checked):
     """A stretch of constant command: ``seconds`` long, ``speed`` forward (m/s), ``turn`` (rad/s, positive
     to the left), ``sideways`` (m/s, positive to the left)."""
 
-    seconds: float
-    speed: float
-    turn: float = 0.0
-    sideways: float = 0.0
-
-    def __post_init__(self) -> None:
-        check_scalar(self.seconds, "seconds", "Segment", minimum=0.0, include_minimum=False)
-        for name in ("speed", "turn", "sideways"):
-            check_scalar(getattr(self, name), name, "Segment")
+    seconds: float = real(above=0)
+    speed: float = real()
+    turn: float = real(0.0)
+    sideways: float = real(0.0)
 
 
 def control_programme(segments: Sequence[Segment], fps: float = 30.0, ramp: float = 0.5) -> Tensor:

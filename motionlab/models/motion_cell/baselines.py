@@ -33,13 +33,13 @@ from motionlab.models.motion_cell.losses import (
     rotation_loss,
 )
 from motionlab.models.motion_cell.model import ControlEmbedding, InitialState, mlp
-from motionlab.validation import check_choice, check_scalar, check_tensor
+from motionlab.validation import Checked, check_scalar, check_tensor, choice, integer
 
 RecurrentState = Tensor | tuple[Tensor, Tensor]
 
 
 @dataclass(frozen=True)
-class BaselineConfig:
+class BaselineConfig(Checked):
     """A frame-level deterministic recurrent baseline: ERD or the QuaterNet-style quaternion RNN.
 
     Attributes:
@@ -50,19 +50,13 @@ class BaselineConfig:
         hidden_dim: recurrent width; encoder_dim: ERD's encoder / decoder width (unused by QuaterNet).
     """
 
-    kind: str = "erd"
-    n_joints: int = 22
-    hidden_dim: int = 128
-    encoder_dim: int = 128
-    control_dim: int = 32
-    n_actions: int = 6
-    n_bodies: int = 2
-
-    def __post_init__(self) -> None:
-        check_choice(self.kind, "kind", "BaselineConfig", ("erd", "quaternet"))
-        for name in ("hidden_dim", "encoder_dim", "control_dim", "n_actions", "n_bodies"):
-            check_scalar(getattr(self, name), name, "BaselineConfig", kind=numbers.Integral, minimum=1)
-        check_scalar(self.n_joints, "n_joints", "BaselineConfig", kind=numbers.Integral, minimum=2)
+    kind: str = choice(("erd", "quaternet"), "erd")
+    n_joints: int = integer(22, minimum=2)
+    hidden_dim: int = integer(128, minimum=1)
+    encoder_dim: int = integer(128, minimum=1)
+    control_dim: int = integer(32, minimum=1)
+    n_actions: int = integer(6, minimum=1)
+    n_bodies: int = integer(2, minimum=1)
 
     @property
     def pose_dim(self) -> int:

@@ -36,7 +36,7 @@ from motionlab.models.motion_cell.data import (
 from motionlab.models.motion_cell.heads import OutputHead, PosePrediction, assemble_pose
 from motionlab.models.motion_cell.losses import LossConfig, LossFn, joint_weights, norm_loss, pose_loss
 from motionlab.train import TrainResult
-from motionlab.validation import check_scalar, check_tensor
+from motionlab.validation import Checked, check_scalar, check_tensor, integer
 
 #: Noise on the root position: 0.5 mm jitter, no spikes. The pelvis is tracked by a rigid cluster of markers,
 #: far better than single joints, and the root channels are velocities (frame differences), which magnify
@@ -59,7 +59,7 @@ CAPTURE_SEED, DENOISER_DATA_SEED = 1, 2
 
 
 @dataclass(frozen=True)
-class DenoiserConfig:
+class DenoiserConfig(Checked):
     """The 1D-convolutional denoising autoencoder (the paper's Table 1, scaled).
 
     Attributes:
@@ -67,15 +67,13 @@ class DenoiserConfig:
         kernel_size: temporal kernel (odd); every layer keeps the frame count.
     """
 
-    n_joints: int = 22
-    channels: int = 128
-    bottleneck: int = 64
-    kernel_size: int = 5
+    n_joints: int = integer(22, minimum=2)
+    channels: int = integer(128, minimum=1)
+    bottleneck: int = integer(64, minimum=1)
+    kernel_size: int = integer(5, minimum=1)
 
     def __post_init__(self) -> None:
-        check_scalar(self.n_joints, "n_joints", "DenoiserConfig", kind=numbers.Integral, minimum=2)
-        for name in ("channels", "bottleneck", "kernel_size"):
-            check_scalar(getattr(self, name), name, "DenoiserConfig", kind=numbers.Integral, minimum=1)
+        super().__post_init__()
         if self.kernel_size % 2 != 1:
             raise ValueError(f"DenoiserConfig: kernel_size must be odd, got {self.kernel_size!r}")
 

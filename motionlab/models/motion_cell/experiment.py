@@ -15,7 +15,7 @@ The chapter's steps (and the training command's: :data:`CHAPTER`, :data:`DEFAULT
 from __future__ import annotations
 
 import numbers
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, replace
 from functools import partial
 from typing import Any
 
@@ -54,7 +54,7 @@ from motionlab.train import (
 from motionlab.train.many import Trained, train_many, train_meanwhile
 from motionlab.train.run import Run
 from motionlab.train.schedules import Schedule
-from motionlab.validation import check_scalar
+from motionlab.validation import check_scalar, instance, integer, real
 
 #: The chapter that trains this family, and its main run (the training command's default).
 CHAPTER, DEFAULT_RUN = "04_motion_cell", "mcell"
@@ -90,57 +90,38 @@ class ExperimentConfig(config.ProfileConfig):
         n_per_combination, n_repeats: evaluation sample sets (per action x body) and their number.
     """
 
-    motion_cell: MotionCellConfig = field(
+    motion_cell: MotionCellConfig = instance(
+        MotionCellConfig,
         default_factory=lambda: MotionCellConfig(
             word_dim=48, feature_dim=48, latent_dim=16, hidden_dim=64, control_dim=16
-        )
+        ),
     )
-    denoiser: DenoiserConfig = field(default_factory=lambda: DenoiserConfig(channels=96, bottleneck=64))
-    window: int = 96
-    batch_size: int = 32
-    lr: float = 3e-3
-    steps: int = 200
-    representation_steps: int = 60
-    collapse_steps: int = 1000
-    denoiser_steps: int = 400
-    denoiser_batch: int = 16
-    denoiser_lr: float = 1e-3
-    denoiser_copies: int = 3
-    beta: float = 1.0
-    classifier: float = 1.0
-    word_drop: float = 0.5
-    input_noise: float = 0.05
-    sampling: float = 1.0
-    n_per_combination: int = 20
-    n_repeats: int = 5
+    denoiser: DenoiserConfig = instance(
+        DenoiserConfig, default_factory=lambda: DenoiserConfig(channels=96, bottleneck=64)
+    )
+    window: int = integer(96, minimum=1)
+    batch_size: int = integer(32, minimum=1)
+    lr: float = real(3e-3, above=0)
+    steps: int = integer(200, minimum=10)  # the schedules need 10 steps
+    representation_steps: int = integer(60, minimum=10)
+    collapse_steps: int = integer(1000, minimum=10)
+    denoiser_steps: int = integer(400, minimum=1)
+    denoiser_batch: int = integer(16, minimum=1)
+    denoiser_lr: float = real(1e-3, above=0)
+    denoiser_copies: int = integer(3, minimum=1)
+    beta: float = real(1.0, minimum=0)
+    classifier: float = real(1.0, minimum=0)
+    word_drop: float = real(0.5, minimum=0, maximum=1)
+    input_noise: float = real(0.05, minimum=0)
+    sampling: float = real(1.0, minimum=0, maximum=1)
+    n_per_combination: int = integer(20, minimum=1)
+    n_repeats: int = integer(5, minimum=2)
 
     def __post_init__(self) -> None:
-        where = "ExperimentConfig"
-        if not isinstance(self.motion_cell, MotionCellConfig):
-            raise TypeError(f"{where}: motion_cell must be a MotionCellConfig, got {self.motion_cell!r}")
-        if not isinstance(self.denoiser, DenoiserConfig):
-            raise TypeError(f"{where}: denoiser must be a DenoiserConfig, got {self.denoiser!r}")
-        for name in (
-            "window",
-            "batch_size",
-            "denoiser_steps",
-            "denoiser_batch",
-            "denoiser_copies",
-            "n_per_combination",
-        ):
-            check_scalar(getattr(self, name), name, where, kind=numbers.Integral, minimum=1)
-        for name in ("steps", "representation_steps", "collapse_steps"):  # the schedules need 10 steps
-            check_scalar(getattr(self, name), name, where, kind=numbers.Integral, minimum=10)
-        check_scalar(self.n_repeats, "n_repeats", where, kind=numbers.Integral, minimum=2)
-        for name in ("lr", "denoiser_lr"):
-            check_scalar(getattr(self, name), name, where, minimum=0.0, include_minimum=False)
-        for name in ("beta", "classifier", "input_noise"):
-            check_scalar(getattr(self, name), name, where, minimum=0.0)
-        for name in ("word_drop", "sampling"):
-            check_scalar(getattr(self, name), name, where, minimum=0.0, maximum=1.0)
+        super().__post_init__()
         if self.window % self.motion_cell.word_length:
             raise ValueError(
-                f"{where}: window ({self.window}) must be a multiple of the word length "
+                f"ExperimentConfig: window ({self.window}) must be a multiple of the word length "
                 f"({self.motion_cell.word_length})"
             )
 

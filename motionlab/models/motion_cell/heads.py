@@ -19,7 +19,7 @@ from torch import Tensor
 
 from motionlab.geometry import axis_angle_to_quat, gram_schmidt, matrix_to_quat, quat_normalize
 from motionlab.models.motion_cell.data import ROOT_DIM
-from motionlab.validation import check_choice, check_tensor
+from motionlab.validation import Checked, check_tensor, choice
 
 #: Rotation outputs a decoder can produce (compared in the chapter; the paper's §3 and §5.1).
 OUTPUT_KINDS = ("quaternion", "matrix", "axis_angle")
@@ -32,17 +32,14 @@ _IDENTITY = {
 
 
 @dataclass(frozen=True)
-class OutputHead:
+class OutputHead(Checked):
     """Raw decoder outputs ``(..., params_per_joint)`` per joint -> unit quaternions ``(..., 4)``.
 
     Attributes:
         kind: one of :data:`OUTPUT_KINDS`.
     """
 
-    kind: str
-
-    def __post_init__(self) -> None:
-        check_choice(self.kind, "kind", "OutputHead", OUTPUT_KINDS)
+    kind: str = choice(OUTPUT_KINDS)
 
     @property
     def params_per_joint(self) -> int:

@@ -33,7 +33,7 @@ from motionlab.models.gaussian import gaussian_kl
 from motionlab.models.motion_cell.data import PoseCodec, WindowBatch
 from motionlab.models.motion_cell.heads import OutputHead
 from motionlab.skeleton import joint_impact_weights
-from motionlab.validation import check_choice, check_scalar
+from motionlab.validation import Checked, check_choice, check_scalar, choice, integer, real
 
 #: Joint weights of the reconstruction loss: eq. 23's impact weights, or all ones (the NL ablation).
 JOINT_WEIGHTINGS = ("impact", "uniform")
@@ -42,7 +42,7 @@ LossFn = Callable[[nn.Module, WindowBatch, int, dict[str, float]], dict[str, Ten
 
 
 @dataclass(frozen=True)
-class LossConfig:
+class LossConfig(Checked):
     """Fixed weights of the Motion Cell objective (eq. 14); the scheduled ones live in the ``TrainConfig``.
 
     The schedules the loss reads (``coeffs``): ``"beta"`` (lambda_KL, :class:`~motionlab.train.KLAnneal`),
@@ -62,20 +62,13 @@ class LossConfig:
             of 32, eq. 24 made the full-profile Motion Cell train about 1.8 times as long as NC).
     """
 
-    joint_weights: str = "impact"
-    root_weight: float = 1.0
-    norm_weight: float = 0.1
-    feature_weight: float = 1.0
-    entropy_weight: float = 1.0
-    classifier_clips: int = 16
-    classifier_every: int = 2
-
-    def __post_init__(self) -> None:
-        check_choice(self.joint_weights, "joint_weights", "LossConfig", JOINT_WEIGHTINGS)
-        for name in ("root_weight", "norm_weight", "feature_weight", "entropy_weight"):
-            check_scalar(getattr(self, name), name, "LossConfig", minimum=0.0)
-        for name in ("classifier_clips", "classifier_every"):
-            check_scalar(getattr(self, name), name, "LossConfig", kind=numbers.Integral, minimum=1)
+    joint_weights: str = choice(JOINT_WEIGHTINGS, "impact")
+    root_weight: float = real(1.0, minimum=0)
+    norm_weight: float = real(0.1, minimum=0)
+    feature_weight: float = real(1.0, minimum=0)
+    entropy_weight: float = real(1.0, minimum=0)
+    classifier_clips: int = integer(16, minimum=1)
+    classifier_every: int = integer(2, minimum=1)
 
 
 def joint_weights(kind: str, n_joints: int = 22) -> Tensor:

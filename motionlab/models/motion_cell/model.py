@@ -45,11 +45,11 @@ from motionlab.models.gaussian import reparameterize
 from motionlab.models.motion_cell.data import PoseCodec, pose_dim
 from motionlab.models.motion_cell.heads import OUTPUT_KINDS, OutputHead, assemble_pose, split_raw_pose
 from motionlab.models.motion_cell.smoothing import smooth_word_boundaries
-from motionlab.validation import check_choice, check_scalar, check_tensor
+from motionlab.validation import Checked, check_scalar, check_tensor, choice, flag, integer
 
 
 @dataclass(frozen=True)
-class MotionCellConfig:
+class MotionCellConfig(Checked):
     """The hierarchical Motion Cell (and its SL ablation with ``word_length=1``).
 
     Attributes:
@@ -67,34 +67,17 @@ class MotionCellConfig:
         output: rotation output of the decoder, one of :data:`~.heads.OUTPUT_KINDS`.
     """
 
-    n_joints: int = 22
-    word_length: int = 3
-    word_dim: int = 64
-    feature_dim: int = 64
-    latent_dim: int = 24
-    hidden_dim: int = 128
-    control_dim: int = 32
-    n_actions: int = 6
-    n_bodies: int = 2
-    output: str = "quaternion"
-    word_layers: bool = True
-
-    def __post_init__(self) -> None:
-        for name in (
-            "word_length",
-            "word_dim",
-            "feature_dim",
-            "latent_dim",
-            "hidden_dim",
-            "control_dim",
-            "n_actions",
-            "n_bodies",
-        ):
-            check_scalar(getattr(self, name), name, "MotionCellConfig", kind=numbers.Integral, minimum=1)
-        check_scalar(self.n_joints, "n_joints", "MotionCellConfig", kind=numbers.Integral, minimum=2)
-        check_choice(self.output, "output", "MotionCellConfig", OUTPUT_KINDS)
-        if not isinstance(self.word_layers, bool):
-            raise TypeError(f"MotionCellConfig: word_layers must be a bool, got {self.word_layers!r}")
+    n_joints: int = integer(22, minimum=2)
+    word_length: int = integer(3, minimum=1)
+    word_dim: int = integer(64, minimum=1)
+    feature_dim: int = integer(64, minimum=1)
+    latent_dim: int = integer(24, minimum=1)
+    hidden_dim: int = integer(128, minimum=1)
+    control_dim: int = integer(32, minimum=1)
+    n_actions: int = integer(6, minimum=1)
+    n_bodies: int = integer(2, minimum=1)
+    output: str = choice(OUTPUT_KINDS, "quaternion")
+    word_layers: bool = flag(True)
 
     @property
     def pose_dim(self) -> int:

@@ -12,7 +12,6 @@ the numbers equal in-process calls of :mod:`~motionlab.models.odmo.evaluate`, wh
 
 from __future__ import annotations
 
-import numbers
 import re
 from collections.abc import Mapping
 from dataclasses import dataclass, field, replace
@@ -42,7 +41,7 @@ from motionlab.models.odmo.sampling import ODMOSampler, encode_clips
 from motionlab.train import LinearRamp, TrainConfig
 from motionlab.train.many import Trained, train_many
 from motionlab.train.run import Run, given
-from motionlab.validation import check_choice, check_scalar
+from motionlab.validation import check_choice, instance, integer, real, tuple_of
 
 #: The chapter's models, as changes to the base config (the base is ODMO as the chapter uses it: the paper's,
 #: with two changes of ours, :func:`chapter_model`). The names are the models' cache names (through
@@ -104,56 +103,35 @@ class ExperimentConfig(config.ProfileConfig):
         homogeneity, end_point: the variants of Table 3 (and the style purity) and of Table 4.
     """
 
-    model: ODMOConfig = field(default_factory=chapter_model)
-    frame_stride: int = 3
-    steps: int = 300
-    batch_size: int = 60
-    lr: float = 3e-3
-    teacher_forcing_end: float = 0.3
-    seed: int = 0
-    n_sets: int = 10
-    n_per_class: int = 20
-    homogeneity_share: float = 0.5
-    n_per_mode: int = 10
-    n_codes: int = 40
-    n_end_points: int = 10
-    prior_sampled: tuple[str, ...] = ("standard VAE",)
-    conventional: tuple[str, ...] = ("ODMO",)
-    homogeneity: tuple[str, ...] = ("ODMO", "ODMO + prior on mu (extension)", "standard VAE")
-    end_point: tuple[str, ...] = (
-        "ODMO",
-        "paper's LMP axes and decoder",
-        "+ trajectory every frame",
-        "-r_e",
-        "-L_cons",
-        "-L_traj",
+    model: ODMOConfig = instance(ODMOConfig, default_factory=chapter_model)
+    frame_stride: int = integer(3, minimum=1)
+    steps: int = integer(300, minimum=1)
+    batch_size: int = integer(60, minimum=1)
+    lr: float = real(3e-3, above=0)
+    teacher_forcing_end: float = real(0.3, minimum=0, maximum=1)
+    seed: int = integer(0, minimum=0)
+    n_sets: int = integer(10, minimum=1)
+    n_per_class: int = integer(20, minimum=1)
+    homogeneity_share: float = real(0.5, above=0, maximum=1)
+    n_per_mode: int = integer(10, minimum=1)
+    n_codes: int = integer(40, minimum=1)
+    n_end_points: int = integer(10, minimum=1)
+    prior_sampled: tuple[str, ...] = tuple_of(("standard VAE",), choices=VARIANTS)
+    conventional: tuple[str, ...] = tuple_of(("ODMO",), choices=VARIANTS)
+    homogeneity: tuple[str, ...] = tuple_of(
+        ("ODMO", "ODMO + prior on mu (extension)", "standard VAE"), choices=VARIANTS
     )
-
-    def __post_init__(self) -> None:
-        where = "ExperimentConfig"
-        if not isinstance(self.model, ODMOConfig):
-            raise TypeError(f"{where}: model must be an ODMOConfig, got {type(self.model).__name__}")
-        counts = (
-            "frame_stride",
-            "steps",
-            "batch_size",
-            "n_sets",
-            "n_per_class",
-            "n_per_mode",
-            "n_codes",
-            "n_end_points",
-        )
-        for name in counts:
-            check_scalar(getattr(self, name), name, where, kind=numbers.Integral, minimum=1)
-        check_scalar(self.seed, "seed", where, kind=numbers.Integral, minimum=0)
-        check_scalar(self.lr, "lr", where, minimum=0, include_minimum=False)
-        check_scalar(self.teacher_forcing_end, "teacher_forcing_end", where, minimum=0, maximum=1)
-        check_scalar(
-            self.homogeneity_share, "homogeneity_share", where, minimum=0, maximum=1, include_minimum=False
-        )
-        for name in ("prior_sampled", "conventional", "homogeneity", "end_point"):
-            for variant in getattr(self, name):
-                check_choice(variant, name, where, VARIANTS)
+    end_point: tuple[str, ...] = tuple_of(
+        (
+            "ODMO",
+            "paper's LMP axes and decoder",
+            "+ trajectory every frame",
+            "-r_e",
+            "-L_cons",
+            "-L_traj",
+        ),
+        choices=VARIANTS,
+    )
 
     @classmethod
     def full(cls) -> ExperimentConfig:
@@ -386,25 +364,18 @@ class RealExperimentConfig(ExperimentConfig):
     frame_stride: int = 2
     steps: int = 200
     batch_size: int = 56
-    n_clips: int | None = None
-    window: int = 100
-    draws: int = 4
-    variants: tuple[str, ...] = REAL_VARIANTS
-    n_per_set: int = 400
+    n_clips: int | None = integer(None, minimum=28, optional=True)
+    window: int = integer(100, minimum=1)
+    draws: int = integer(4, minimum=1)
+    variants: tuple[str, ...] = tuple_of(REAL_VARIANTS, choices=REAL_VARIANTS)
+    n_per_set: int = integer(400, minimum=1)
 
     def __post_init__(self) -> None:
         super().__post_init__()
-        where = "RealExperimentConfig"
-        for name in ("window", "draws", "n_per_set"):
-            check_scalar(getattr(self, name), name, where, kind=numbers.Integral, minimum=1)
-        if self.n_clips is not None:
-            check_scalar(self.n_clips, "n_clips", where, kind=numbers.Integral, minimum=28)
-        for variant in self.variants:
-            check_choice(variant, "variants", where, REAL_VARIANTS)
         if self.window != self.model.n_frames * self.frame_stride:
             raise ValueError(
-                f"{where}: the model's {self.model.n_frames} frames x frame_stride {self.frame_stride} must "
-                f"equal the window of {self.window} frames"
+                f"RealExperimentConfig: the model's {self.model.n_frames} frames x frame_stride "
+                f"{self.frame_stride} must equal the window of {self.window} frames"
             )
 
     @classmethod

@@ -51,7 +51,16 @@ from torch import Tensor, nn
 from motionlab.data.datasets import Standardizer
 from motionlab.data.representations import rotate_xy
 from motionlab.models.gaussian import reparameterize
-from motionlab.validation import check_choice, check_scalar, check_tensor
+from motionlab.validation import (
+    Checked,
+    check_scalar,
+    check_tensor,
+    choice,
+    flag,
+    integer,
+    real,
+    tuple_of,
+)
 
 #: The prior term of the embedding loss (see :mod:`.losses`), with the code's ``q(z | x) = N(μ, diag s²)``:
 #: ``"covariance"`` eq. 1's covariance terms, ``-ln det Σ + Tr(Σ) / σ²`` per clip (the paper; the reference
@@ -78,7 +87,7 @@ DECODER_TRAJECTORIES: tuple[str, ...] = ("initial_state", "every_frame")
 
 
 @dataclass(frozen=True)
-class ODMOConfig:
+class ODMOConfig(Checked):
     """Sizes and objective of one ODMO model. The defaults are the paper's design (eq. 1 with the reference
     implementation's same-class slack, the encoder reading the LMP in world axes, the decoder reading the
     trajectory through its initial state) at the sizes the full profile trains; chapter 08's ODMO turns on
@@ -120,62 +129,36 @@ class ODMOConfig:
             reference's; the standard VAE weighs its KL with 1.
     """
 
-    n_classes: int = 6
-    n_frames: int = 40
-    n_joints: int = 22
-    code_dim: int = 20
-    encoder_hidden: int = 64
-    encoder_mlp: int = 128
-    trajectory_hidden: int = 64
-    motion_hidden: int = 64
-    margin: float = 5.0
-    same_class_slack: float = 0.5
-    prior_variance: float = 0.05
-    prior: PriorTerm = "covariance"
-    use_contrastive: bool = True
-    use_end_point: bool = True
-    use_consistency: bool = True
-    use_trajectory_loss: bool = True
-    encoder_frame: EncoderFrame = "world"
-    hips: tuple[int, int] = (1, 2)
-    decoder_trajectory: DecoderTrajectory = "initial_state"
-    contrastive_weight: float = 1.0
-    prior_weight: float = 0.5
+    n_classes: int = integer(6, minimum=1)
+    n_frames: int = integer(40, minimum=2)
+    n_joints: int = integer(22, minimum=2)
+    code_dim: int = integer(20, minimum=1)
+    encoder_hidden: int = integer(64, minimum=1)
+    encoder_mlp: int = integer(128, minimum=1)
+    trajectory_hidden: int = integer(64, minimum=1)
+    motion_hidden: int = integer(64, minimum=1)
+    margin: float = real(5.0, above=0)
+    same_class_slack: float = real(0.5, minimum=0)
+    prior_variance: float = real(0.05, above=0)
+    prior: PriorTerm = choice(PRIOR_TERMS, "covariance")
+    use_contrastive: bool = flag(True)
+    use_end_point: bool = flag(True)
+    use_consistency: bool = flag(True)
+    use_trajectory_loss: bool = flag(True)
+    encoder_frame: EncoderFrame = choice(ENCODER_FRAMES, "world")
+    hips: tuple[int, int] = tuple_of((1, 2), kind=numbers.Integral, minimum=1, length=2)
+    decoder_trajectory: DecoderTrajectory = choice(DECODER_TRAJECTORIES, "initial_state")
+    contrastive_weight: float = real(1.0, minimum=0)
+    prior_weight: float = real(0.5, minimum=0)
 
     def __post_init__(self) -> None:
+        super().__post_init__()
         where = "ODMOConfig"
-        sizes = (
-            "n_classes",
-            "code_dim",
-            "encoder_hidden",
-            "encoder_mlp",
-            "trajectory_hidden",
-            "motion_hidden",
-        )
-        for name in sizes:
-            check_scalar(getattr(self, name), name, where, kind=numbers.Integral, minimum=1)
-        for name in ("n_frames", "n_joints"):
-            check_scalar(getattr(self, name), name, where, kind=numbers.Integral, minimum=2)
-        for name in ("margin", "prior_variance"):
-            check_scalar(getattr(self, name), name, where, minimum=0, include_minimum=False)
-        for name in ("same_class_slack", "contrastive_weight", "prior_weight"):
-            check_scalar(getattr(self, name), name, where, minimum=0)
-        check_choice(self.prior, "prior", where, PRIOR_TERMS)
-        check_choice(self.encoder_frame, "encoder_frame", where, ENCODER_FRAMES)
-        check_choice(self.decoder_trajectory, "decoder_trajectory", where, DECODER_TRAJECTORIES)
-        if (
-            not isinstance(self.hips, tuple)
-            or len(self.hips) != 2
-            or not all(isinstance(j, numbers.Integral) and 1 <= j < self.n_joints for j in self.hips)
-            or self.hips[0] == self.hips[1]
-        ):
+        if max(self.hips) >= self.n_joints or self.hips[0] == self.hips[1]:
             raise ValueError(
-                f"{where}: hips must be a tuple of two different non-root joints in [1, {self.n_joints}), "
+                f"{where}: hips must be two different non-root joints in [1, {self.n_joints}), "
                 f"got {self.hips!r}"
             )
-        for name in ("use_contrastive", "use_end_point", "use_consistency", "use_trajectory_loss"):
-            if not isinstance(getattr(self, name), bool):
-                raise TypeError(f"{where}: {name} must be True or False, got {getattr(self, name)!r}")
         if self.use_consistency and not self.use_trajectory_loss:
             raise ValueError(
                 f"{where}: the consistency loss is part of the trajectory losses; "

@@ -15,7 +15,6 @@ turn the task into offsets.
 
 from __future__ import annotations
 
-import numbers
 from dataclasses import dataclass
 
 import torch
@@ -24,8 +23,8 @@ from torch import Tensor, nn
 from motionlab.models.gaussian import reparameterize
 from motionlab.models.trajevae.data import check_batch, check_task
 from motionlab.models.trajevae.masks import KEEP_PROBABILITY, given_trajectories
-from motionlab.models.trajevae.model import Gaussian, WindowShape, check_flags, check_reconstruction
-from motionlab.validation import check_scalar
+from motionlab.models.trajevae.model import RECONSTRUCTIONS, Gaussian, WindowShape
+from motionlab.validation import choice, flag, integer, real
 
 
 @dataclass(frozen=True)
@@ -43,27 +42,14 @@ class RecurrentConfig(WindowShape):
         seed: seeds the weight initialisation.
     """
 
-    n_joints: int = 22
     n_frames: int = 60
-    hidden: int = 64
-    latent_dim: int = 0
-    beta: float = 0.01
-    reconstruction: str = "sum"
-    keep_probability: float = KEEP_PROBABILITY
-    augment: bool = True
-    seed: int = 0
-
-    def __post_init__(self) -> None:
-        where = "RecurrentConfig"
-        for name in ("n_joints", "hidden"):
-            check_scalar(getattr(self, name), name, where, kind=numbers.Integral, minimum=1)
-        check_scalar(self.n_frames, "n_frames", where, kind=numbers.Integral, minimum=2)
-        check_scalar(self.latent_dim, "latent_dim", where, kind=numbers.Integral, minimum=0)
-        check_scalar(self.beta, "beta", where, minimum=0)
-        check_reconstruction(self.reconstruction, where)
-        check_scalar(self.keep_probability, "keep_probability", where, minimum=0, maximum=1)
-        check_flags(self, ("augment",), where)
-        check_scalar(self.seed, "seed", where, kind=numbers.Integral, minimum=0)
+    hidden: int = integer(64, minimum=1)
+    latent_dim: int = integer(0, minimum=0)
+    beta: float = real(0.01, minimum=0)
+    reconstruction: str = choice(RECONSTRUCTIONS, "sum")
+    keep_probability: float = real(KEEP_PROBABILITY, minimum=0, maximum=1)
+    augment: bool = flag(True)
+    seed: int = integer(0, minimum=0)
 
 
 class TaskContext(nn.Module):

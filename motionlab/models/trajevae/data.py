@@ -21,7 +21,7 @@ import numpy as np
 import torch
 from torch import Tensor
 
-from motionlab.data.augment import random_yaw
+from motionlab.data.augment import check_clips, random_yaw
 from motionlab.data.representations import to_trajevae
 from motionlab.models.trajevae.masks import (
     KEEP_PROBABILITY,
@@ -29,7 +29,7 @@ from motionlab.models.trajevae.masks import (
     given_trajectories,
     sample_joint_masks,
 )
-from motionlab.validation import check_scalar, check_tensor
+from motionlab.validation import Checked, check_scalar, check_tensor, flag, real
 
 #: Every FRAME_STEP-th frame of the 30 fps clips is kept.
 FRAME_STEP = 2
@@ -107,7 +107,7 @@ def check_task(
 
 
 @dataclass(frozen=True, eq=False)
-class CompletionBatches:
+class CompletionBatches(Checked):
     """The training batch source: shuffled clips, each with a random joint mask, optionally turned by a random
     yaw.
 
@@ -124,23 +124,16 @@ class CompletionBatches:
 
     positions: Tensor
     rotations: Tensor
-    augment: bool
-    keep_probability: float = KEEP_PROBABILITY
+    augment: bool = flag()
+    keep_probability: float = real(KEEP_PROBABILITY, minimum=0, maximum=1)
 
     def __post_init__(self) -> None:
+        super().__post_init__()
         where = "CompletionBatches"
         positions = torch.as_tensor(self.positions, dtype=torch.float32)
         rotations = torch.as_tensor(self.rotations, dtype=torch.float32)
-        check_tensor(positions, "positions", where, trailing=(None, 3), ndim=4)
-        check_tensor(rotations, "rotations", where, trailing=(None, 4), ndim=4)
-        check_scalar(self.keep_probability, "keep_probability", where, minimum=0, maximum=1)
-        if not isinstance(self.augment, bool):
-            raise TypeError(f"{where}: augment must be a bool, got {self.augment!r}")
-        if positions.shape[:-1] != rotations.shape[:-1]:
-            raise ValueError(
-                f"{where}: positions (N, T, J, 3) and rotations (N, T, J, 4) must share N, T, J; got "
-                f"{tuple(positions.shape)} and {tuple(rotations.shape)}"
-            )
+        check_tensor(positions, "positions", where, ndim=4, finite=False)  # (N, T, J, 3)
+        check_clips(positions, rotations, where)
         object.__setattr__(self, "positions", positions)
         object.__setattr__(self, "rotations", rotations)
 

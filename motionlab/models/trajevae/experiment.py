@@ -59,7 +59,7 @@ from motionlab.train import PiecewiseLinear, TrainConfig
 from motionlab.train.loop import LossFn
 from motionlab.train.many import Trained, train_many
 from motionlab.train.run import Run
-from motionlab.validation import check_scalar
+from motionlab.validation import check_scalar, instance, integer
 
 #: A completion model's config: TrajeVAE (any rung of the ladder) or a recurrent baseline.
 ModelConfig = TrajeVAEConfig | RecurrentConfig
@@ -119,23 +119,15 @@ class ExperimentConfig(config.ProfileConfig):
         n_eval_windows: test windows the metrics average over (each with ``N_SAMPLES`` samples).
     """
 
-    trajevae: TrajeVAEConfig
-    gru: RecurrentConfig
-    cvae_rnn: RecurrentConfig
-    train: TrainConfig
-    n_eval_windows: int
+    trajevae: TrajeVAEConfig = instance(TrajeVAEConfig)
+    gru: RecurrentConfig = instance(RecurrentConfig)
+    cvae_rnn: RecurrentConfig = instance(RecurrentConfig)
+    train: TrainConfig = instance(TrainConfig)
+    n_eval_windows: int = integer(minimum=2)
 
     def __post_init__(self) -> None:
+        super().__post_init__()
         where = "ExperimentConfig"
-        for name, kind in (
-            ("trajevae", TrajeVAEConfig),
-            ("gru", RecurrentConfig),
-            ("cvae_rnn", RecurrentConfig),
-            ("train", TrainConfig),
-        ):
-            value = getattr(self, name)
-            if not isinstance(value, kind):
-                raise TypeError(f"{where}: {name} must be a {kind.__name__}, got {type(value).__name__}")
         if not self.trajevae.n_frames == self.gru.n_frames == self.cvae_rnn.n_frames:
             raise ValueError(
                 f"{where}: every model must complete the same windows, got n_frames "
@@ -143,7 +135,6 @@ class ExperimentConfig(config.ProfileConfig):
             )
         if self.gru.latent_dim != 0 or self.cvae_rnn.latent_dim < 1:
             raise ValueError(f"{where}: gru needs latent_dim 0 and cvae_rnn latent_dim >= 1")
-        check_scalar(self.n_eval_windows, "n_eval_windows", where, kind=numbers.Integral, minimum=2)
 
     @classmethod
     def quick(cls) -> ExperimentConfig:

@@ -33,7 +33,6 @@ decoder and the model.
 from __future__ import annotations
 
 import math
-import numbers
 from dataclasses import dataclass
 from typing import NamedTuple
 
@@ -44,33 +43,19 @@ from motionlab.models.gaussian import reparameterize
 from motionlab.models.trajevae.data import check_batch, check_task
 from motionlab.models.trajevae.dct import dct, idct
 from motionlab.models.trajevae.masks import KEEP_PROBABILITY, given_trajectories, hidden_poses
-from motionlab.validation import check_scalar
-
-
-def check_flags(config: object, names: tuple[str, ...], where: str) -> None:
-    """Raise ``TypeError`` unless each attribute of ``config`` in ``names`` is a bool (a switch, not a
-    number)."""
-    for name in names:
-        value = getattr(config, name)
-        if not isinstance(value, bool):
-            raise TypeError(f"{where}: {name} must be a bool, got {value!r} ({type(value).__name__})")
-
+from motionlab.validation import Checked, check_scalar, choice, flag, integer, real
 
 #: How the reconstruction term reduces the squared errors of a sequence (see :mod:`.losses`).
 RECONSTRUCTIONS: tuple[str, ...] = ("sum", "mean")
 
 
-def check_reconstruction(value: object, where: str) -> None:
-    """Raise ``ValueError`` unless ``value`` is one of :data:`RECONSTRUCTIONS`."""
-    if value not in RECONSTRUCTIONS:
-        raise ValueError(f"{where}: reconstruction must be one of {RECONSTRUCTIONS}, got {value!r}")
+@dataclass(frozen=True)
+class WindowShape(Checked):
+    """The window geometry every completion model's config shares: ``n_joints`` joints, ``n_frames`` frames
+    (the initial pose included)."""
 
-
-class WindowShape:
-    """The window geometry every completion model's config shares (needs ``n_joints`` and ``n_frames``)."""
-
-    n_joints: int
-    n_frames: int
+    n_joints: int = integer(22, minimum=1)
+    n_frames: int = integer(120, minimum=2)
 
     @property
     def n_channels(self) -> int:
@@ -110,49 +95,33 @@ class TrajeVAEConfig(WindowShape):
         seed: seeds the weight initialisation.
     """
 
-    n_joints: int = 22
-    n_frames: int = 120
-    width: int = 64
-    latent_dim: int = 32
-    dct_components: int = 40
-    heads: int = 4
-    layers: int = 1
-    beta: float = 0.01
-    reconstruction: str = "sum"
-    keep_probability: float = KEEP_PROBABILITY
-    use_dct: bool = True
-    learnable_prior: bool = True
-    augment: bool = True
-    mask_future_poses: bool = True
-    seed: int = 0
+    width: int = integer(64, minimum=1)
+    latent_dim: int = integer(32, minimum=1)
+    dct_components: int = integer(40, minimum=1)
+    heads: int = integer(4, minimum=1)
+    layers: int = integer(1, minimum=1)
+    beta: float = real(0.01, minimum=0)
+    reconstruction: str = choice(RECONSTRUCTIONS, "sum")
+    keep_probability: float = real(KEEP_PROBABILITY, minimum=0, maximum=1)
+    use_dct: bool = flag(True)
+    learnable_prior: bool = flag(True)
+    augment: bool = flag(True)
+    mask_future_poses: bool = flag(True)
+    seed: int = integer(0, minimum=0)
 
     def __post_init__(self) -> None:
+        super().__post_init__()
         where = "TrajeVAEConfig"
-        for name in ("n_joints", "width", "latent_dim", "heads", "layers"):
-            check_scalar(getattr(self, name), name, where, kind=numbers.Integral, minimum=1)
-        check_scalar(self.n_frames, "n_frames", where, kind=numbers.Integral, minimum=2)
-        check_scalar(
-            self.dct_components,
-            "dct_components",
-            where,
-            kind=numbers.Integral,
-            minimum=1,
-            maximum=self.n_future,
-        )
+        check_scalar(self.dct_components, "dct_components", where, maximum=self.n_future)
         if (2 * self.width) % self.heads:
             raise ValueError(
                 f"{where}: the token size 2 * width = {2 * self.width} must be divisible by "
                 f"heads={self.heads}"
             )
-        check_scalar(self.beta, "beta", where, minimum=0)
-        check_reconstruction(self.reconstruction, where)
-        check_scalar(self.keep_probability, "keep_probability", where, minimum=0, maximum=1)
-        check_flags(self, ("use_dct", "learnable_prior", "augment", "mask_future_poses"), where)
         if self.mask_future_poses and not self.learnable_prior:
             raise ValueError(
                 f"{where}: mask_future_poses masks the posterior's input, so it needs learnable_prior=True"
             )
-        check_scalar(self.seed, "seed", where, kind=numbers.Integral, minimum=0)
 
     @property
     def n_latent_steps(self) -> int:

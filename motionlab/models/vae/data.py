@@ -26,7 +26,7 @@ from motionlab import config
 from motionlab.data.datasets import MotionClips, Standardizer, WindowDataset, motion_windows
 from motionlab.data.representations import CONTROL_FEATURES, from_moglow, representation
 from motionlab.evaluation.benchmark import load_benchmark
-from motionlab.validation import check_scalar, check_tensor
+from motionlab.validation import Checked, check_scalar, check_tensor, integer
 
 #: Numbers in a MoGlow pose vector for the 22-joint skeleton (root height + 21 x 3).
 POSE_FEATURES = 64
@@ -143,17 +143,14 @@ def _benchmark_clips(length: int, stride: int, profile: str) -> ClipSplits:
 
 
 @dataclass(frozen=True)
-class BenchmarkPoses:
+class BenchmarkPoses(Checked):
     """Poses of the course benchmark: every ``every``-th frame of its train and test clips
     (:func:`pose_features`).
 
     The unconditional pose models train on :meth:`training_inputs`.
     """
 
-    every: int
-
-    def __post_init__(self) -> None:
-        check_scalar(self.every, "every", "BenchmarkPoses", kind=numbers.Integral, minimum=1)
+    every: int = integer(minimum=1)
 
     def load(self) -> PoseSplits:
         """The poses (built once per process and profile; treat the tensors as read-only)."""
@@ -165,19 +162,15 @@ class BenchmarkPoses:
 
 
 @dataclass(frozen=True)
-class BenchmarkClips:
+class BenchmarkClips(Checked):
     """Windows of the course benchmark's clips: ``length`` frames every ``stride`` frames
     (:func:`clip_windows`).
 
     The clip CVAEs train on :meth:`training_inputs`.
     """
 
-    length: int
-    stride: int
-
-    def __post_init__(self) -> None:
-        check_scalar(self.length, "length", "BenchmarkClips", kind=numbers.Integral, minimum=1)
-        check_scalar(self.stride, "stride", "BenchmarkClips", kind=numbers.Integral, minimum=1)
+    length: int = integer(minimum=1)
+    stride: int = integer(minimum=1)
 
     def load(self) -> ClipSplits:
         """The windows (built once per process and profile; treat the tensors as read-only)."""

@@ -33,7 +33,7 @@ from motionlab.models.vae.model import MLPVAE, VAEConfig
 from motionlab.train import TensorBatches, TrainConfig, build_seeded
 from motionlab.train.many import Trained, train_many
 from motionlab.train.run import Run, given
-from motionlab.validation import check_scalar
+from motionlab.validation import check_scalar, integer, real
 
 
 @dataclass(frozen=True)
@@ -53,44 +53,23 @@ class ExperimentConfig(config.ProfileConfig):
         per_action, n_repeats: evaluation sample sets (clips per action) and how many of them.
     """
 
-    pose_every: int = 10
-    pose_latent: int = 8
-    pose_hidden: int = 128
-    pose_steps: int = 800
-    pose_obs_var: float = 0.1
-    small_prior_var: float = 0.05
-    clip_length: int = 60
-    clip_stride: int = 15
-    clip_latent: int = 16
-    clip_hidden: int = 128
-    clip_steps: int = 600
-    batch_size: int = 64
-    lr: float = 2e-3
-    grad_clip: float = 1.0
-    seed: int = 0
-    per_action: int = 50
-    n_repeats: int = 10
-
-    def __post_init__(self) -> None:
-        where = "ExperimentConfig"
-        for name in (
-            "pose_every",
-            "pose_latent",
-            "pose_hidden",
-            "pose_steps",
-            "clip_length",
-            "clip_stride",
-            "clip_latent",
-            "clip_hidden",
-            "clip_steps",
-            "batch_size",
-            "per_action",
-        ):
-            check_scalar(getattr(self, name), name, where, kind=numbers.Integral, minimum=1)
-        check_scalar(self.n_repeats, "n_repeats", where, kind=numbers.Integral, minimum=2)
-        check_scalar(self.seed, "seed", where, kind=numbers.Integral, minimum=0)
-        for name in ("pose_obs_var", "small_prior_var", "lr", "grad_clip"):
-            check_scalar(getattr(self, name), name, where, minimum=0.0, include_minimum=False)
+    pose_every: int = integer(10, minimum=1)
+    pose_latent: int = integer(8, minimum=1)
+    pose_hidden: int = integer(128, minimum=1)
+    pose_steps: int = integer(800, minimum=1)
+    pose_obs_var: float = real(0.1, above=0)
+    small_prior_var: float = real(0.05, above=0)
+    clip_length: int = integer(60, minimum=1)
+    clip_stride: int = integer(15, minimum=1)
+    clip_latent: int = integer(16, minimum=1)
+    clip_hidden: int = integer(128, minimum=1)
+    clip_steps: int = integer(600, minimum=1)
+    batch_size: int = integer(64, minimum=1)
+    lr: float = real(2e-3, above=0)
+    grad_clip: float = real(1.0, above=0)
+    seed: int = integer(0, minimum=0)
+    per_action: int = integer(50, minimum=1)
+    n_repeats: int = integer(10, minimum=2)
 
     @classmethod
     def full(cls) -> ExperimentConfig:

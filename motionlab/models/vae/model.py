@@ -28,7 +28,7 @@ import torch.nn.functional as F
 from torch import Tensor, nn
 
 from motionlab.models.gaussian import reparameterize
-from motionlab.validation import check_scalar, check_tensor
+from motionlab.validation import Checked, check_scalar, check_tensor, flag, integer, real, tuple_of
 
 
 class VAEOutput(NamedTuple):
@@ -41,18 +41,8 @@ class VAEOutput(NamedTuple):
     z: Tensor
 
 
-def _check_common(cfg: VAEConfig | RecurrentVAEConfig) -> None:
-    """The checks both configs share: sizes, class count, the two log-variances."""
-    where = type(cfg).__name__
-    check_scalar(cfg.latent_dim, "latent_dim", where, kind=numbers.Integral, minimum=1)
-    check_scalar(cfg.hidden, "hidden", where, kind=numbers.Integral, minimum=1)
-    check_scalar(cfg.n_classes, "n_classes", where, kind=numbers.Integral, minimum=0)
-    check_scalar(cfg.obs_logvar, "obs_logvar", where)
-    check_scalar(cfg.prior_logvar, "prior_logvar", where)
-
-
 @dataclass(frozen=True)
-class VAEConfig:
+class VAEConfig(Checked):
     """An MLP (conditional) VAE on inputs of a fixed shape (a pose ``(D,)`` or a clip ``(L, D)``, flattened
     inside).
 
@@ -66,24 +56,18 @@ class VAEConfig:
         prior_logvar: log sigma_p^2 of the prior N(0, sigma_p^2 I) (0 is the standard normal).
     """
 
-    input_shape: tuple[int, ...]
-    latent_dim: int = 16
-    hidden: int = 256
-    depth: int = 2
-    n_classes: int = 0
-    variational: bool = True
-    obs_logvar: float = 0.0
-    prior_logvar: float = 0.0
+    input_shape: tuple[int, ...] = tuple_of(kind=numbers.Integral, minimum=1, nonempty=True)
+    latent_dim: int = integer(16, minimum=1)
+    hidden: int = integer(256, minimum=1)
+    depth: int = integer(2, minimum=1)
+    n_classes: int = integer(0, minimum=0)
+    variational: bool = flag(True)
+    obs_logvar: float = real(0.0)
+    prior_logvar: float = real(0.0)
 
     def __post_init__(self) -> None:
-        shape = tuple(self.input_shape)
-        if not shape:
-            raise ValueError(f"VAEConfig: input_shape must be a non-empty tuple, got {self.input_shape!r}")
-        for i, size in enumerate(shape):
-            check_scalar(size, f"input_shape[{i}]", "VAEConfig", kind=numbers.Integral, minimum=1)
-        object.__setattr__(self, "input_shape", shape)
-        check_scalar(self.depth, "depth", "VAEConfig", kind=numbers.Integral, minimum=1)
-        _check_common(self)
+        object.__setattr__(self, "input_shape", tuple(self.input_shape))  # e.g. a torch.Size or a list
+        super().__post_init__()
 
     @property
     def input_size(self) -> int:
@@ -92,7 +76,7 @@ class VAEConfig:
 
 
 @dataclass(frozen=True)
-class RecurrentVAEConfig:
+class RecurrentVAEConfig(Checked):
     """A recurrent (conditional) VAE on clips ``(L, n_features)`` with a GRU encoder and a GRU decoder.
 
     Attributes:
@@ -107,24 +91,15 @@ class RecurrentVAEConfig:
         obs_logvar, prior_logvar: as in :class:`VAEConfig`.
     """
 
-    n_features: int
-    length: int = 60
-    latent_dim: int = 16
-    hidden: int = 128
-    n_classes: int = 0
-    autoregressive: bool = True
-    frame_dropout: float = 0.0
-    obs_logvar: float = 0.0
-    prior_logvar: float = 0.0
-
-    def __post_init__(self) -> None:
-        where = "RecurrentVAEConfig"
-        check_scalar(self.n_features, "n_features", where, kind=numbers.Integral, minimum=1)
-        check_scalar(self.length, "length", where, kind=numbers.Integral, minimum=1)
-        check_scalar(
-            self.frame_dropout, "frame_dropout", where, minimum=0.0, maximum=1.0, include_maximum=False
-        )
-        _check_common(self)
+    n_features: int = integer(minimum=1)
+    length: int = integer(60, minimum=1)
+    latent_dim: int = integer(16, minimum=1)
+    hidden: int = integer(128, minimum=1)
+    n_classes: int = integer(0, minimum=0)
+    autoregressive: bool = flag(True)
+    frame_dropout: float = real(0.0, minimum=0, below=1)
+    obs_logvar: float = real(0.0)
+    prior_logvar: float = real(0.0)
 
 
 def _mlp(sizes: list[int]) -> nn.Sequential:
