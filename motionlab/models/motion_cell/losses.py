@@ -12,7 +12,8 @@ Per frame, for predicted pose vectors against the data (all terms are means over
 * classifier loss (eq. 24): for each training clip ``X`` and its reconstruction ``X~``, the squared l2
   distance between the frozen conv classifier's activations of the two on every intermediate layer
   (each layer with a fixed weight ``beta_l``), plus the cross-entropy of its action and body heads on
-  ``X~`` against the clip's attribute labels (:class:`ClassifierLoss`);
+  ``X~`` against the clip's attribute labels (:class:`ClassifierLoss`). The classifier reads the joint
+  positions of both (ours; eq. 24 applies it to the poses themselves, joint angles and root channels);
 * quaternion-norm constraint (eq. 26 as printed, :math:`\sum_k (\lVert q_k\rVert^2 - 1)`, can be negative
   and is unbounded below; we penalise :math:`(\lVert q\rVert - 1)^2` of the raw quaternion outputs).
 """
@@ -58,8 +59,9 @@ class LossConfig(Checked):
             activation on the real clips, and ``entropy_weight`` for each attribute head).
         classifier_clips: clips of the batch the classifier loss sees (its first ``classifier_clips``).
         classifier_every: the classifier loss is computed every this many steps, with this factor on its
-            weight (the same weight on average, at a fraction of the cost: on every step and the whole batch
-            of 32, eq. 24 made the full-profile Motion Cell train about 1.8 times as long as NC).
+            weight (the same weight on average, at a fraction of the cost of a classifier pass over the
+            whole batch on every step; chapter 04 prints the Motion Cell's training time over NC's when it
+            trains both).
     """
 
     joint_weights: str = choice(JOINT_WEIGHTINGS, "impact")
@@ -136,12 +138,13 @@ class ClassifierLoss(nn.Module):
         + \beta_{ce} \big[\mathrm{CE}(\mathrm{action}(\tilde X), a)
         + \mathrm{CE}(\mathrm{body}(\tilde X), b)\big]
 
-    for each ground-truth clip ``X`` and its reconstruction ``X~``: the squared l2 distance of every
-    intermediate layer's activations (mean over channels and frames, then over clips) and the cross-entropy
-    of the attribute heads on the reconstruction against the clip's labels. The layer weights ``beta_l`` are
-    fixed when the loss is built: one over the layer's mean squared activation on the real clips
-    ``positions`` (so every layer counts alike, whatever its scale; :class:`LossConfig` scales the two parts
-    by ``feature_weight`` and ``entropy_weight``).
+    for each ground-truth clip ``X`` and its reconstruction ``X~``, both as joint positions (ours: eq. 24
+    applies the classifier to the joint-angle poses, and the paper has one classifier per attribute): the
+    squared l2 distance of every intermediate layer's activations (mean over channels and frames, then over
+    clips) and the cross-entropy of the attribute heads on the reconstruction against the clip's labels. The
+    layer weights ``beta_l`` are fixed when the loss is built: one over the layer's mean squared activation
+    on the real clips ``positions`` (so every layer counts alike, whatever its scale; :class:`LossConfig`
+    scales the two parts by ``feature_weight`` and ``entropy_weight``).
 
     ``forward(reconstructed, real, action, body)`` takes joint positions ``(B, T, 22, 3)`` of the
     reconstructions (differentiable) and of the clips, with attributes ``(B,)``, and returns

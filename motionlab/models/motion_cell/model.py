@@ -16,7 +16,9 @@ cells, concatenated, as in §3.3.1) and control ``c``:
   (eq. 5);
 * decoder    the code of word ``t`` from ``[f_z(z_t), h_{t-1}, f_c(c)]`` (eq. 10; then ``f_dec^w`` gives its
   poses);
-* transition ``h_t = GRU_2(GRU_1([f_w(w_t), f_z(z_t), f_c(c)], h^1_{t-1}), h^2_{t-1})`` (eq. 11).
+* transition ``h_t = GRU_2(GRU_1([f_w(w_t), f_z(z_t), f_c(c)], h^1_{t-1}), h^2_{t-1})``: eq. 11 with the
+  control added (ours; the paper's ``f_h(f_w(w_t), f_z(z_t), h_{t-1})`` in eq. 11, 13 and Algorithms 1-2
+  reads no control).
 
 ``f_w``, ``f_z`` are feature MLPs of a word code and a latent, ``f_c`` embeds the one-hot action and body
 type. The initial state of both GRU cells is drawn from a learned Gaussian, one per attribute combination.
@@ -24,10 +26,12 @@ type. The initial state of both GRU cells is drawn from a learned Gaussian, one 
 **The model.** Training (:meth:`MotionCellModel.forward`) reconstructs windows of pose vectors through the
 posterior, teacher-forced, with *scheduled motion-word dropping* (§4.2, strategy ii): with probability
 ``word_drop`` the ground-truth word is dropped from the transition's input and the model's own output for
-that step, ``w~_t`` (decoded from the posterior latent), takes its place, as it does at generation time
-(eq. 13). The posterior always sees the real word. Generation (:meth:`MotionCellModel.generate`) draws the
-initial state and then, word after word, a latent from the prior, decodes it, and feeds the generated word
-back; it runs for any number of frames, and smooths the steps between words (:mod:`.smoothing`, ours).
+that step, ``w~_t`` (decoded from the posterior latent), takes its place, as it does at generation time.
+A fed-back word is decoded into its poses and encoded again, ``f_w(f_enc^w(f_dec^w(w~_t)))``, the path a
+real word takes (ours; eq. 13 feeds ``f_w(w~_t)``). The posterior always sees the real word. Generation
+(:meth:`MotionCellModel.generate`) draws the initial state and then, word after word, a latent from the
+prior, decodes it, and feeds the generated word back (the same way); it runs for any number of frames, and
+smooths the boundaries between words (:mod:`.smoothing`, ours).
 """
 
 from __future__ import annotations
@@ -266,7 +270,11 @@ class MotionCell(nn.Module):
     def transition(
         self, layers: tuple[Tensor, Tensor], word_features: Tensor, latent_features: Tensor, control: Tensor
     ) -> tuple[Tensor, Tensor]:
-        """The two stacked GRU cells: ``(h^1_{t-1}, h^2_{t-1}) -> (h^1_t, h^2_t)``."""
+        """The two stacked GRU cells: ``(h^1_{t-1}, h^2_{t-1}) -> (h^1_t, h^2_t)``, each ``(B, hidden_dim)``.
+
+        The lower cell reads ``[f_w(w_t), f_z(z_t), f_c(c)]`` ``(B, 2 * feature_dim + control_dim)``; eq. 11
+        has no control in ``f_h`` (the control input is ours).
+        """
         lower = self.gru[0](torch.cat([word_features, latent_features, control], dim=-1), layers[0])
         return lower, self.gru[1](lower, layers[1])
 
@@ -365,7 +373,7 @@ class MotionCellModel(nn.Module):
             features = cell.latent_feature(reparameterize(mu, logvar, generator))
             word_input = word_features[:, t]
             if not bool(keep[:, t].all()):
-                with torch.no_grad():  # the model's own output w~_t, fed back as in eq. 13
+                with torch.no_grad():  # w~_t re-encoded, f_w(f_enc^w(f_dec^w(w~_t))) (eq. 13: f_w(w~_t))
                     own, _ = self.decode_words(cell.decode(features, state, control)[:, None])
                     own_features = self.encode_words(own)[:, 0]
                 word_input = torch.where(keep[:, t], word_input, own_features)
