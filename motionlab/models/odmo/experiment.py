@@ -348,9 +348,10 @@ class RealExperimentConfig(ExperimentConfig):
     and the Table 2 protocol. The defaults are the full profile; :meth:`long` is a longer documented run.
 
     Attributes:
-        model: the paper's design at the real data's sizes (:class:`ODMOConfig`'s defaults, without
-            chapter 08's two changes of :func:`chapter_model`: with them, ODMO's samples on real motion were
-            recognised less often than -L_es's).
+        model: :class:`ODMOConfig`'s defaults (the paper's wiring of encoder and decoder, with the
+            differences its docstring lists) at the real data's sizes, without chapter 08's two changes of
+            :func:`chapter_model` (with them, ODMO's samples on real motion were recognised less often than
+            -L_es's).
         n_clips: keep a stratified subset of this many benchmark clips (``None``: all 970).
         window: frames per window (ODMO: 100); frame_stride: every ``frame_stride``-th frame is a model
             frame (2: 6 fps, 50 model frames; the paper models all 100); draws: random windows per clip

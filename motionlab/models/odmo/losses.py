@@ -10,7 +10,10 @@ the joint objective on standardised clips is
         + \lambda_c \underbrace{L_c}_{\text{eq. 1}} + \lambda_p\, L_{prior}
 
 where ``τ`` is the real trajectory, ``τ̂`` the trajectory generator's and ``x̂_traj`` the trajectory
-channels of the generated motion; ``L_c + L_prior`` is the embedding loss ``L_es``. The ablations switch
+channels of the generated motion; ``L_c + L_prior`` is the embedding loss ``L_es``. ``L_traj`` compares
+trajectories, positions accumulated from the origin, as the reference implementation does; the paper's eq. 2
+compares the per-frame velocities ``r̂_t - r̂_{t-1}`` with ``r_t - r_{t-1}``. Like the reference, every term
+averages over channels where eqs. 2-4 sum. The ablations switch
 terms off through the config (:data:`~motionlab.models.odmo.experiment.VARIANTS`); every term is still
 logged.
 

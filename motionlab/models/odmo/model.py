@@ -7,7 +7,8 @@ objective that trains the three networks together is in :mod:`.losses`.
 
 **The condition.** Every ODMO generator is conditioned on the outer product of the class one-hot and the
 code, flattened (:func:`class_code_condition`): a ``C · D`` vector that holds the code in the block of its
-class and zeros elsewhere, so each class reads the code space with its own weights.
+class and zeros elsewhere, so each class reads the code space with its own weights. (The paper says only that
+the generators read the class and the code; the outer product is the reference implementation's.)
 
 **LMP encoder.** An LSTM reads the local movement profile (joints relative to the root, no trajectory) frame
 by frame; its outputs, averaged over the frames, go through two fully connected layers with BatchNorm and
@@ -22,14 +23,17 @@ turn instead of their style.
 
 **Trajectory generator.** It feeds the condition, the end point ``r_e`` (zeros in the ``-r_e`` ablation)
 and the frame's time ``t / (T - 1)`` to an LSTM at every frame, maps each output to a velocity and adds the
-velocities up from the origin (:func:`accumulate`). :class:`ODMO` feeds it a standardised end point and
-reads its velocities in units of each trajectory channel's standard deviation.
+velocities up from the origin (:func:`accumulate`). The time input is ours: the paper mentions none, and the
+reference implementation spreads the condition over the frames with a linear layer instead. :class:`ODMO`
+feeds it a standardised end point and reads its velocities in units of each trajectory channel's standard
+deviation.
 
 **Motion generator.** A trajectory encoder (an LSTM over the trajectory generator's output, during
 training and sampling alike) hands its last hidden and cell states to an autoregressive LSTM decoder as
 its initial state, which is how the trajectory steers the motion (the paper's design). The decoder writes
 the full motion frame by frame, local movement profile and root trajectory together (``3 (J - 1) + 3``
-channels): at frame ``t`` its input is the previous frame, the condition and the time ``t / T``, and with
+channels): at frame ``t`` its input is the previous frame, the condition and the time ``t / T`` (as in the
+reference implementation; the paper mentions no time input), and with
 ``decoder_trajectory="every_frame"`` (ours) also the trajectory's frame ``t``: through the initial state
 alone, chapter 08's decoder let its root end where the code's own clip ended, whatever end point the
 trajectory generator had been given. In training the previous frame is the real one with probability
@@ -88,11 +92,13 @@ DECODER_TRAJECTORIES: tuple[str, ...] = ("initial_state", "every_frame")
 
 @dataclass(frozen=True)
 class ODMOConfig(Checked):
-    """Sizes and objective of one ODMO model. The defaults are the paper's design (eq. 1 with the reference
-    implementation's same-class slack, the encoder reading the LMP in world axes, the decoder reading the
-    trajectory through its initial state) at the sizes the full profile trains; chapter 08's ODMO turns on
-    two changes of ours (:func:`~.experiment.chapter_model`: ``encoder_frame="heading"``,
-    ``decoder_trajectory="every_frame"``).
+    """Sizes and objective of one ODMO model. The defaults follow the paper's design where the course does
+    (the encoder reading the LMP in world axes, the decoder reading the trajectory through its initial state),
+    with the reference implementation's same-class slack, prior weight and trajectory loss on positions
+    (:mod:`.losses`), an encoder that averages its LSTM's outputs over time, and the sizes the full profile
+    trains (generators of one 64-unit LSTM layer; the paper's Table S2: two of 128); chapters 08 and 10 list
+    every difference in their "Paper vs. us" tables. Chapter 08's ODMO turns on two changes of ours
+    (:func:`~.experiment.chapter_model`: ``encoder_frame="heading"``, ``decoder_trajectory="every_frame"``).
 
     The chapter's ODMO, the extension with a prior on ``μ``, the ablations of Table 2 and the standard-VAE
     baseline differ only in fields of this config (:data:`~.experiment.VARIANTS`), never in code.

@@ -6,13 +6,14 @@ by the silhouette of its hard assignments. The number of modes is the first ``k_
 ``S_i`` is more than 95 % of the next one's (``S_i > 0.95 · S_{i+1}``): more components are taken only
 while they make the clusters clearly better separated. Components that keep fewer than ``min_share`` of
 the class's codes are dropped (tiny clusters are outliers, not styles), and the others' weights are
-renormalised.
+renormalised; the share is ours, the paper's supplement (§2.2) drops components of fewer than 10 codes.
 
 **Sampling.** *Mode-preserving* sampling gives every mode its share of the samples (the mixture weights,
 or probabilities the user picks) and draws each sample from its mode's Gaussian. The conventional
 sampler (``ODMO_conv``) fits one Gaussian per class; a standard VAE samples its prior ``N(0, I)``. All
 three are a :class:`ModeSet`. The end point ``r_e`` of a sampled code is that of the training clip whose
-code is nearest (:meth:`ModeSet.nearest_end_points`).
+code is nearest (:meth:`ModeSet.nearest_end_points`), as in the reference implementation; the paper (§4)
+fits a k-nearest-neighbour regressor from codes to end points.
 """
 
 from __future__ import annotations
