@@ -312,7 +312,7 @@ class TrajeVAE(nn.Module):
     # --- encoder -------------------------------------------------------------------------------------
     def trunk(self, sequence: Tensor, initial_embedding: Tensor) -> Tensor:
         """The shared encoder: frames ``(B, F, J * 3)`` and ``(B, d)`` → tokens per latent step ``(B, C, 2
-        d)``."""
+        d)``. The paper shares up to the DCT; the attention block after it is ours."""
         context = initial_embedding[:, None, :].expand(-1, sequence.shape[1], -1)
         tokens = self.before_dct(torch.cat([self.frame_encoder(sequence), context], dim=-1) + self.frame_code)
         if self.cfg.use_dct:
