@@ -9,7 +9,7 @@ bound. Both include allocating their output, as real use does. Kernel and copy a
 (so background load on the shared machine hits both alike); each reported time is the median.
 
 Eager PyTorch writes every intermediate of a formula to memory, so the eager kernels reach only a fraction
-of the copy bandwidth. ``pipeline.compiled`` runs the issue's pipeline (quaternions to matrices plus their
+of the copy bandwidth. ``pipeline.compiled`` runs the whole pipeline (quaternions to matrices plus their
 geodesic distances) through ``torch.compile``, which fuses it into one pass over memory: that is the
 memory-bound speed the same code reaches when fused (compile time reported separately).
 """

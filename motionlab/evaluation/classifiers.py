@@ -1,8 +1,9 @@
 """The two evaluation classifiers of the course, one architecture each from the papers we reproduce.
 
-* ``kind="conv"`` — the Motion Cell paper's classifier: 3 × [Conv1D + ReLU] over time, adaptive average
-  pooling, a fully connected layer. Its per-layer activations are what the paper's classifier loss
-  (eq. 24, feature matching) compares.
+* ``kind="conv"`` — the Motion Cell paper's classifier architecture (its Table 1): 3 × [Conv1D + ReLU] over
+  time, adaptive average pooling, a fully connected layer. Its per-layer activations are what the paper's
+  classifier loss (eq. 24, feature matching) compares. The paper trains one such classifier per attribute
+  (§3.4); ours shares the convolutions between the labels (below).
 * ``kind="gru"`` — the Action2Motion / ODMO recognition model: a 2-layer GRU(128), its last hidden state
   through FC + tanh to a 30-d feature vector (the vector FID, Diversity and Multimodality are computed on),
   then FC to the classes. Action2Motion's code starts the GRU from random noise, which makes features

@@ -1,5 +1,8 @@
 """MoGlow (chapter 06): autoregressive, controllable motion with normalising flows, and its baselines.
 
+"The paper" in this package is Henter, Alexanderson & Beskow, arXiv:1905.06598 (2019); its sections,
+equations and figures are the ones cited.
+
 Modules: :mod:`~.data` (features, augmentation, standardisation, windows), :mod:`~.conditioning` (the
 autoregressive conditioning and its history dropout), :mod:`~.coupling` (the LSTM affine coupling),
 :mod:`~.linear` (the least-squares first layer), :mod:`~.model` (MoGlow and its config), :mod:`~.losses`

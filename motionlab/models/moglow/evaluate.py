@@ -16,8 +16,9 @@ toes) -- the foot carrying the body -- and measure its horizontal speed in the w
 the commanded root velocity keeps that foot planted (speed near 0). A character that keeps stepping while
 the control says *stand still* drags its support foot backwards at its walking speed, and one whose legs
 move slower or faster than the commanded speed slides by the difference: roughly
-``|commanded speed - gait speed|``. So this single number captures both failures the MoGlow paper
-describes for models trained without autoregressive dropout.
+``|commanded speed - gait speed|``. So this single number captures both the failure the MoGlow paper
+reports for models trained without autoregressive dropout (§5.3: stepping while the control says the body
+does not move through space) and a gait slower or faster than commanded.
 
 **Joint-speed ratio** (collapse). The mean speed of the root-local joints over the last seconds of a long
 sample divided by that over its first seconds. A model that drifts into a frozen mean pose (the classic

@@ -1,4 +1,5 @@
-"""MoGlow (Henter, Alexanderson & Beskow, 2020, §4): an autoregressive, causal, controllable flow.
+"""MoGlow (Henter, Alexanderson & Beskow, arXiv:1905.06598, 2019, §4): an autoregressive, causal,
+controllable flow.
 
 Each frame's pose ``x_t`` ``(P,)`` is the image of a standard-normal ``z_t`` under an invertible map that
 depends on the conditioning ``c_t`` (previous poses and controls, :mod:`.conditioning`) and on the
@@ -50,7 +51,7 @@ from motionlab.validation import flag, integer, real
 
 @dataclass(frozen=True)
 class MoGlowConfig(HistoryConfig):
-    """MoGlow (§4 of the paper): a next-frame Glow whose couplings are LSTMs over time.
+    """MoGlow (§4.2 of the 2019 preprint, eqs. 16-18): a next-frame Glow whose couplings are LSTMs over time.
 
     Attributes:
         pose_dim, control_dim, history: as in :class:`~.conditioning.HistoryConfig` (the previous poses and

@@ -1,5 +1,8 @@
 r"""The paper's recurrent baselines, given the same initial pose and trajectories as TrajeVAE.
 
+The paper's supplement B says only that both are built as in DLow, with GRUs, at TrajeVAE's sizes, and that
+the recurrent decoder also reads :math:`Y_t`; the architecture below is ours.
+
 Both read the task frame by frame: the trajectories :math:`Y_t` (``J * 3``, zeros for joints to complete)
 with the initial pose :math:`x_0`. Like TrajeVAE they output per-frame offsets accumulated from the
 initial pose, :math:`\hat x_t = x_0 + \sum_{s \le t} \Delta_s`, so the three models differ only in how they

@@ -7,9 +7,12 @@ frames and coordinates): the given joints' coordinates, zeros elsewhere. The pos
 ``X ⊙ (1 - M)``.
 
 In training each sequence draws its own mask, every joint kept independently with probability
-:data:`KEEP_PROBABILITY` (0.15, so 3.3 of 22 joints on average). For evaluation the joints are given in the
-paper's order, :data:`PAPER_ORDER`: right foot, left foot, right hand, left hand (our skeleton's hands are
-the wrists), then :data:`FULL_ORDER` continues to all joints.
+:data:`KEEP_PROBABILITY` (0.15, so 3.3 of 22 joints on average). The paper draws coordinates from
+Bernoulli(p_m) with p_m = 0.85 (§4) without saying which outcome has that probability; we read it as the
+probability of being hidden, the reading closer to its aim of 3-4 trajectories on average.
+
+For evaluation the joints are given in the paper's order, :data:`PAPER_ORDER`: right foot, left foot, right
+hand, left hand (our skeleton's hands are the wrists), then :data:`FULL_ORDER` continues to all joints.
 """
 
 from __future__ import annotations

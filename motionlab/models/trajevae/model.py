@@ -7,11 +7,14 @@ representation, :func:`motionlab.data.representations.to_trajevae`), ``d`` the w
 components, or frames without the DCT), ``L`` latent numbers per step.
 
 **Encoder.** A frame MLP shared by poses and trajectories embeds every frame (``d``); the initial-pose MLP
-embeds :math:`x_0` (``d``) and is concatenated to every frame (tokens of ``2 d``, plus a sinusoidal frame
-code). Self-attention over frames, the DCT over time keeping ``C`` components (plus a component code),
-self-attention over components: this trunk is shared. Then unshared branches give a mean and log-variance
-per component: the learnable prior :math:`p_\text{traj}(z \mid Y, x_0)` from the trajectories
-:math:`Y = X \odot M` and the posterior :math:`q_\text{pose}(z \mid X \odot (1 - M), x_0)`.
+embeds :math:`x_0` (``d``) and is concatenated to every frame (tokens of ``2 d``). Self-attention over frames
+and the DCT over time keeping ``C`` components: as in the paper (§3.2), prior and posterior share every
+parameter up to here. Ours then adds a shared self-attention block over the components, and the unshared
+branches are self-attention with linear heads (the paper: transformer-like encoders and final MLPs, unshared
+from the DCT on); they give a mean and log-variance per component: the learnable prior
+:math:`p_\text{traj}(z \mid Y, x_0)` from the trajectories :math:`Y = X \odot M` and the posterior
+:math:`q_\text{pose}(z \mid X \odot (1 - M), x_0)`. The sinusoidal frame and component codes added to the
+tokens are ours too (the paper does not describe any).
 
 **Decoder** (eq. 1). The inverse DCT brings ``z`` back to ``F`` frames; concatenated with the initial-pose
 embedding, mixed by an MLP and self-attention, it gives per-frame offsets that are accumulated from the
@@ -186,7 +189,8 @@ def attention_block(dim: int, heads: int, layers: int) -> nn.TransformerEncoder:
 
 
 class GaussianBranch(nn.Module):
-    """An unshared branch: self-attention, then per-token mean and log-variance of the latent.
+    """An unshared branch: self-attention, then linear heads give each token's latent mean and log-variance
+    (the paper's branches end in MLPs).
 
     ``(B, N, dim) -> (mu, logvar)``, each ``(B, N, latent_dim)``.
     """
@@ -277,7 +281,7 @@ class TrajeVAE(nn.Module):
     # --- encoder -------------------------------------------------------------------------------------
     def trunk(self, sequence: Tensor, initial_embedding: Tensor) -> Tensor:
         """The shared encoder: frames ``(B, F, J * 3)`` and ``(B, d)`` → tokens per latent step ``(B, C, 2
-        d)``."""
+        d)``. The paper shares up to the DCT; the attention block after it is ours."""
         context = initial_embedding[:, None, :].expand(-1, sequence.shape[1], -1)
         tokens = self.before_dct(torch.cat([self.frame_encoder(sequence), context], dim=-1) + self.frame_code)
         if self.cfg.use_dct:
