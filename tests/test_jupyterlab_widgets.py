@@ -144,7 +144,13 @@ def test_widgets_respond_in_a_live_jupyterlab(tmp_path: Path) -> None:
     from selenium.webdriver.common.keys import Keys
 
     port, token = _free_port(), secrets.token_hex(16)
-    environment = {**os.environ, "MOTIONLAB_PROFILE": "quick", "JUPYTER_CONFIG_DIR": str(tmp_path / "config")}
+    config = tmp_path / "config"
+    settings = config / "lab" / "user-settings" / "@jupyterlab" / "docmanager-extension"
+    settings.mkdir(parents=True)
+    # The chapter runs in the repository's own file: JupyterLab must not save its outputs into it.
+    (settings / "plugin.jupyterlab-settings").write_text(json.dumps({"autosave": False}))
+    chapter = (REPO_ROOT / CHAPTER).read_bytes()
+    environment = {**os.environ, "MOTIONLAB_PROFILE": "quick", "JUPYTER_CONFIG_DIR": str(config)}
     log = tmp_path / "jupyterlab.log"
     server = subprocess.Popen(
         [
@@ -233,3 +239,4 @@ def test_widgets_respond_in_a_live_jupyterlab(tmp_path: Path) -> None:
         except subprocess.TimeoutExpired:
             server.kill()
             server.wait()
+    assert (REPO_ROOT / CHAPTER).read_bytes() == chapter, f"{CHAPTER} was changed by the test"
