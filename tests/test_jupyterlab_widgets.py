@@ -55,7 +55,8 @@ cells.forEach((cell, i) => {
     if (o.output_type === 'error') { errors.push(`cell ${i}: ${o.ename}: ${o.evalue}`); }
   });
 });
-return {found: true, id: panel.id, main: seen, kernel: kernel ? kernel.status : 'none', cells: cells.length,
+return {found: true, id: panel.id, main: seen, loaded: panel.context.isReady,
+        kernel: kernel ? kernel.status : 'none', cells: cells.length,
         executed: cells.filter(c => c.model.executionCount !== null).length,
         running: cells.filter(c => c.model.executionState === 'running').length,
         errors: errors};
@@ -185,9 +186,9 @@ def test_widgets_respond_in_a_live_jupyterlab(tmp_path: Path) -> None:
             state = _wait_for_notebook(
                 driver,
                 log,
-                lambda s: s["found"] and s["kernel"] == "idle",
+                lambda s: s["found"] and s["loaded"] and s["cells"] > 0 and s["kernel"] == "idle",
                 WAIT_SECONDS,
-                f"{CHAPTER} to open with an idle kernel",
+                f"{CHAPTER} to open, its cells loaded and its kernel idle",
             )
             driver.execute_script(
                 "window.jupyterapp.commands.execute('notebook:run-all-cells', {widgetId: arguments[0]});",
