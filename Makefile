@@ -20,11 +20,13 @@ course: $(STAMP)
 	MOTIONLAB_PROFILE=full $(BIN)/python -m motionlab.course.logs course -- \
 		$(BIN)/python -m motionlab.course
 
-# The formatter and the linter (ruff, settings in pyproject.toml) first, then the tests and notebooks.
+# The formatter and the linter (ruff, settings in pyproject.toml) first, then the tests and notebooks; the
+# log ends with the 25 slowest tests (--durations), so a test that grows slow shows itself.
 test: $(STAMP)
 	MOTIONLAB_PROFILE=quick $(BIN)/python -m motionlab.course.logs test -- sh -c '\
 		$(BIN)/ruff format --check . && $(BIN)/ruff check . && $(BIN)/lint-imports && \
-		$(BIN)/python -m pytest -n 2 --dist loadscope --nbval-sanitize-with tests/nbval_sanitize.cfg'
+		$(BIN)/python -m pytest -n 2 --dist loadscope --durations=25 \
+			--nbval-sanitize-with tests/nbval_sanitize.cfg'
 
 bench: $(STAMP)
 	$(BIN)/python -m motionlab.bench

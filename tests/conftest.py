@@ -1,16 +1,24 @@
-"""Shared test settings: quick profile, one torch thread, and each notebook cell's time limit under nbval."""
+"""Shared test settings: quick profile, one torch thread, property tests that do not depend on the machine's
+speed, and each notebook cell's time limit under nbval."""
 
 import os
 from pathlib import Path
 
 import pytest
 import torch
+from hypothesis import HealthCheck, settings
 
 os.environ.setdefault("MOTIONLAB_PROFILE", "quick")
 
 from motionlab import config  # noqa: E402
 
 config.set_threads()
+
+# Hypothesis times each example (its deadline) and the drawing of the first ones (the too_slow health check)
+# by the wall clock, so a busy machine could fail a property that holds. Every test's own settings start
+# from this profile.
+settings.register_profile("motionlab", deadline=None, suppress_health_check=[HealthCheck.too_slow])
+settings.load_profile("motionlab")
 
 
 def pytest_runtest_setup(item) -> None:

@@ -52,19 +52,20 @@ def test_a_kernel_that_stops_answering_is_named_diagnosed_and_killed(
     assert execution.hung and execution.failed_cell == cell
     error = execution.error
     assert isinstance(error, KernelNotAnswering) and missing in error.missing
-    assert 4 <= error.waited < 12
+    # Caught by the answer limit (seconds after it), long before the cell's limit, on a busy machine too.
+    assert limits.answer_seconds <= error.waited < limits.cell_seconds / 4
     assert error.diagnosis["control_answers"] is True  # the control channel still answers
     assert execution.notebook.cells[0].outputs[0]["text"] == "fine\n"
-    assert execution.seconds < 60
+    assert execution.seconds < limits.cell_seconds
 
 
 def test_a_cell_past_its_limit_fails_with_the_limit_in_the_message(tmp_path: Path):
     execution = execute_notebook(
-        _notebook("1", "import time\ntime.sleep(60)"), tmp_path, CellLimits(cell_seconds=2)
+        _notebook("1", "import time\ntime.sleep(600)"), tmp_path, CellLimits(cell_seconds=2)
     )
     assert not execution.hung and execution.failed_cell == 1
     assert "timed out (limit 2 s)" in str(execution.error)
-    assert execution.seconds < 30
+    assert execution.seconds < 300  # the sleep was cut short (the kernel's start and end included)
 
 
 def test_cell_limits_come_from_the_chapter_budget(monkeypatch):

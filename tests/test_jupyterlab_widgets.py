@@ -1,22 +1,28 @@
 """The widgets in a live JupyterLab, driven by headless Chromium: chapter 08 runs in the quick profile, then
 a slider of its sampling widget and a slider of its interpolation widget are moved with the keyboard, and
 each widget's figure must change, with no error output anywhere. Skipped, with how to enable it, when
-Chromium is not installed. The server is stopped at the end, whatever happens."""
+Chromium is not installed. The server is stopped at the end, whatever happens.
+
+Nothing here follows the focus: the notebook is found among the main area's widgets by its path (not as
+JupyterLab's current widget, which is whatever had the focus last) and run through its own id. Each wait has
+a limit of minutes, though a run here takes seconds, so a slow machine that is busy too passes; a wait that
+runs out says what it waited for and what it saw last (the notebook's state, the main area's widgets, the
+console's errors, the end of the server's log)."""
 
 from __future__ import annotations
 
+import json
 import os
 import secrets
 import socket
 import subprocess
 import sys
-import time
 import urllib.request
 from pathlib import Path
 
 import pytest
 
-from motionlab.course.browser import browser_available, chromium
+from motionlab.course.browser import browser_available, chromium, console_errors, poll
 from motionlab.paths import REPO_ROOT
 
 pytestmark = pytest.mark.skipif(
@@ -25,14 +31,23 @@ pytestmark = pytest.mark.skipif(
 )
 
 CHAPTER = "notebooks/08_contrastive_mode_discovery.ipynb"
-#: Seconds for JupyterLab to start, and for the chapter to run in the quick profile (its cell limit).
-START_SECONDS = 90
-RUN_SECONDS = 600
+#: Seconds for JupyterLab to answer, for the chapter to open with an idle kernel, and for a slider's new
+#: figure: each takes seconds here.
+WAIT_SECONDS = 300
+#: Seconds for the chapter to run in the quick profile (under a minute here).
+RUN_SECONDS = 900
 
+#: The state of the notebook at ``arguments[0]`` (its path under the server's root), found among the main
+#: area's widgets; ``main`` lists them all, so a wait that runs out shows what was open instead.
 _NOTEBOOK_STATE = """
-const panel = window.jupyterapp && window.jupyterapp.shell.currentWidget;
-if (!panel || !panel.content || !panel.sessionContext) { return null; }
-const kernel = panel.sessionContext.session && panel.sessionContext.session.kernel;
+const app = window.jupyterapp;
+if (!app) { return {found: false, main: [], note: 'window.jupyterapp is not defined yet'}; }
+const main = Array.from(app.shell.widgets('main'));
+const seen = main.map(w => (w.context ? w.context.path : w.title.label) || w.id);
+const panel = main.find(w => w.context && w.context.path === arguments[0] && w.content && w.sessionContext);
+if (!panel) { return {found: false, main: seen}; }
+const session = panel.sessionContext.session;
+const kernel = session && session.kernel;
 const cells = panel.content.widgets.filter(c => c.model.type === 'code');
 const errors = [];
 cells.forEach((cell, i) => {
@@ -40,9 +55,10 @@ cells.forEach((cell, i) => {
     if (o.output_type === 'error') { errors.push(`cell ${i}: ${o.ename}: ${o.evalue}`); }
   });
 });
-return {kernel: kernel ? kernel.status : 'none', cells: cells.length,
+return {found: true, id: panel.id, main: seen, loaded: panel.context.isReady,
+        kernel: kernel ? kernel.status : 'none', cells: cells.length,
         executed: cells.filter(c => c.model.executionCount !== null).length,
-        running: cells.filter(c => c.promptNode && c.promptNode.textContent.includes('*')).length,
+        running: cells.filter(c => c.model.executionState === 'running').length,
         errors: errors};
 """
 
@@ -53,22 +69,29 @@ def _free_port() -> int:
         return probe.getsockname()[1]
 
 
-def _wait(condition, seconds: float, what: str):
-    deadline = time.monotonic() + seconds
-    while time.monotonic() < deadline:
-        value = condition()
-        if value:
-            return value
-        time.sleep(0.5)
-    raise AssertionError(f"timed out after {seconds:.0f} s waiting for {what}")
-
-
-def _server_answers(url: str) -> bool:
+def _server_state(url: str, server: subprocess.Popen) -> str:
+    """``answers`` when ``url`` replies 200, ``exited with N`` when the server has ended, else the error."""
+    if server.poll() is not None:
+        return f"exited with {server.returncode}"
     try:
-        with urllib.request.urlopen(url, timeout=2) as reply:
-            return reply.status == 200
-    except OSError:
-        return False
+        with urllib.request.urlopen(url, timeout=5) as reply:
+            return "answers" if reply.status == 200 else f"HTTP {reply.status}"
+    except OSError as error:
+        return f"no answer ({error})"
+
+
+def _log_tail(log: Path, lines: int = 15) -> str:
+    return "\n".join(log.read_text(errors="replace").splitlines()[-lines:])
+
+
+def _wait_for_notebook(driver, log: Path, done, seconds: float, what: str) -> dict:
+    """Poll the notebook's state until ``done`` holds for it; past ``seconds``, fail saying what was seen."""
+    state = poll(lambda: driver.execute_script(_NOTEBOOK_STATE, CHAPTER), done, seconds)
+    assert done(state), (
+        f"waited {seconds:.0f} s for {what}; the notebook's state last: {json.dumps(state)}; "
+        f"console errors: {console_errors(driver)}; the end of JupyterLab's log:\n{_log_tail(log)}"
+    )
+    return state
 
 
 def _widget_output(driver, source_snippet: str):
@@ -81,38 +104,55 @@ def _widget_output(driver, source_snippet: str):
     raise AssertionError(f"no cell with {source_snippet!r}")
 
 
-def _move_slider(driver, output, description: str) -> bytes:
-    """Press the right arrow on the slider labelled ``description`` in ``output``; return a screenshot of
-    the widget's figure taken before the move."""
-    from selenium.webdriver.common.by import By
-    from selenium.webdriver.common.keys import Keys
-
-    driver.execute_script("arguments[0].scrollIntoView({block: 'center'});", output)
-    sliders = [
-        s
-        for s in output.find_elements(By.CSS_SELECTOR, ".widget-slider")
-        if s.find_element(By.CSS_SELECTOR, "label").text.strip() == description
-    ]
-    assert sliders, f"no slider {description!r}"
-    figure = output.find_elements(By.CSS_SELECTOR, ".widget-output img")
-    assert figure, "the widget shows no figure"
-    before = figure[0].screenshot_as_png
-    handle = sliders[0].find_element(By.CSS_SELECTOR, ".noUi-handle")
-    handle.click()
-    handle.send_keys(Keys.ARROW_RIGHT)
-    return before
-
-
-def _figure_changed(output, before: bytes) -> bool:
+def _slider(output, description: str) -> dict | None:
+    """The slider labelled ``description`` in a widget's ``output``: its handle, its readout and a screenshot
+    of the widget's figure; None while either is not rendered (or is being rendered again)."""
+    from selenium.common.exceptions import StaleElementReferenceException
     from selenium.webdriver.common.by import By
 
-    figure = output.find_elements(By.CSS_SELECTOR, ".widget-output img")
-    return bool(figure) and figure[0].screenshot_as_png != before
+    try:
+        sliders = [
+            s
+            for s in output.find_elements(By.CSS_SELECTOR, ".widget-slider")
+            if s.find_element(By.CSS_SELECTOR, "label").text.strip() == description
+        ]
+        figure = output.find_elements(By.CSS_SELECTOR, ".widget-output img")
+        if not sliders or not figure:
+            return None
+        return {
+            "handle": sliders[0].find_element(By.CSS_SELECTOR, ".noUi-handle"),
+            "readout": sliders[0].find_element(By.CSS_SELECTOR, ".widget-readout").text,
+            "figure": figure[0].screenshot_as_png,
+        }
+    except StaleElementReferenceException:
+        return None
+
+
+def _moved(before: dict, now: dict | None) -> bool:
+    """Whether the slider's readout and the widget's figure both differ from ``before``."""
+    return now is not None and now["readout"] != before["readout"] and now["figure"] != before["figure"]
+
+
+def _seen(before: dict, now: dict | None) -> str:
+    """What :func:`_slider` saw last, in words, for a wait that ran out."""
+    if now is None:
+        return "no slider or no figure"
+    figure = "changed" if now["figure"] != before["figure"] else "unchanged"
+    return f"the readout {now['readout']}, the figure {figure}"
 
 
 def test_widgets_respond_in_a_live_jupyterlab(tmp_path: Path) -> None:
+    from selenium.webdriver.common.keys import Keys
+
     port, token = _free_port(), secrets.token_hex(16)
-    environment = {**os.environ, "MOTIONLAB_PROFILE": "quick", "JUPYTER_CONFIG_DIR": str(tmp_path / "config")}
+    config = tmp_path / "config"
+    settings = config / "lab" / "user-settings" / "@jupyterlab" / "docmanager-extension"
+    settings.mkdir(parents=True)
+    # The chapter runs in the repository's own file: JupyterLab must not save its outputs into it.
+    (settings / "plugin.jupyterlab-settings").write_text(json.dumps({"autosave": False}))
+    chapter = (REPO_ROOT / CHAPTER).read_bytes()
+    environment = {**os.environ, "MOTIONLAB_PROFILE": "quick", "JUPYTER_CONFIG_DIR": str(config)}
+    log = tmp_path / "jupyterlab.log"
     server = subprocess.Popen(
         [
             sys.executable,
@@ -129,40 +169,69 @@ def test_widgets_respond_in_a_live_jupyterlab(tmp_path: Path) -> None:
             "--LabApp.check_for_updates_class=jupyterlab.NeverCheckForUpdate",
         ],
         env=environment,
-        stdout=(tmp_path / "jupyterlab.log").open("w"),
+        stdout=log.open("w"),
         stderr=subprocess.STDOUT,
     )
     base = f"http://127.0.0.1:{port}"
     try:
-        _wait(lambda: _server_answers(f"{base}/api/status?token={token}"), START_SECONDS, "JupyterLab")
+        status = f"{base}/api/status?token={token}"
+        answer = poll(
+            lambda: _server_state(status, server), lambda a: not a.startswith("no answer"), WAIT_SECONDS
+        )
+        assert answer == "answers", (
+            f"waited {WAIT_SECONDS} s for JupyterLab to answer: {answer}; its log:\n{_log_tail(log)}"
+        )
         with chromium() as driver:
             driver.get(f"{base}/lab/tree/{CHAPTER}?token={token}")
-            state = _wait(
-                lambda: (s := driver.execute_script(_NOTEBOOK_STATE)) and s["kernel"] == "idle" and s,
-                START_SECONDS,
-                "the notebook and an idle kernel",
+            state = _wait_for_notebook(
+                driver,
+                log,
+                lambda s: s["found"] and s["loaded"] and s["cells"] > 0 and s["kernel"] == "idle",
+                WAIT_SECONDS,
+                f"{CHAPTER} to open, its cells loaded and its kernel idle",
             )
-            driver.execute_script("window.jupyterapp.commands.execute('notebook:run-all-cells');")
-            state = _wait(
-                lambda: (
-                    (s := driver.execute_script(_NOTEBOOK_STATE))
-                    and (
+            driver.execute_script(
+                "window.jupyterapp.commands.execute('notebook:run-all-cells', {widgetId: arguments[0]});",
+                state["id"],
+            )
+            state = _wait_for_notebook(
+                driver,
+                log,
+                lambda s: (
+                    s["found"]
+                    and bool(
                         s["errors"]
                         or (s["executed"] == s["cells"] and s["kernel"] == "idle" and not s["running"])
                     )
-                    and s
                 ),
                 RUN_SECONDS,
                 "the chapter to run",
             )
             assert state["errors"] == [], state["errors"]
-            for snippet, slider in (("mode_sampler_widget(", "seed"), ("interpolation_widget(", "weight")):
+            for snippet, description in (
+                ("mode_sampler_widget(", "seed"),
+                ("interpolation_widget(", "weight"),
+            ):
                 output = _widget_output(driver, snippet)
-                before = _move_slider(driver, output, slider)
-                _wait(
-                    lambda o=output, b=before: _figure_changed(o, b), 60, f"the {slider} slider's new figure"
+                driver.execute_script("arguments[0].scrollIntoView({block: 'center'});", output)
+                before = poll(lambda o=output, d=description: _slider(o, d), bool, WAIT_SECONDS)
+                assert before, (
+                    f"waited {WAIT_SECONDS} s for the {description} slider and its figure; the cell's output "
+                    f"shows {output.text[:300]!r}; console errors: {console_errors(driver)}"
                 )
-            state = driver.execute_script(_NOTEBOOK_STATE)
+                before["handle"].click()
+                before["handle"].send_keys(Keys.ARROW_RIGHT)
+                now = poll(
+                    lambda o=output, d=description: _slider(o, d),
+                    lambda n, b=before: _moved(b, n),
+                    WAIT_SECONDS,
+                )
+                assert _moved(before, now), (
+                    f"waited {WAIT_SECONDS} s for the {description} slider to move from {before['readout']} "
+                    f"and its figure to change; last saw {_seen(before, now)}; "
+                    f"console errors: {console_errors(driver)}"
+                )
+            state = driver.execute_script(_NOTEBOOK_STATE, CHAPTER)
             assert state["errors"] == [], state["errors"]
     finally:
         server.terminate()
@@ -171,3 +240,4 @@ def test_widgets_respond_in_a_live_jupyterlab(tmp_path: Path) -> None:
         except subprocess.TimeoutExpired:
             server.kill()
             server.wait()
+    assert (REPO_ROOT / CHAPTER).read_bytes() == chapter, f"{CHAPTER} was changed by the test"

@@ -18,6 +18,8 @@ from motionlab.apps.training import main
 from motionlab.train.runtime import Execution, executing, local_batch, shard_indices
 
 VENV_BIN = Path(sys.executable).parent
+#: Seconds for the 2-process torchrun of 3 steps (about 20 s here, torch's start included).
+TORCHRUN_SECONDS = 600
 
 
 def fresh_build(root: Path) -> Path:
@@ -180,7 +182,14 @@ def test_two_processes_under_torchrun_match_one_process_with_the_same_global_bat
         monkeypatch.setenv("MOTIONLAB_BUILD", str(fresh_build(tmp_path / "build_one")))
         assert main([*args, "--out", str(tmp_path / "one")]) == 0
     finally:
-        _, err = two.communicate(timeout=120)
+        try:
+            _, err = two.communicate(timeout=TORCHRUN_SECONDS)
+        except subprocess.TimeoutExpired:
+            two.kill()
+            _, err = two.communicate()
+            pytest.fail(
+                f"torchrun did not end within {TORCHRUN_SECONDS} s; the end of its stderr:\n{err[-3000:]}"
+            )
     assert two.returncode == 0, err
     assert json.loads((tmp_path / "two" / "run.json").read_text())["processes"] == 2
     one, two_weights = state_dict(tmp_path / "one"), state_dict(tmp_path / "two")

@@ -20,6 +20,11 @@ print(json.dumps({"workers": pids, "tracker": tracker._resource_tracker._pid, "m
 """
 
 
+#: Seconds the workers may take to end: half a second here; the limit leaves room for a busy machine, and a
+#: passing run does not wait for it.
+ENDED_SECONDS = 60.0
+
+
 def _alive(pid: int) -> bool:
     try:
         state = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()[0]
@@ -55,14 +60,14 @@ def test_no_worker_outlives_its_chapter(tmp_path: Path) -> None:
     assert execution.error is None
     report = _report(execution)
     assert not _alive(report["me"])
-    assert _gone_within(_children(report), 10.0) == []
+    assert _gone_within(_children(report), ENDED_SECONDS) == []
 
 
 def test_an_interrupt_leaves_the_workers_and_a_killed_kernel_takes_them_along(tmp_path: Path) -> None:
     """Ctrl-C in the notebook (SIGINT to the kernel's process group) stops the cell, not the idle workers: the
     next cell finds the same two. A kernel that is killed runs no clean-up, and its workers still end."""
     interrupt = (
-        "import os, signal, time\ntry:\n    os.killpg(os.getpgid(0), signal.SIGINT)\n    time.sleep(5)\n"
+        "import os, signal, time\ntry:\n    os.killpg(os.getpgid(0), signal.SIGINT)\n    time.sleep(60)\n"
         "except KeyboardInterrupt:\n    print('interrupted')"
     )
     again = "run_in_workers(os.getpid, [(), ()])\nprint(sorted(shared_pool(2)._processes))"
@@ -74,4 +79,4 @@ def test_an_interrupt_leaves_the_workers_and_a_killed_kernel_takes_them_along(tm
     report = _report(execution)
     assert "interrupted" in execution.notebook.cells[1].outputs[0]["text"]
     assert execution.notebook.cells[2].outputs[0]["text"].strip() == str(report["workers"])
-    assert _gone_within([report["me"], *_children(report)], 10.0) == []
+    assert _gone_within([report["me"], *_children(report)], ENDED_SECONDS) == []

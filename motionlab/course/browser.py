@@ -19,12 +19,15 @@ import shutil
 import sys
 import tempfile
 import time
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import TypeVar
 
 from motionlab import arguments
+
+T = TypeVar("T")
 
 CHROMIUM = "/usr/bin/chromium"
 CHROMEDRIVER = "/usr/bin/chromedriver"
@@ -43,8 +46,10 @@ CHROMIUM_FLAGS = (
     "--window-size=1280,1600",
 )
 
-#: Seconds a page may take to load, typeset its formulas and render its widgets.
-PAGE_SECONDS = 60.0
+#: Seconds a page may take to load, typeset its formulas and render its widgets, and an animation to show a
+#: new frame once played. A page here takes a few seconds; the limit leaves room for a slow machine that is
+#: busy too, and a page that runs out of it is reported with what it still lacked.
+PAGE_SECONDS = 300.0
 
 #: LaTeX commands that must not be visible in the prose (Markdown outside code) once MathJax has typeset it.
 RAW_LATEX = r"\\(frac|mathcal|mathbf|mathrm|sum|sqrt|lVert|operatorname|hat|tilde|sigma|mu)\b"
@@ -81,6 +86,17 @@ class PageReport:
     animation_checked: bool = False
 
 
+def poll(probe: Callable[[], T], done: Callable[[T], bool], seconds: float, step: float = 0.5) -> T:
+    """Call ``probe`` every ``step`` seconds until ``done`` holds for what it returned or ``seconds`` have
+    passed; return what it returned last (so a caller that ran out can say what it saw)."""
+    deadline = time.monotonic() + seconds
+    while True:
+        seen = probe()
+        if done(seen) or time.monotonic() > deadline:
+            return seen
+        time.sleep(step)
+
+
 def browser_available() -> bool:
     """Whether Debian's Chromium and its driver are installed (and selenium importable)."""
     try:
@@ -92,7 +108,11 @@ def browser_available() -> bool:
 
 @contextmanager
 def chromium() -> Iterator[object]:
-    """A headless Chromium under selenium, logging the console and the network; quit at the end."""
+    """A headless Chromium under selenium, logging the console and the network; quit at the end.
+
+    Its pages behave as if their window had the focus, whether or not it has (DevTools' focus emulation, as
+    Playwright sets it): what follows the focus (JupyterLab's current widget, a focused slider) is then the
+    same on every machine, desktop or headless, foreground or background."""
     from selenium import webdriver
     from selenium.webdriver.chrome.service import Service
 
@@ -104,10 +124,16 @@ def chromium() -> Iterator[object]:
     options.set_capability("goog:loggingPrefs", {"browser": "ALL", "performance": "ALL"})
     driver = webdriver.Chrome(options=options, service=Service(CHROMEDRIVER))
     try:
+        driver.execute_cdp_cmd("Emulation.setFocusEmulationEnabled", {"enabled": True})
         yield driver
     finally:
         driver.quit()
         shutil.rmtree(profile, ignore_errors=True)
+
+
+def console_errors(driver) -> list[str]:
+    """The console's errors since the last call (each cut to 300 characters)."""
+    return [entry["message"][:300] for entry in driver.get_log("browser") if entry["level"] == "SEVERE"]
 
 
 def _failed_requests(driver) -> list[str]:
@@ -126,8 +152,9 @@ def _failed_requests(driver) -> list[str]:
     return failed
 
 
-def _animation_moves(driver) -> bool:
-    """Play the page's first matplotlib animation; whether two screenshots 0.5 s apart differ."""
+def _animation_moves(driver, seconds: float) -> bool:
+    """Play the page's first matplotlib animation; whether a screenshot taken within ``seconds`` differs
+    from the first one (screenshots are taken until one does)."""
     from selenium.webdriver.common.by import By
 
     image = driver.find_element(By.CSS_SELECTOR, ".animation img")
@@ -140,8 +167,7 @@ def _animation_moves(driver) -> bool:
         return False
     driver.execute_script("arguments[0].click();", play[0])
     first = image.screenshot_as_png
-    time.sleep(0.5)
-    return image.screenshot_as_png != first
+    return poll(lambda: image.screenshot_as_png, lambda shot: shot != first, seconds) != first
 
 
 def check_page(driver, page: Path, timeout: float = PAGE_SECONDS) -> PageReport:
@@ -150,32 +176,40 @@ def check_page(driver, page: Path, timeout: float = PAGE_SECONDS) -> PageReport:
     driver.get_log("browser")  # drop what earlier pages left
     driver.get_log("performance")
     driver.get(page.resolve().as_uri())
-    deadline = time.monotonic() + timeout
-    while True:
-        state = driver.execute_script(_PAGE_STATE, RAW_LATEX)
-        settled = state["mathPending"] == 0 and state["emptyViews"] == 0 and not state["broken"]
-        if settled or time.monotonic() > deadline:
-            break
-        time.sleep(0.5)
+    state = poll(
+        lambda: driver.execute_script(_PAGE_STATE, RAW_LATEX),
+        lambda s: (
+            (s["mathJax"] or not s["mathScripts"])
+            and s["mathPending"] == 0
+            and s["emptyViews"] == 0
+            and not s["broken"]
+        ),
+        timeout,
+    )
     report.state = state
-    for entry in driver.get_log("browser"):
-        if entry["level"] == "SEVERE":
-            report.problems.append(f"console error: {entry['message'][:300]}")
+    report.problems += [f"console error: {message}" for message in console_errors(driver)]
     report.problems += [f"failed request: {url}" for url in _failed_requests(driver)]
+    within = f"within {timeout:.0f} s"
     if state["broken"]:
-        report.problems.append(f"{len(state['broken'])} image(s) not decoded, e.g. {state['broken'][0]}")
+        report.problems.append(
+            f"{len(state['broken'])} image(s) not decoded {within}, e.g. {state['broken'][0]}"
+        )
     if state["mathScripts"] and not state["mathJax"]:
-        report.problems.append("MathJax did not load: formulas show as raw LaTeX")
+        report.problems.append(f"MathJax did not load {within}: formulas show as raw LaTeX")
     elif state["mathPending"]:
-        report.problems.append("MathJax did not finish typesetting")
+        report.problems.append(
+            f"MathJax did not finish typesetting {within} ({state['mathPending']} pending)"
+        )
     if state["rawLatex"]:
         report.problems.append(f"raw LaTeX in the text: {state['rawLatex']}")
     if state["emptyViews"]:
-        report.problems.append(f"{state['emptyViews']} of {state['views']} widget views did not render")
+        report.problems.append(
+            f"{state['emptyViews']} of {state['views']} widget views did not render {within}"
+        )
     if state["animations"]:
         report.animation_checked = True
-        if not _animation_moves(driver):
-            report.problems.append("the first animation did not advance when played")
+        if not _animation_moves(driver, timeout):
+            report.problems.append(f"the first animation did not advance {within} of being played")
     return report
 
 
