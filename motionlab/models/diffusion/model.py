@@ -44,7 +44,7 @@ from torch import Tensor, nn
 
 from motionlab.data.datasets import Standardizer
 from motionlab.models.diffusion.data import n_features
-from motionlab.models.diffusion.schedule import NoiseSchedule
+from motionlab.models.diffusion.schedule import NoiseSchedule, check_steps
 from motionlab.models.trajevae.model import sinusoidal_encoding
 from motionlab.skeleton import JOINT
 from motionlab.validation import check_scalar, check_tensor
@@ -218,13 +218,7 @@ class MDM(nn.Module):
         batch, frames = x_t.shape[:2]
         if frames > cfg.n_frames:
             raise ValueError(f"{where}: x_t has {frames} frames, the model at most n_frames={cfg.n_frames}")
-        check_tensor(t, "t", where, ndim=1, floating=False)
-        if t.is_floating_point() or t.shape != (batch,):
-            raise ValueError(f"{where}: t must be ({batch},) integer steps, got {t.dtype} {tuple(t.shape)}")
-        if t.numel() and (int(t.min()) < 0 or int(t.max()) >= cfg.diffusion_steps):
-            raise ValueError(
-                f"{where}: t must lie in [0, {cfg.diffusion_steps}), got [{int(t.min())}, {int(t.max())}]"
-            )
+        check_steps(t, batch, cfg.diffusion_steps, where)
         token = self.embed_timestep(t) + self.condition(action, null, batch)
         sequence = torch.cat([token[:, None, :], self.input_process(x_t)], dim=1)
         sequence = self.position_dropout(sequence + self.positions[: frames + 1])

@@ -76,6 +76,22 @@ def evenly_spaced(n_steps: int, count: int) -> list[int]:
     return [round(k * stride) for k in range(count)]
 
 
+def check_steps(t: Tensor, batch: int, n_steps: int, where: str) -> Tensor:
+    """Check diffusion steps ``t``: a ``(batch,)`` integer tensor with entries in ``[0, n_steps)``; return it.
+
+    ``TypeError`` for a non-tensor or a floating or bool dtype, ``ValueError`` for a wrong shape or range.
+    """
+    if not isinstance(t, Tensor) or t.is_floating_point() or t.dtype == torch.bool:
+        raise TypeError(
+            f"{where}: t must be an integer tensor of steps, got {getattr(t, 'dtype', type(t).__name__)}"
+        )
+    if t.shape != (batch,):
+        raise ValueError(f"{where}: t must be ({batch},), got {tuple(t.shape)}")
+    if t.numel() and (int(t.min()) < 0 or int(t.max()) >= n_steps):
+        raise ValueError(f"{where}: steps must lie in [0, {n_steps}), got [{int(t.min())}, {int(t.max())}]")
+    return t
+
+
 def _per_sample(values: Tensor, t: Tensor, like: Tensor) -> Tensor:
     """``values[t]`` ``(B,)`` shaped ``(B, 1, ..., 1)`` to broadcast against ``like`` ``(B, ...)``, in its
     dtype."""
@@ -104,13 +120,21 @@ class NoiseSchedule:
         betas = check_tensor(self.betas, "betas", where, ndim=1).to(torch.float64)
         if betas.numel() == 0 or bool((betas <= 0).any()) or bool((betas > 1).any()):
             raise ValueError(f"{where}: betas must be a non-empty (S,) tensor with every beta in (0, 1]")
-        check_tensor(self.timesteps, "timesteps", where, ndim=1, floating=False)
-        if self.timesteps.is_floating_point() or self.timesteps.shape != betas.shape:
-            raise ValueError(
-                f"{where}: timesteps must be an integer tensor of shape {tuple(betas.shape)}, got "
-                f"{self.timesteps.dtype} {tuple(self.timesteps.shape)}"
+        timesteps = self.timesteps
+        if (
+            not isinstance(timesteps, Tensor)
+            or timesteps.is_floating_point()
+            or timesteps.dtype == torch.bool
+        ):
+            raise TypeError(
+                f"{where}: timesteps must be an integer tensor, got {getattr(timesteps, 'dtype', timesteps)}"
             )
-        if betas.numel() > 1 and bool((self.timesteps.diff() <= 0).any()):
+        if timesteps.shape != betas.shape or bool((timesteps < 0).any()):
+            raise ValueError(
+                f"{where}: timesteps must be {tuple(betas.shape)} non-negative steps, "
+                f"got {tuple(timesteps.shape)}"
+            )
+        if betas.numel() > 1 and bool((timesteps.diff() <= 0).any()):
             raise ValueError(f"{where}: timesteps must increase strictly")
         object.__setattr__(self, "betas", betas)
         object.__setattr__(self, "timesteps", self.timesteps.to(torch.int64))
@@ -146,15 +170,8 @@ class NoiseSchedule:
         return NoiseSchedule(1 - alpha_bar / previous, self.timesteps[kept])
 
     def check_step(self, t: Tensor, batch: int, where: str) -> Tensor:
-        """Check step indices ``t`` ``(batch,)`` int64 in ``[0, S)``; return them."""
-        check_tensor(t, "t", where, ndim=1, floating=False)
-        if t.is_floating_point() or t.shape != (batch,):
-            raise ValueError(f"{where}: t must be ({batch},) integer steps, got {t.dtype} {tuple(t.shape)}")
-        if t.numel() and (int(t.min()) < 0 or int(t.max()) >= self.n_steps):
-            raise ValueError(
-                f"{where}: steps must lie in [0, {self.n_steps}), got [{int(t.min())}, {int(t.max())}]"
-            )
-        return t
+        """Check step indices ``t`` ``(batch,)`` (integers in ``[0, S)``) of this schedule; return them."""
+        return check_steps(t, batch, self.n_steps, where)
 
     def q_sample(self, x0: Tensor, t: Tensor, noise: Tensor) -> Tensor:
         r"""A draw of :math:`q(x_t \mid x_0)`: :math:`\sqrt{\bar\alpha_t}\, x_0 + \sqrt{1 - \bar\alpha_t}\,
