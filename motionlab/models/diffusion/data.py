@@ -113,10 +113,11 @@ def skeleton_offsets(offsets: Tensor | np.ndarray | None, n_joints: int, like: T
 def joint_positions(features: Tensor, offsets: Tensor | np.ndarray | None = None) -> Tensor:
     """Joint positions ``(..., T, J, 3)`` in metres of MDM features ``(..., T, 6 J + 3)`` by forward
     kinematics (differentiable; the geometric losses use it); ``offsets`` as in :func:`skeleton_offsets`."""
-    rotations, root = from_mdm(features)
-    n_joints = rotations.shape[-2]
+    check_tensor(features, "features", "joint_positions", min_leading=1)
+    n_joints = n_joints_of(features, "joint_positions")
     if n_joints != len(PARENTS):
         raise ValueError(f"joint_positions: the course skeleton has {len(PARENTS)} joints, got {n_joints}")
+    rotations, root = from_mdm(features)
     offsets = skeleton_offsets(offsets, n_joints, features)
     if offsets.dim() > 2:  # per clip (N, J, 3): one skeleton for all of a clip's frames
         offsets = offsets.unsqueeze(-3)
