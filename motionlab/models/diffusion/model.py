@@ -4,7 +4,7 @@ Shapes: ``B`` clips, ``T`` frames, ``F`` channels per frame (the family's repres
 ``d`` the transformer width.
 
 **What the network predicts.** MDM's denoiser :math:`G(x_t, t, c)` predicts the clean motion
-:math:`\hat x_0` itself, not the noise (§3, "we predict the signal itself"): the geometric losses of
+:math:`\hat x_0` itself, not the noise (§3, after Ramesh et al. 2022): the geometric losses of
 :mod:`.losses` are then computed on a motion, and the sampler (:mod:`.sampling`) puts :math:`\hat x_0` into
 the posterior of :mod:`.schedule`.
 
@@ -74,7 +74,7 @@ class MDMConfig:
         heads: attention heads (repository ``num_heads`` 4).
         dropout: dropout in the transformer and after the position code (repository 0.1).
         cond_mask_prob: probability that a training clip's action is replaced by the null condition
-            (repository ``--cond_mask_prob`` 0.1; paper §3: "randomly setting c = ∅ for 10% of the samples").
+            (repository ``--cond_mask_prob`` 0.1; paper §3: the null condition for 10 % of the samples).
         diffusion_steps: steps ``S`` of the cosine schedule (repository ``--diffusion_steps`` 1,000 with
             ``--noise_schedule cosine``).
         lambda_pos: weight of the joint-position loss; lambda_vel: of the velocity loss; lambda_foot: of

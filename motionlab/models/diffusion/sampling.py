@@ -23,10 +23,11 @@ with a respaced schedule this is the fast variant. Every clip of a batch runs th
 from one batched pass of the network. The repository's sampling default is ``s = 2.5``
 (``--guidance_param``), chosen on text-to-motion.
 
-**Inpainting** (editing; MDM §3 "Editing", repository ``sample/edit.py`` with ``p_mean_variance``). Given a
-motion and a mask of its known channels (:func:`~.data.known_mask`), at *every* step the repository
-overwrites the known entries of the prediction :math:`\hat x_0` with the given motion, before the posterior
-is formed; at the last step the sample is :math:`\hat x_0`, so the known part comes out exactly. That is
+**Inpainting** (MDM's editing: in-betweening and body-part editing; repository ``sample/edit.py`` with
+``p_mean_variance``). Given a motion and a mask of its known channels (:func:`~.data.known_mask`), at *every*
+step the repository overwrites the known entries of the prediction :math:`\hat x_0` with the given motion,
+before the posterior is formed; at the last step the sample is :math:`\hat x_0`, so the known part comes
+out exactly. That is
 ``inpaint="prediction"``, our default. The image-diffusion way (Song et al. 2021, RePaint) instead replaces
 the known part of :math:`x_{t-1}` with the given motion noised to step ``t - 1`` by :math:`q`
 (``inpaint="noised"``); at the last step it, too, puts the given motion in place exactly.
