@@ -154,3 +154,12 @@ def test_config_rejects_bad_types():
 def test_forward_rejects_bad_inputs(args, error, match):
     with pytest.raises(error, match=match):
         tiny()(*args)
+
+
+def test_state_dict_round_trip_restores_weights_and_statistics():
+    model = tiny().eval()
+    restored = MDM(model.cfg).eval()
+    restored.load_state_dict(model.state_dict())
+    x, t = torch.randn(2, 12, 135), torch.tensor([1, 30])
+    assert torch.equal(restored(x, t, torch.tensor([2, 0])), model(x, t, torch.tensor([2, 0])))
+    assert torch.equal(restored.standardizer.std, model.standardizer.std)
