@@ -149,6 +149,21 @@ def test_config_rejects_bad_types():
         ((torch.randn(2, 12, 135), torch.tensor([0, 1]), torch.tensor([0.0, 1.0])), TypeError, "action"),
         ((torch.randn(2, 12, 135), torch.tensor([0, 1]), torch.tensor([0, 3])), ValueError, "actions"),
         ((torch.randn(2, 12, 135), torch.tensor([0, 1]), torch.tensor([0])), ValueError, "action"),
+        (
+            (torch.randn(2, 12, 135), torch.tensor([0, 1]), torch.tensor([0, 1]), torch.tensor([0, 1])),
+            TypeError,
+            "null",
+        ),
+        (
+            (
+                torch.randn(2, 12, 135),
+                torch.tensor([0, 1]),
+                torch.tensor([0, 1]),
+                torch.ones(3, dtype=torch.bool),
+            ),
+            ValueError,
+            "null",
+        ),
     ],
 )
 def test_forward_rejects_bad_inputs(args, error, match):

@@ -202,8 +202,10 @@ class MDM(nn.Module):
             )
         drop = torch.zeros(batch, dtype=torch.bool)
         if null is not None:
-            if not isinstance(null, Tensor) or null.dtype != torch.bool or null.shape != (batch,):
-                raise ValueError(f"{where}: null must be a ({batch},) bool tensor, got {null!r}")
+            if not isinstance(null, Tensor) or null.dtype != torch.bool:
+                raise TypeError(f"{where}: null must be a bool tensor, got {getattr(null, 'dtype', null)!r}")
+            if null.shape != (batch,):
+                raise ValueError(f"{where}: null must be ({batch},), got {tuple(null.shape)}")
             drop = null
         if self.training and self.cfg.cond_mask_prob > 0:
             drop = drop | (torch.rand(batch) < self.cfg.cond_mask_prob)
