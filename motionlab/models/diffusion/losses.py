@@ -22,8 +22,9 @@ mask of frame ``i``:
 Each squared norm is averaged over its channels (joints × coordinates), as the repository's ``masked_l2``
 does, and over the clips of the batch. :math:`f_i` is 1 for a foot joint (:data:`~.model.FOOT_JOINTS`: both
 ankles and both feet) whose *real* speed from frame ``i`` to ``i + 1`` is at most ``contact_threshold``
-metres per frame, 0 otherwise (the repository's rule; the paper calls :math:`f_i` a binary foot-contact mask
-without saying how it is found): the predicted feet are penalised for moving where the real feet stand still.
+metres per frame, 0 otherwise (the repository's rule, which reads contact off the real feet's speed; the
+paper calls :math:`f_i` the binary foot-contact mask of frame ``i``): the predicted feet are penalised for
+moving where the real feet stand still.
 
 **Paper and repository.**
 
