@@ -70,7 +70,7 @@ def test_samples_have_the_shape_and_are_reproducible():
         ({"action": torch.tensor([0]), "n_samples": 2}, ValueError, "n_samples"),
         ({"action": torch.tensor([0]), "method": "euler"}, ValueError, "method"),
         ({"action": torch.tensor([0]), "inpaint": "copy"}, ValueError, "inpaint"),
-        ({"action": torch.tensor([0]), "steps": 0}, ValueError, "count"),
+        ({"action": torch.tensor([0]), "steps": 0}, ValueError, "steps"),
         ({"action": torch.tensor([0]), "eta": -1.0}, ValueError, "eta"),
         ({"action": torch.tensor([0]), "edit": (torch.zeros(1, 10, 135), None)}, TypeError, "Edit"),
         (

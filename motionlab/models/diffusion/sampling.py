@@ -20,8 +20,8 @@ with a respaced schedule this is the fast variant. Every clip of a batch runs th
 .. math:: G_s(x_t, t, c) = G(x_t, t, \varnothing) + s\,\big(G(x_t, t, c) - G(x_t, t, \varnothing)\big),
 
 ``s = 1`` being the plain conditional model and ``s = 0`` the unconditioned one. Both predictions come
-from one batched pass of the network. The repository's sampling default is ``s = 2.5``
-(``--guidance_param``), chosen on text-to-motion.
+from one batched pass of the network. The repository's sampling scripts default to ``s = 2.5``
+(``--guidance_param``, :data:`GUIDANCE_SCALE`).
 
 **Inpainting** (MDM's editing: in-betweening and body-part editing; repository ``sample/edit.py`` with
 ``p_mean_variance``). Given a motion and a mask of its known channels (:func:`~.data.known_mask`), at *every*
@@ -145,6 +145,7 @@ def sample(
             raise ValueError(f"{where}: n_samples={n_samples} differs from the {batch} actions")
     schedule: NoiseSchedule = model.schedule
     if steps is not None:
+        check_scalar(steps, "steps", where, kind=numbers.Integral, minimum=1, maximum=schedule.n_steps)
         schedule = schedule.respace(steps)
     model.eval()
     shape = (batch, model.cfg.n_frames, model.cfg.n_features)
