@@ -152,7 +152,7 @@ def test_the_synthetic_command_line_still_writes(tmp_path: Path) -> None:
     ("argv", "message"),
     [
         (["--bogus"], "unrecognized arguments: --bogus"),
-        (["nosuch"], "unknown entry 'nosuch' (choose from data, geometry,"),
+        (["nosuch"], "unknown entry 'nosuch' (choose from data, diffusion, geometry,"),
         (["geometry", "nosuch", "other"], "unknown entry 'nosuch', 'other'"),
         (["--out", "{folder}/missing/bench.json"], "argument --out: directory '{folder}/missing'"),
         (["--out", "{folder}"], "argument --out: '{folder}' is a directory"),
