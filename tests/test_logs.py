@@ -7,11 +7,11 @@ from pathlib import Path
 
 import pytest
 
-from motionlab.course import logs as runlog
+from motionlab.course import logs
 
 
 def test_a_run_is_copied_to_the_terminal_and_to_a_log_with_its_exit_code(tmp_path: Path, capfd) -> None:
-    code = runlog.run_logged(
+    code = logs.run_logged(
         "test",
         [sys.executable, "-c", "import sys; print('out'); print('err', file=sys.stderr); sys.exit(3)"],
         tmp_path,
@@ -27,19 +27,19 @@ def test_only_the_newest_logs_are_kept(tmp_path: Path) -> None:
     for stamp in range(12):
         (tmp_path / f"course-20260101-0000{stamp:02d}.log").write_text("old")
     (tmp_path / "test-20250101-000000.log").write_text("another name")
-    deleted = runlog.prune(tmp_path, "course", keep=10)
+    deleted = logs.prune(tmp_path, "course", keep=10)
     assert sorted(p.name for p in deleted) == ["course-20260101-000000.log", "course-20260101-000001.log"]
     assert len(list(tmp_path.glob("course-*.log"))) == 10 and (tmp_path / "test-20250101-000000.log").exists()
 
 
 def test_a_command_that_cannot_start_is_reported_in_one_line(tmp_path: Path, capsys) -> None:
-    assert runlog.run_logged("test", ["/no/such/program"], tmp_path) == 127
+    assert logs.run_logged("test", ["/no/such/program"], tmp_path) == 127
     assert "cannot run '/no/such/program'" in capsys.readouterr().err
 
 
 @pytest.mark.parametrize("argv", [[], ["test"], ["test", "echo"], ["bad name", "--", "echo"]])
 def test_bad_arguments_get_a_usage_line(argv: list[str], capsys) -> None:
-    assert runlog.main(argv) == 2
+    assert logs.main(argv) == 2
     assert "Traceback" not in capsys.readouterr().err
 
 
@@ -49,6 +49,6 @@ def test_a_log_folder_that_cannot_be_made_is_reported_in_one_line(
     not_a_folder = tmp_path / "build"
     not_a_folder.write_text("a file")
     monkeypatch.setenv("MOTIONLAB_BUILD", str(not_a_folder))
-    assert runlog.main(["test", "--", "echo"]) == 2
+    assert logs.main(["test", "--", "echo"]) == 2
     err = capsys.readouterr().err
-    assert err.startswith("runlog: ") and err.count("\n") == 1
+    assert err.startswith("motionlab.course.logs: ") and err.count("\n") == 1
