@@ -71,6 +71,12 @@ class ProfileConfig(Checked):
         """:meth:`quick` or :meth:`full`, for the active :func:`profile`."""
         return cls.quick() if is_quick() else cls.full()
 
+    @classmethod
+    def full(cls):  # -> the subclass
+        """The reported runs: the fields' defaults (a subclass whose defaults are not its full profile
+        overrides this)."""
+        return cls()
+
 
 def checkpoint_dir() -> Path:
     """Where trained models are cached, keyed by a hash of their configuration."""

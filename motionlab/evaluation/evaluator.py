@@ -34,26 +34,48 @@ CHUNK = 256
 
 
 @dataclass(frozen=True)
-class EvaluatorConfig(Checked):
-    """How an evaluation classifier is built and trained.
+class ClassifierTraining(Checked):
+    """What every evaluation classifier's config holds: its widths and how it is trained.
 
     Attributes:
-        kind: ``"conv"`` (Motion Cell paper) or ``"gru"`` (Action2Motion / ODMO).
-        steps: training steps; batch_size: clips per step; lr: AdamW learning rate.
-        min_crop: each batch is a random window of between ``min_crop`` frames and the whole clip, so the
-            classifier recognises clips of any length in that range (models generate various lengths).
-        hidden: conv channels or GRU width; feature_dim: the GRU's feature size (Action2Motion: 30).
+        steps: training steps; batch_size: clips (or windows) per step; lr: AdamW learning rate.
+        hidden: conv channels or GRU width (Action2Motion: 128); feature_dim: the GRU's feature size
+            (Action2Motion: 30).
         seed: seeds initialisation and batch order.
     """
 
-    kind: Literal["conv", "gru"] = choice(("conv", "gru"), "gru")
     steps: int = integer(300, minimum=1)
     batch_size: int = integer(64, minimum=1)
     lr: float = real(2e-3, above=0)
-    min_crop: int = integer(40, minimum=1)
     hidden: int = integer(128, minimum=1)
     feature_dim: int = integer(30, minimum=1)
     seed: int = integer(0, minimum=0)
+
+    def training(self, n_items: int) -> TrainConfig:
+        """The classifier's :class:`~motionlab.train.TrainConfig` on ``n_items`` training items (a batch
+        holds at most all of them)."""
+        return TrainConfig(
+            steps=self.steps,
+            batch_size=min(self.batch_size, n_items),
+            lr=self.lr,
+            grad_clip=1.0,
+            seed=self.seed,
+            checkpoint_every=None,
+        )
+
+
+@dataclass(frozen=True)
+class EvaluatorConfig(ClassifierTraining):
+    """How an evaluation classifier is built and trained (the training fields: :class:`ClassifierTraining`).
+
+    Attributes:
+        kind: ``"conv"`` (Motion Cell paper) or ``"gru"`` (Action2Motion / ODMO).
+        min_crop: each batch is a random window of between ``min_crop`` frames and the whole clip, so the
+            classifier recognises clips of any length in that range (models generate various lengths).
+    """
+
+    kind: Literal["conv", "gru"] = choice(("conv", "gru"), "gru")
+    min_crop: int = integer(40, minimum=1)
 
 
 def default_evaluator_config(kind: Literal["conv", "gru"]) -> EvaluatorConfig:
@@ -199,14 +221,7 @@ def _training_identity(
     config and data config (computed without building the model, so without touching the global RNG)."""
     classes = {name: int(value.max()) + 1 for name, value in labels.items()}
     classifier_cfg = ClassifierConfig(cfg.kind, EVAL_FEATURES, classes, cfg.hidden, cfg.feature_dim)
-    train_cfg = TrainConfig(
-        steps=cfg.steps,
-        batch_size=min(cfg.batch_size, positions.shape[0]),
-        lr=cfg.lr,
-        grad_clip=1.0,
-        seed=cfg.seed,
-        checkpoint_every=None,
-    )
+    train_cfg = cfg.training(positions.shape[0])
     data_config = {
         "positions": data_fingerprint(positions),
         "labels": {k: data_fingerprint(v.numpy()) for k, v in labels.items()},

@@ -51,11 +51,11 @@ from motionlab.data.cmu_mocap import (
 from motionlab.data.datasets import Standardizer
 from motionlab.evaluation.benchmark import feature_metrics
 from motionlab.evaluation.classifiers import ClassifierConfig, MotionClassifier
-from motionlab.evaluation.evaluator import Evaluator, data_fingerprint
+from motionlab.evaluation.evaluator import ClassifierTraining, Evaluator, data_fingerprint
 from motionlab.metrics import Interval, mean_ci
-from motionlab.train import TrainConfig, TrainResult
+from motionlab.train import TrainResult
 from motionlab.train.run import Run, given
-from motionlab.validation import Checked, check_scalar, integer, real
+from motionlab.validation import check_scalar, integer
 
 #: Columns of Table 2 that this protocol measures, in the paper's order.
 TABLE2_METRICS = ("accuracy", "fid", "diversity", "multimodality")
@@ -129,24 +129,17 @@ def canonical(positions: Tensor | np.ndarray) -> np.ndarray:
 
 
 @dataclass(frozen=True)
-class RealEvaluatorConfig(Checked):
-    """How the real-data classifier is built and trained.
+class RealEvaluatorConfig(ClassifierTraining):
+    """How the real-data classifier is built and trained (the training fields: :class:`ClassifierTraining`;
+    ``seed`` also draws the windows).
 
     Attributes:
         window: frames per window (ODMO: 100). frame_stride: the classifier reads every ``frame_stride``-th
             frame of a window (1: every frame; the paper mentions no skipped frames).
-        steps, batch_size, lr: AdamW training; hidden: GRU width (Action2Motion: 128); feature_dim: the
-            feature layer (30); seed: initialisation, windows and batch order.
     """
 
     window: int = integer(100, minimum=1)
     frame_stride: int = integer(2, minimum=1)
-    steps: int = integer(300, minimum=1)
-    batch_size: int = integer(64, minimum=1)
-    lr: float = real(2e-3, above=0)
-    hidden: int = integer(128, minimum=1)
-    feature_dim: int = integer(30, minimum=1)
-    seed: int = integer(0, minimum=0)
 
     def __post_init__(self) -> None:
         super().__post_init__()
@@ -233,14 +226,7 @@ def real_evaluator_run(clips: MocapClips, cfg: RealEvaluatorConfig) -> Run:
     classifier = ClassifierConfig(
         "gru", IN_FEATURES, {"action": len(clips.action_names)}, cfg.hidden, cfg.feature_dim
     )
-    training = TrainConfig(
-        steps=cfg.steps,
-        batch_size=min(cfg.batch_size, clips.n_clips),
-        lr=cfg.lr,
-        grad_clip=1.0,
-        seed=cfg.seed,
-        checkpoint_every=None,
-    )
+    training = cfg.training(clips.n_clips)
     return Run(
         "evaluator_real",
         {"evaluator": asdict(cfg), "classifier": classifier},

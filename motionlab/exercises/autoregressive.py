@@ -18,7 +18,7 @@ from typing import Any
 
 import torch
 
-from motionlab.exercises.checking import CheckResult, Diagnosis, as_result, close, run_checks
+from motionlab.exercises.checking import CheckResult, Diagnosis, as_result, checker, close
 from motionlab.models.moglow.conditioning import history_keep_mask
 from motionlab.models.moglow.sampling import autoregressive_sample
 
@@ -204,16 +204,14 @@ def _other_sizes(fn: SampleLoop) -> None:
         )
 
 
+@checker(
+    [_follow_the_calls, _other_sizes],
+    "conditions each frame on the last tau poses and the current control window, scales the latent by "
+    "the temperature, carries the state and appends each pose to the history",
+)
 def check_sample_loop(fn: SampleLoop) -> CheckResult:
     """Check ``fn(invert_frame, control, seed_pose, noise, temperature) -> (B, N, P)``: MoGlow's frame-by-
     frame generation with ``control (B, tau + N, C)``, ``seed_pose (B, tau, P)``, ``noise (B, N, P)``."""
-    return run_checks(
-        "sample_loop",
-        fn,
-        [_follow_the_calls, _other_sizes],
-        "conditions each frame on the last tau poses and the current control window, scales the latent by "
-        "the temperature, carries the state and appends each pose to the history",
-    )
 
 
 def _keep_mask_reference(batch: int, frames: int, history: int, dropout: float, seed: int) -> torch.Tensor:
@@ -285,13 +283,11 @@ def _keep_mask_generation_and_edges(fn: KeepMask) -> None:
             raise Diagnosis(f"p = {dropout:g} should give all flags {1 - dropout:g}, got other values")
 
 
+@checker(
+    [_keep_mask_training, _keep_mask_generation_and_edges],
+    "matches history_keep_mask(..., rescale=True) in training, keeps everything at generation, and "
+    "handles p = 0 and p = 1",
+)
 def check_keep_mask(fn: KeepMask) -> CheckResult:
     """Check ``fn(batch, frames, history, dropout, generator, training) -> keep (batch, frames, history)``:
     MoGlow's history dropout with kept poses rescaled by ``1 / (1 - dropout)``, all ones when not training."""
-    return run_checks(
-        "keep_mask",
-        fn,
-        [_keep_mask_training, _keep_mask_generation_and_edges],
-        "matches history_keep_mask(..., rescale=True) in training, keeps everything at generation, and "
-        "handles p = 0 and p = 1",
-    )

@@ -2,15 +2,20 @@
 
 from __future__ import annotations
 
+import functools
 import traceback
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, TypeVar
 
 import torch
 
 #: A check: given the reader's function, ``None`` when it passes, else a sentence saying what is wrong.
 Check = Callable[[Callable[..., Any]], str | None]
+
+
+#: The reader's function a checker takes (each exercise names its own signature).
+F = TypeVar("F", bound=Callable[..., Any])
 
 
 class Diagnosis(Exception):
@@ -62,6 +67,24 @@ def run_checks(exercise: str, fn: Callable[..., Any], checks: Sequence[Check], s
         if problem is not None:
             return CheckResult(exercise, "wrong", problem)
     return CheckResult(exercise, "passed", success)
+
+
+def checker(
+    checks: Sequence[Callable[[F], str | None]], success: str
+) -> Callable[[Callable[[F], CheckResult]], Callable[[F], CheckResult]]:
+    """Make a declared ``check_<name>(fn)`` (a signature and a docstring, no body) the checker of exercise
+    ``<name>``: it runs ``checks`` through :func:`run_checks` and reports ``success`` when all pass."""
+
+    def make(declared: Callable[[F], CheckResult]) -> Callable[[F], CheckResult]:
+        exercise = declared.__name__.removeprefix("check_")
+
+        @functools.wraps(declared)
+        def check(fn: F) -> CheckResult:
+            return run_checks(exercise, fn, checks, success)
+
+        return check
+
+    return make
 
 
 def as_result(value: Any, what: str) -> torch.Tensor:

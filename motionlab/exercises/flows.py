@@ -7,7 +7,7 @@ from collections.abc import Callable
 
 import torch
 
-from motionlab.exercises.checking import CheckResult, Diagnosis, as_result, close, run_checks
+from motionlab.exercises.checking import CheckResult, Diagnosis, as_result, checker, close
 from motionlab.models.flows.coupling import SCALE_OFFSET, affine_forward, affine_inverse
 
 AffineForward = Callable[[torch.Tensor, torch.Tensor], tuple[torch.Tensor, torch.Tensor]]
@@ -73,15 +73,13 @@ def _forward_is_stable(fn: AffineForward) -> None:
         )
 
 
+@checker(
+    [_forward_values, _forward_is_stable],
+    "matches the package's affine coupling transform and log-determinant, stable for large scales",
+)
 def check_affine_forward(fn: AffineForward) -> CheckResult:
     """Check ``fn(x_b, params) -> (y_b, logdet)``: ``x_b (B, C, T)``, ``params (B, 2C, T)`` = (shift, raw
     scale), ``logdet (B,)``."""
-    return run_checks(
-        "affine_forward",
-        fn,
-        [_forward_values, _forward_is_stable],
-        "matches the package's affine coupling transform and log-determinant, stable for large scales",
-    )
 
 
 def _inverse_undoes_forward(fn: AffineInverse) -> None:
@@ -98,11 +96,9 @@ def _inverse_undoes_forward(fn: AffineInverse) -> None:
     raise Diagnosis("inverse(forward(x_b)) is not x_b")
 
 
+@checker(
+    [_inverse_undoes_forward],
+    f"undoes the transform (as {affine_inverse.__module__}.affine_inverse does)",
+)
 def check_affine_inverse(fn: AffineInverse) -> CheckResult:
     """Check ``fn(y_b, params) -> x_b``, the inverse of the affine coupling transform."""
-    return run_checks(
-        "affine_inverse",
-        fn,
-        [_inverse_undoes_forward],
-        f"undoes the transform (as {affine_inverse.__module__}.affine_inverse does)",
-    )

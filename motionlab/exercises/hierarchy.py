@@ -8,7 +8,7 @@ from collections.abc import Callable, Sequence
 
 import numpy as np
 
-from motionlab.exercises.checking import CheckResult, Diagnosis, run_checks
+from motionlab.exercises.checking import CheckResult, Diagnosis, checker
 from motionlab.skeleton import Skeleton, average_skeleton, joint_impact_weights, subtree_reach
 
 SubtreeReach = Callable[[Sequence[int], np.ndarray], np.ndarray]
@@ -59,15 +59,13 @@ def _reach_values(fn: SubtreeReach) -> None:
         )
 
 
+@checker(
+    [_reach_values],
+    "matches motionlab.skeleton.subtree_reach on the skeleton, a chain and a random tree",
+)
 def check_subtree_reach(fn: SubtreeReach) -> CheckResult:
     """Check ``fn(parents (J,), bone_lengths (J,)) -> L (J,)``, the longest path from each joint to an end
     effector (``bone_lengths[j]``: the length of the bone from joint ``j``'s parent to ``j``)."""
-    return run_checks(
-        "subtree_reach",
-        fn,
-        [_reach_values],
-        "matches motionlab.skeleton.subtree_reach on the skeleton, a chain and a random tree",
-    )
 
 
 def _as_skeleton(parents: list[int], bones: np.ndarray, seed: int) -> Skeleton:
@@ -119,12 +117,10 @@ def _weights_values(fn: ImpactWeights) -> None:
         )
 
 
+@checker(
+    [_weights_values],
+    "matches motionlab.skeleton.joint_impact_weights on the skeleton, a chain and a random tree",
+)
 def check_impact_weights(fn: ImpactWeights) -> CheckResult:
     """Check ``fn(reach (J,), leaf_floor) -> alpha (J,)``: each ``L_k`` raised to at least ``leaf_floor *
     max(L)``, then divided by the mean (eq. 23's joint impact weights, mean 1)."""
-    return run_checks(
-        "impact_weights",
-        fn,
-        [_weights_values],
-        "matches motionlab.skeleton.joint_impact_weights on the skeleton, a chain and a random tree",
-    )

@@ -12,9 +12,9 @@ from motionlab.exercises.checking import (
     CheckResult,
     Diagnosis,
     as_result,
+    checker,
     close,
     random_unit_quaternions,
-    run_checks,
 )
 from motionlab.skeleton import forward_kinematics
 
@@ -90,12 +90,10 @@ def _chain_batches_and_gradient(fn: ChainFK) -> None:
         raise Diagnosis("no gradient flows to the rotations: compute with torch operations only")
 
 
+@checker(
+    [_chain_values, _chain_batches_and_gradient],
+    "matches motionlab.skeleton.forward_kinematics on a chain, batched, with gradients",
+)
 def check_chain_positions(fn: ChainFK) -> CheckResult:
     """Check ``fn(rotations (..., K, 4), root (..., 3), offsets (K, 3)) -> positions (..., K, 3)`` for a chain
     in which joint ``k``'s parent is ``k - 1``."""
-    return run_checks(
-        "chain_positions",
-        fn,
-        [_chain_values, _chain_batches_and_gradient],
-        "matches motionlab.skeleton.forward_kinematics on a chain, batched, with gradients",
-    )

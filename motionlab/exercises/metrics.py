@@ -16,7 +16,7 @@ import numpy as np
 import torch
 from scipy.spatial.distance import pdist
 
-from motionlab.exercises.checking import CheckResult, Diagnosis, run_checks
+from motionlab.exercises.checking import CheckResult, Diagnosis, checker
 from motionlab.metrics import apd, fid, frechet_distance
 
 APD = Callable[[torch.Tensor], Any]
@@ -79,14 +79,12 @@ def _apd_edges(fn: APD) -> None:
         raise Diagnosis(f"two samples: APD is their distance {want:.6g}")
 
 
+@checker(
+    [_apd_values, _apd_edges],
+    "matches motionlab.metrics.apd on random sample sets, 0 for identical samples, linear in scale",
+)
 def check_apd(fn: APD) -> CheckResult:
     """Check ``fn(samples) -> number``, the average pairwise distance of samples ``(K, T, D)``."""
-    return run_checks(
-        "apd",
-        fn,
-        [_apd_values, _apd_edges],
-        "matches motionlab.metrics.apd on random sample sets, 0 for identical samples, linear in scale",
-    )
 
 
 def _features(seed: int, n: int, d: int, shift: float = 0.0, scale: float = 1.0) -> torch.Tensor:
@@ -131,11 +129,9 @@ def _fid_edges(fn: FID) -> None:
         )
 
 
+@checker(
+    [_fid_values, _fid_edges],
+    "matches motionlab.metrics.fid on random feature sets, 0 for a set with itself, ‖shift‖² for a shift",
+)
 def check_fid(fn: FID) -> CheckResult:
     """Check ``fn(a, b) -> number``, the FID between feature sets ``(N, D)`` and ``(M, D)``."""
-    return run_checks(
-        "fid",
-        fn,
-        [_fid_values, _fid_edges],
-        "matches motionlab.metrics.fid on random feature sets, 0 for a set with itself, ‖shift‖² for a shift",
-    )

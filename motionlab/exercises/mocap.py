@@ -11,7 +11,7 @@ import torch
 
 from motionlab.data.augment import mirror_positions
 from motionlab.data.cmu_mocap import MIRROR, PARENTS
-from motionlab.exercises.checking import CheckResult, Diagnosis, close, run_checks
+from motionlab.exercises.checking import CheckResult, Diagnosis, checker, close
 from motionlab.metrics.physical import bone_lengths
 from motionlab.metrics.realism import bone_length_variation
 
@@ -86,14 +86,12 @@ def _rigid_is_zero(fn: BoneLengthVariation) -> None:
         raise Diagnosis("a rigid body that turns and moves keeps its bone lengths: the variation should be 0")
 
 
+@checker(
+    [_variation_values, _rigid_is_zero],
+    "matches the package's bone-length variation, and a rigid moving body gives 0",
+)
 def check_bone_length_variation(fn: BoneLengthVariation) -> CheckResult:
     """Check ``fn(positions (T, J, 3), parents) -> (J - 1,)``: each bone's length std over mean."""
-    return run_checks(
-        "bone_length_variation",
-        fn,
-        [_variation_values, _rigid_is_zero],
-        "matches the package's bone-length variation, and a rigid moving body gives 0",
-    )
 
 
 def _mirror_values(fn: Mirror) -> None:
@@ -123,11 +121,9 @@ def _mirror_twice_is_identity(fn: Mirror) -> None:
         raise Diagnosis("mirroring twice must give the clip back")
 
 
+@checker(
+    [_mirror_values, _mirror_twice_is_identity],
+    "matches the package's mirror image, and mirroring twice gives the clip back",
+)
 def check_mirror(fn: Mirror) -> CheckResult:
     """Check ``fn(positions (T, J, 3), mirror (J,)) -> (T, J, 3)``: the left/right mirror image."""
-    return run_checks(
-        "mirror",
-        fn,
-        [_mirror_values, _mirror_twice_is_identity],
-        "matches the package's mirror image, and mirroring twice gives the clip back",
-    )

@@ -12,9 +12,9 @@ from motionlab.exercises.checking import (
     CheckResult,
     Diagnosis,
     as_result,
+    checker,
     close,
     random_unit_quaternions,
-    run_checks,
 )
 
 QuatMul = Callable[[torch.Tensor, torch.Tensor], torch.Tensor]
@@ -83,14 +83,12 @@ def _product_keeps_dtype_and_gradient(fn: QuatMul) -> None:
         raise Diagnosis("the gradient with respect to q1 is missing or not finite")
 
 
+@checker(
+    [_product_values, _product_broadcasts, _product_keeps_dtype_and_gradient],
+    "matches motionlab.geometry.quat_mul on random, broadcast and float32 inputs, with gradients",
+)
 def check_quat_mul(fn: QuatMul) -> CheckResult:
     """Check a Hamilton product ``fn(q1, q2)`` of ``(..., 4)`` quaternions, w first."""
-    return run_checks(
-        "quat_mul",
-        fn,
-        [_product_values, _product_broadcasts, _product_keeps_dtype_and_gradient],
-        "matches motionlab.geometry.quat_mul on random, broadcast and float32 inputs, with gradients",
-    )
 
 
 def _pair_at_angle(angle: float, seed: int) -> tuple[torch.Tensor, torch.Tensor]:
@@ -158,12 +156,9 @@ def _slerp_near_equal(fn: Slerp) -> None:
         raise Diagnosis("for almost equal quaternions the result should be (almost) q0")
 
 
+@checker(
+    [_slerp_endpoints_and_path, _slerp_takes_the_short_way, _slerp_near_equal],
+    "matches motionlab.geometry.quat_slerp: end points, constant speed, the short arc, almost equal inputs",
+)
 def check_slerp(fn: Slerp) -> CheckResult:
     """Check a slerp ``fn(q0, q1, t)`` of unit quaternions ``(..., 4)`` with a number or tensor ``t``."""
-    return run_checks(
-        "slerp",
-        fn,
-        [_slerp_endpoints_and_path, _slerp_takes_the_short_way, _slerp_near_equal],
-        "matches motionlab.geometry.quat_slerp: end points, constant speed, the short arc, almost equal "
-        "inputs",
-    )

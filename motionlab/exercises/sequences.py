@@ -9,7 +9,7 @@ from collections.abc import Callable
 
 import torch
 
-from motionlab.exercises.checking import CheckResult, Diagnosis, as_result, close, close_each, run_checks
+from motionlab.exercises.checking import CheckResult, Diagnosis, as_result, checker, close, close_each
 from motionlab.models.odmo.losses import contrastive_loss
 from motionlab.models.trajevae.dct import dct_matrix
 from motionlab.models.trajevae.masks import given_trajectories, hidden_poses
@@ -57,14 +57,12 @@ def _dct_other_sizes(fn: DCTMatrix) -> None:
             )
 
 
+@checker(
+    [_dct_values, _dct_other_sizes],
+    "matches the orthonormal DCT-II (scipy's dct(norm='ortho')) for 1, 5, 8 and 31 frames",
+)
 def check_dct_matrix(fn: DCTMatrix) -> CheckResult:
     """Check ``fn(n_frames) -> (n_frames, n_frames)``, the orthonormal DCT-II matrix (rows: frequencies)."""
-    return run_checks(
-        "dct_matrix",
-        fn,
-        [_dct_values, _dct_other_sizes],
-        "matches the orthonormal DCT-II (scipy's dct(norm='ortho')) for 1, 5, 8 and 31 frames",
-    )
 
 
 def _pairs(seed: int) -> tuple[torch.Tensor, torch.Tensor, torch.Tensor]:
@@ -129,14 +127,12 @@ def _contrastive_gradient_at_zero(fn: ContrastiveLoss) -> None:
         raise Diagnosis("two equal codes of different classes should cost 1/2 m^2")
 
 
+@checker(
+    [_contrastive_values, _contrastive_gradient_at_zero],
+    "matches ODMO's eq. 1 per pair (without slack), with finite gradients for equal codes",
+)
 def check_contrastive_loss(fn: ContrastiveLoss) -> CheckResult:
     """Check ``fn(mu_a, mu_b, same, margin) -> (P,)``: ODMO's eq. 1 per pair of codes ``(P, D)``."""
-    return run_checks(
-        "contrastive_loss",
-        fn,
-        [_contrastive_values, _contrastive_gradient_at_zero],
-        "matches ODMO's eq. 1 per pair (without slack), with finite gradients for equal codes",
-    )
 
 
 def _masked_inputs(batch: tuple[int, ...], seed: int) -> tuple[torch.Tensor, torch.Tensor]:
@@ -191,12 +187,10 @@ def _given_per_sequence(fn: GivenTrajectories) -> None:
         raise Diagnosis("no gradient flows to the poses: compute with torch operations only")
 
 
+@checker(
+    [_given_one_mask, _given_per_sequence],
+    "matches motionlab.models.trajevae.masks.given_trajectories, for one mask and a mask per sequence",
+)
 def check_given_trajectories(fn: GivenTrajectories) -> CheckResult:
     """Check ``fn(poses (..., T, J * 3), mask (..., J) bool) -> Y (..., T, J * 3)``: ``Y = X ⊙ M``, the given
     joints' trajectories and zeros elsewhere."""
-    return run_checks(
-        "given_trajectories",
-        fn,
-        [_given_one_mask, _given_per_sequence],
-        "matches motionlab.models.trajevae.masks.given_trajectories, for one mask and a mask per sequence",
-    )

@@ -7,7 +7,7 @@ from collections.abc import Callable
 
 import numpy as np
 
-from motionlab.exercises.checking import CheckResult, Diagnosis, run_checks
+from motionlab.exercises.checking import CheckResult, Diagnosis, checker
 from motionlab.metrics.physical import foot_skating
 
 FootSkating = Callable[[np.ndarray, np.ndarray, float], float]
@@ -77,12 +77,10 @@ def _skating_values(fn: FootSkating) -> None:
         raise Diagnosis(f"for {what} you gave {got:.4f} m/s, the skating is {want:.4f} m/s")
 
 
+@checker(
+    [_skating_values],
+    "matches motionlab.metrics.physical.foot_skating with given contacts, for one clip and for a batch",
+)
 def check_foot_skating(fn: FootSkating) -> CheckResult:
     """Check ``fn(feet (..., T, F, 3), contacts (..., T, F) bool, fps) -> float``: the mean horizontal speed
     (m/s) of the foot joints over the frame pairs in which they are in contact at both ends."""
-    return run_checks(
-        "foot_skating",
-        fn,
-        [_skating_values],
-        "matches motionlab.metrics.physical.foot_skating with given contacts, for one clip and for a batch",
-    )

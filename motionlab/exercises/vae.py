@@ -9,7 +9,7 @@ from collections.abc import Callable
 
 import torch
 
-from motionlab.exercises.checking import CheckResult, Diagnosis, as_result, close, run_checks
+from motionlab.exercises.checking import CheckResult, Diagnosis, as_result, checker, close
 from motionlab.models.gaussian import gaussian_kl
 from motionlab.models.odmo.losses import prior_term
 
@@ -71,14 +71,12 @@ def _draws_are_differentiable_and_seeded(fn: Reparameterize) -> None:
         raise Diagnosis("the same generator seed gave different draws: pass the generator to torch.randn")
 
 
+@checker(
+    [_draws_have_the_right_moments, _draws_are_differentiable_and_seeded],
+    "right mean and spread over 200,000 draws, gradients reach mu and logvar, seeded by the generator",
+)
 def check_reparameterize(fn: Reparameterize) -> CheckResult:
     """Check ``fn(mu, logvar, generator) -> z`` drawing from N(mu, exp(logvar)) differentiably."""
-    return run_checks(
-        "reparameterize",
-        fn,
-        [_draws_have_the_right_moments, _draws_are_differentiable_and_seeded],
-        "right mean and spread over 200,000 draws, gradients reach mu and logvar, seeded by the generator",
-    )
 
 
 def _kl_values(fn: GaussianKL) -> None:
@@ -116,14 +114,12 @@ def _kl_is_zero_at_the_prior(fn: GaussianKL) -> None:
         raise Diagnosis("no gradient reaches mu: compute with torch operations only")
 
 
+@checker(
+    [_kl_values, _kl_is_zero_at_the_prior],
+    "matches motionlab.models.gaussian.gaussian_kl per dimension, 0 at the prior, with gradients",
+)
 def check_gaussian_kl(fn: GaussianKL) -> CheckResult:
     """Check ``fn(mu, logvar)``, the KL of N(mu, exp(logvar)) from N(0, I) per dimension, ``(..., D)``."""
-    return run_checks(
-        "gaussian_kl",
-        fn,
-        [_kl_values, _kl_is_zero_at_the_prior],
-        "matches motionlab.models.gaussian.gaussian_kl per dimension, 0 at the prior, with gradients",
-    )
 
 
 def _covariance_reference(mu: torch.Tensor, logvar: torch.Tensor, prior_variance: float) -> torch.Tensor:
@@ -192,12 +188,10 @@ def _covariance_minimum_and_gradient(fn: CovariancePrior) -> None:
         raise Diagnosis("the gradient should vanish at s² = σ², the term's minimum")
 
 
+@checker(
+    [_covariance_values, _covariance_minimum_and_gradient],
+    "matches eq. 1's covariance term (the package's prior_term plus its minimum), smallest at s² = σ²",
+)
 def check_covariance_prior(fn: CovariancePrior) -> CheckResult:
     """Check ``fn(mu, logvar, prior_variance) -> (B,)``: ODMO's eq. 1 prior term ``-ln det Σ + Tr Σ / σ²`` for
     ``Σ = diag(exp(logvar))``, codes ``(B, D)``, no term on ``mu``."""
-    return run_checks(
-        "covariance_prior",
-        fn,
-        [_covariance_values, _covariance_minimum_and_gradient],
-        "matches eq. 1's covariance term (the package's prior_term plus its minimum), smallest at s² = σ²",
-    )

@@ -24,7 +24,7 @@ from matplotlib.figure import Figure
 from mpl_toolkits.mplot3d import Axes3D
 
 from motionlab.validation import check_choice, check_scalar
-from motionlab.viz.checks import ArrayLike, as_parents, as_sequence_list
+from motionlab.viz.checks import ArrayLike, as_parents, as_sequence_list, series_colors
 from motionlab.viz.stick_figure import (
     GENERATED_COLOR,
     REAL_COLOR,
@@ -87,11 +87,7 @@ def build_animation(
     check_choice(layout, "layout", func, LAYOUTS)
     fps = float(check_scalar(fps, "fps", func, minimum=0, include_minimum=False))
     count = len(sequences)
-    colors = [f"C{i % 10}" for i in range(count)] if colors is None else list(colors)
-    if len(colors) != count:
-        raise ValueError(f"{func}: got {len(colors)} colors for {count} motions")
-    if labels is not None and len(labels) != count:
-        raise ValueError(f"{func}: got {len(labels)} labels for {count} motions")
+    colors = series_colors(colors, labels, count, func)
     length = max(len(s) for s in sequences)
     frames = animation_frames(length, step)
     padded = [np.concatenate([s, np.repeat(s[-1:], length - len(s), axis=0)]) for s in sequences]

@@ -86,3 +86,16 @@ def as_parents(parents: Sequence[int] | ArrayLike, num_joints: int, func: str) -
         if not -1 <= p < num_joints or p == j:
             raise ValueError(f"{func}: parents[{j}] must be -1 or the index of another joint, got {p!r}")
     return np.asarray(values, dtype=np.int64)
+
+
+def series_colors(
+    colors: Sequence[str] | None, labels: Sequence[str] | None, count: int, func: str
+) -> list[str]:
+    """One colour per motion (default ``C0, C1, ...``), after checking that ``colors`` and ``labels`` (when
+    given) have one entry per motion."""
+    colors = [f"C{i % 10}" for i in range(count)] if colors is None else list(colors)
+    if len(colors) != count:
+        raise ValueError(f"{func}: got {len(colors)} colors for {count} motions")
+    if labels is not None and len(labels) != count:
+        raise ValueError(f"{func}: got {len(labels)} labels for {count} motions")
+    return colors

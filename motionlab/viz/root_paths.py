@@ -9,7 +9,7 @@ import matplotlib.pyplot as plt
 from matplotlib.axes import Axes
 
 from motionlab.validation import check_scalar
-from motionlab.viz.checks import ArrayLike, as_sequence_list
+from motionlab.viz.checks import ArrayLike, as_sequence_list, series_colors
 
 
 def plot_root_paths(
@@ -39,12 +39,7 @@ def plot_root_paths(
     paths = as_sequence_list(positions, func)
     joints = paths[0].shape[1]
     check_scalar(root, "root (a joint index)", func, kind=numbers.Integral, minimum=0, maximum=joints - 1)
-    count = len(paths)
-    colors = [f"C{i % 10}" for i in range(count)] if colors is None else list(colors)
-    if len(colors) != count:
-        raise ValueError(f"{func}: got {len(colors)} colors for {count} motions")
-    if labels is not None and len(labels) != count:
-        raise ValueError(f"{func}: got {len(labels)} labels for {count} motions")
+    colors = series_colors(colors, labels, len(paths), func)
     if ax is None:
         _, ax = plt.subplots(figsize=(4.5, 4.5), layout="constrained")
     for i, (path, color) in enumerate(zip(paths, colors)):

@@ -16,7 +16,7 @@ import numpy as np
 from IPython.display import display
 from matplotlib.figure import Figure
 
-from motionlab.models.odmo.sampling import ODMOSampler, mode_interpolation, styles_to_end_point
+from motionlab.models.odmo.sampling import ODMOSampler, Samples, mode_interpolation, styles_to_end_point
 from motionlab.viz import GENERATED_COLOR, filmstrip, plot_root_paths
 
 
@@ -26,20 +26,20 @@ def _check_mode(sampler: ODMOSampler, action: int, mode: int) -> None:
         raise ValueError(f"action {action} has discovered modes 0..{n_modes - 1}, got {mode}")
 
 
+def _clip_strip(clip: Samples, parents: Sequence[int], fps: int, title: str) -> Figure:
+    """Six keyframes of the first of ``clip``'s generated motions."""
+    return filmstrip(
+        clip.positions[0].numpy(), parents, n_frames=6, fps=fps, color=GENERATED_COLOR, title=title
+    )
+
+
 def mode_sample_figure(
     sampler: ODMOSampler, parents: Sequence[int], action: int, mode: int, seed: int, fps: int = 30
 ) -> Figure:
     """Filmstrip of one clip drawn from discovered ``mode`` of ``action`` (seeded)."""
     _check_mode(sampler, action, mode)
     clip = sampler.sample(action, 1, np.random.default_rng(seed), mode=mode)
-    return filmstrip(
-        clip.positions[0].numpy(),
-        parents,
-        n_frames=6,
-        fps=fps,
-        color=GENERATED_COLOR,
-        title=f"action {action}, discovered mode {mode}, seed {seed}",
-    )
+    return _clip_strip(clip, parents, fps, f"action {action}, discovered mode {mode}, seed {seed}")
 
 
 def interpolation_figure(
@@ -58,13 +58,11 @@ def interpolation_figure(
     if not 0.0 <= weight <= 1.0:
         raise ValueError(f"interpolation_figure: weight must lie in [0, 1], got {weight}")
     clip = mode_interpolation(sampler, action, mode_a, mode_b, np.array([weight]))
-    return filmstrip(
-        clip.positions[0].numpy(),
+    return _clip_strip(
+        clip,
         parents,
-        n_frames=6,
-        fps=fps,
-        color=GENERATED_COLOR,
-        title=f"action {action}: {1 - weight:.2f} x mode {mode_a} + {weight:.2f} x mode {mode_b}",
+        fps,
+        f"action {action}: {1 - weight:.2f} x mode {mode_a} + {weight:.2f} x mode {mode_b}",
     )
 
 

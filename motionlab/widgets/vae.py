@@ -27,6 +27,10 @@ def _check_action(model: MLPVAE, action: int, where: str) -> int:
     return int(action)
 
 
+def _action_name(action: int, action_names: Sequence[str] | None) -> str:
+    return action_names[action] if action_names is not None else f"action {action}"
+
+
 def prior_code(model: MLPVAE, seed: int) -> torch.Tensor:
     """The latent code ``(latent_dim,)`` drawn from the model's prior with ``seed`` (same seed, same code)."""
     check_scalar(seed, "seed", "prior_code", kind=numbers.Integral, minimum=0)
@@ -59,15 +63,8 @@ def show_cvae_sample(
 ) -> Figure:
     """Keyframes of one CVAE sample: the code drawn from the prior with ``seed``, decoded for ``action``."""
     positions = decode_clip(model, codec, prior_code(model, seed), action)
-    name = action_names[action] if action_names is not None else f"action {action}"
-    return filmstrip(
-        positions,
-        parents,
-        n_frames,
-        fps=fps,
-        color=GENERATED_COLOR,
-        title=f"sample of '{name}' (seed {seed})",
-    )
+    title = f"sample of '{_action_name(action, action_names)}' (seed {seed})"
+    return filmstrip(positions, parents, n_frames, fps=fps, color=GENERATED_COLOR, title=title)
 
 
 def show_latent_interpolation(
@@ -87,12 +84,5 @@ def show_latent_interpolation(
     check_scalar(t, "t", "show_latent_interpolation", minimum=0.0, maximum=1.0)
     z = interpolate_codes(prior_code(model, seed_a), prior_code(model, seed_b), float(t))[0]
     positions = decode_clip(model, codec, z, action)
-    name = action_names[action] if action_names is not None else f"action {action}"
-    return filmstrip(
-        positions,
-        parents,
-        n_frames,
-        fps=fps,
-        color=GENERATED_COLOR,
-        title=f"'{name}': t = {float(t):.2f} between seeds {seed_a} and {seed_b}",
-    )
+    title = f"'{_action_name(action, action_names)}': t = {float(t):.2f} between seeds {seed_a} and {seed_b}"
+    return filmstrip(positions, parents, n_frames, fps=fps, color=GENERATED_COLOR, title=title)

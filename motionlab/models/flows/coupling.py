@@ -56,7 +56,37 @@ def zero_init(layer: nn.Module) -> nn.Module:
     return layer
 
 
-class AffineCoupling(FlowLayer):
+class CouplingLayer(FlowLayer):
+    """What every affine coupling on ``(batch, channels, time)`` shares: ``x_a``, the first ``n_a`` channels,
+    passes unchanged, and ``x_b``, the rest, moves by :func:`affine_forward` with the shift and raw scale
+    ``(B, 2 C_b, T)`` that the subclass's network ``_params(x_a, cond)`` reads off ``x_a`` and the
+    conditioning. A subclass sets ``channels``, ``cond_channels``, ``n_a`` and ``scale_offset``."""
+
+    channels: int
+    cond_channels: int
+    n_a: int
+    scale_offset: float
+
+    def _params(self, x_a: Tensor, cond: Tensor | None) -> Tensor:
+        raise NotImplementedError(f"{type(self).__name__} does not define _params")
+
+    def forward(self, x: Tensor, cond: Tensor | None = None) -> tuple[Tensor, Tensor]:
+        where = f"{type(self).__name__}.forward"
+        check_sequence(x, "x", where, self.channels)
+        cond = check_cond(cond, x, self.cond_channels, where)
+        x_a, x_b = x[:, : self.n_a], x[:, self.n_a :]
+        y_b, logdet = affine_forward(x_b, self._params(x_a, cond), self.scale_offset)
+        return torch.cat([x_a, y_b], dim=1), logdet
+
+    def inverse(self, y: Tensor, cond: Tensor | None = None) -> Tensor:
+        where = f"{type(self).__name__}.inverse"
+        check_sequence(y, "y", where, self.channels)
+        cond = check_cond(cond, y, self.cond_channels, where)
+        y_a, y_b = y[:, : self.n_a], y[:, self.n_a :]
+        return torch.cat([y_a, affine_inverse(y_b, self._params(y_a, cond), self.scale_offset)], dim=1)
+
+
+class AffineCoupling(CouplingLayer):
     """Affine coupling with a convolutional network over time, optionally conditioned.
 
     Args:
@@ -106,16 +136,3 @@ class AffineCoupling(FlowLayer):
 
     def _params(self, x_a: Tensor, cond: Tensor | None) -> Tensor:
         return self.net(x_a if cond is None else torch.cat([x_a, cond], dim=1))
-
-    def forward(self, x: Tensor, cond: Tensor | None = None) -> tuple[Tensor, Tensor]:
-        check_sequence(x, "x", "AffineCoupling.forward", self.channels)
-        cond = check_cond(cond, x, self.cond_channels, "AffineCoupling.forward")
-        x_a, x_b = x[:, : self.n_a], x[:, self.n_a :]
-        y_b, logdet = affine_forward(x_b, self._params(x_a, cond), self.scale_offset)
-        return torch.cat([x_a, y_b], dim=1), logdet
-
-    def inverse(self, y: Tensor, cond: Tensor | None = None) -> Tensor:
-        check_sequence(y, "y", "AffineCoupling.inverse", self.channels)
-        cond = check_cond(cond, y, self.cond_channels, "AffineCoupling.inverse")
-        y_a, y_b = y[:, : self.n_a], y[:, self.n_a :]
-        return torch.cat([y_a, affine_inverse(y_b, self._params(y_a, cond), self.scale_offset)], dim=1)

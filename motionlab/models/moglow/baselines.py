@@ -21,7 +21,7 @@ from motionlab.models.moglow.conditioning import (
     history_keep_mask,
 )
 from motionlab.models.moglow.linear import LinearPredictor
-from motionlab.models.moglow.sampling import autoregressive_sample, sampling_setup
+from motionlab.models.moglow.sampling import AutoregressiveModel, autoregressive_sample
 from motionlab.validation import integer, real
 
 #: Bounds on the predicted log standard deviation (standard units), to keep the likelihood finite.
@@ -41,7 +41,7 @@ class GaussianARConfig(HistoryConfig):
     dropout: float = real(0.0, minimum=0, below=1)
 
 
-class GaussianAR(nn.Module):
+class GaussianAR(AutoregressiveModel):
     """``x_t ~ N(mu(h_t), diag(sigma(h_t)**2))`` with ``h_t = LSTM(c_1 .. c_t)``."""
 
     def __init__(self, cfg: GaussianARConfig) -> None:
@@ -90,16 +90,9 @@ class GaussianAR(nn.Module):
         )
         return per_value.sum(dim=(1, 2))
 
-    @torch.no_grad()
-    def sample(
-        self,
-        control: Tensor,
-        seed_pose: Tensor,
-        temperature: float = 1.0,
-        generator: torch.Generator | None = None,
-    ) -> Tensor:
-        """Generate poses ``(B, N, P)`` frame by frame, as :meth:`MoGlow.sample`."""
-        noise = sampling_setup(self.cfg, control, seed_pose, temperature, generator, "GaussianAR.sample")
+    def draw(self, control: Tensor, seed_pose: Tensor, noise: Tensor) -> Tensor:
+        """Poses ``(B, N, P)`` generated frame by frame, each the predicted mean plus its standard deviation
+        times that frame's ``noise``."""
 
         def step(
             t: int, cond: Tensor, state: tuple[Tensor, Tensor] | None

@@ -21,8 +21,7 @@ from typing import (
 import torch
 from torch import Tensor, nn
 
-from motionlab.models.flows.base import FlowLayer, check_cond, check_sequence
-from motionlab.models.flows.coupling import SCALE_OFFSET, affine_forward, affine_inverse, zero_init
+from motionlab.models.flows.coupling import SCALE_OFFSET, CouplingLayer, affine_inverse, zero_init
 from motionlab.validation import check_scalar, check_tensor
 
 LSTMState = tuple[Tensor, Tensor]
@@ -49,7 +48,7 @@ class FrameCoupling(NamedTuple):
     out_bias: Tensor  # (2 C_b,)
 
 
-class LSTMAffineCoupling(FlowLayer):
+class LSTMAffineCoupling(CouplingLayer):
     """Affine coupling on ``(batch, channels, time)`` whose network is a one-layer LSTM over time.
 
     Args:
@@ -86,19 +85,6 @@ class LSTMAffineCoupling(FlowLayer):
         inputs = torch.cat([x_a, cond], dim=1).transpose(1, 2)
         output, _ = self.lstm(inputs)
         return self.out(torch.cat([output, inputs], dim=2)).transpose(1, 2)
-
-    def forward(self, x: Tensor, cond: Tensor | None = None) -> tuple[Tensor, Tensor]:
-        check_sequence(x, "x", "LSTMAffineCoupling.forward", self.channels)
-        cond = check_cond(cond, x, self.cond_channels, "LSTMAffineCoupling.forward")
-        x_a, x_b = x[:, : self.n_a], x[:, self.n_a :]
-        y_b, logdet = affine_forward(x_b, self._params(x_a, cond), self.scale_offset)
-        return torch.cat([x_a, y_b], dim=1), logdet
-
-    def inverse(self, y: Tensor, cond: Tensor | None = None) -> Tensor:
-        check_sequence(y, "y", "LSTMAffineCoupling.inverse", self.channels)
-        cond = check_cond(cond, y, self.cond_channels, "LSTMAffineCoupling.inverse")
-        y_a, y_b = y[:, : self.n_a], y[:, self.n_a :]
-        return torch.cat([y_a, affine_inverse(y_b, self._params(y_a, cond), self.scale_offset)], dim=1)
 
     def inverse_frame(
         self, y: Tensor, cond: Tensor, state: LSTMState | None = None

@@ -48,7 +48,8 @@ def moglow_name(dropout: float, rescale: bool = True) -> str:
 
 @dataclass(frozen=True)
 class ExperimentConfig(config.ProfileConfig):
-    """Every size, step count and schedule of chapter 06 (:meth:`full` is the default, :meth:`quick` tiny).
+    """Every size, step count and schedule of chapter 06: the defaults are the full profile (:meth:`full`),
+    as the course runs it, about a minute of training per model on one CPU thread; :meth:`quick` is tiny.
 
     Attributes:
         data: which clips and which augmentation. Walk and jog as in the paper, plus wave: the only action
@@ -102,11 +103,6 @@ class ExperimentConfig(config.ProfileConfig):
     long_seed: int = integer(1, minimum=0)
     n_repeats: int = integer(3, minimum=1)
     bench_batch: int = integer(256, minimum=1)
-
-    @classmethod
-    def full(cls) -> ExperimentConfig:
-        """The chapter as the course runs it: about a minute of training per model on one CPU thread."""
-        return cls()
 
     @classmethod
     def quick(cls) -> ExperimentConfig:
@@ -297,7 +293,8 @@ def with_steps(cfg: ExperimentConfig, name: str, steps: int) -> ExperimentConfig
 
 @dataclass(frozen=True)
 class RealLocomotionConfig(config.ProfileConfig):
-    """MoGlow and the Gaussian autoregressive baseline on the CMU clips of Walk and Run (about 12 fps).
+    """MoGlow and the Gaussian autoregressive baseline on the CMU clips of Walk and Run (about 12 fps); the
+    defaults are the full profile (:meth:`full`: 300 steps each).
 
     Attributes:
         data: the actions (names of the CMU classes) and the augmentation (mirroring and time reversal, as
@@ -329,11 +326,6 @@ class RealLocomotionConfig(config.ProfileConfig):
             raise ValueError(
                 f"RealLocomotionConfig: window {self.window} must be longer than history {self.history}"
             )
-
-    @classmethod
-    def full(cls) -> RealLocomotionConfig:
-        """The chapter's run: 300 steps each."""
-        return cls()
 
     @classmethod
     def quick(cls) -> RealLocomotionConfig:

@@ -40,11 +40,11 @@ from motionlab.models.moglow.coupling import LSTMAffineCoupling
 from motionlab.models.moglow.data import POSE_DIM
 from motionlab.models.moglow.linear import LinearPredictor
 from motionlab.models.moglow.sampling import (
+    AutoregressiveModel,
     GenerationPlan,
     InverseStep,
     check_generated,
     sample_frames,
-    sampling_setup,
 )
 from motionlab.validation import flag, integer, real
 
@@ -78,7 +78,7 @@ class MoGlowConfig(HistoryConfig):
     dropout_rescale: bool = flag(True)
 
 
-class MoGlow(nn.Module):
+class MoGlow(AutoregressiveModel):
     """The MoGlow model of :class:`MoGlowConfig` (see the module notes)."""
 
     def __init__(self, cfg: MoGlowConfig) -> None:
@@ -174,27 +174,8 @@ class MoGlow(nn.Module):
             steps,
         )
 
-    @torch.no_grad()
-    def sample(
-        self,
-        control: Tensor,
-        seed_pose: Tensor,
-        temperature: float = 1.0,
-        generator: torch.Generator | None = None,
-    ) -> Tensor:
-        """Generate poses ``(B, N, P)`` frame by frame with the fused loop (:func:`.sampling.sample_frames`).
-
-        Args:
-            control: ``(B, tau + N, C)``: the seed frames' controls, then those of the frames to generate.
-            seed_pose: ``(B, tau, P)``, the poses that start the history.
-            temperature: the prior's temperature (0 gives the zero-latent path, each frame the image of the
-                latent mode ``z_t = 0``, which is not the mode of ``p(x_t | past)``; 1 the model's
-                distribution).
-            generator: draws the latents of all frames (generation never drops history inputs).
-
-        Raises ``ValueError`` on bad inputs, and naming the first frame when the generated poses stop being
-        finite.
-        """
-        latents = sampling_setup(self.cfg, control, seed_pose, temperature, generator, "MoGlow.sample")
+    def draw(self, control: Tensor, seed_pose: Tensor, latents: Tensor) -> Tensor:
+        """Poses ``(B, N, P)`` generated frame by frame with the fused loop (:func:`.sampling.sample_frames`);
+        a ``ValueError`` names the first frame whose generated pose is not finite."""
         generated = sample_frames(self.generation_plan(), control, seed_pose, None, latents)
         return check_generated(generated, "MoGlow.sample")

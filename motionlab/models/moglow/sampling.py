@@ -41,11 +41,10 @@ from dataclasses import dataclass
 from typing import (  # TorchScript reads these annotations: no ``from __future__ import annotations``
     Any,
     NamedTuple,
-    Protocol,
 )
 
 import torch
-from torch import Tensor
+from torch import Tensor, nn
 
 from motionlab.data.representations import from_moglow
 from motionlab.models.flows.prior import check_temperature
@@ -350,19 +349,42 @@ def sample_frames(
     )
 
 
-class AutoregressiveModel(Protocol):
-    """MoGlow or the Gaussian baseline: ``cfg.history`` and ``sample(control, seed_pose, temperature,
-    generator)``."""
+class AutoregressiveModel(nn.Module):
+    """MoGlow or the Gaussian baseline: a config ``cfg`` with ``history``, ``pose_dim`` and ``control_dim``,
+    and :meth:`sample`, which checks a request and draws its latents once (:func:`sampling_setup`) and
+    hands them to the model's :meth:`draw`."""
 
-    cfg: object
+    cfg: Any
 
+    @torch.no_grad()
     def sample(
         self,
         control: Tensor,
         seed_pose: Tensor,
         temperature: float = 1.0,
         generator: torch.Generator | None = None,
-    ) -> Tensor: ...
+    ) -> Tensor:
+        """Generate poses ``(B, N, P)`` frame by frame.
+
+        Args:
+            control: ``(B, tau + N, C)``: the seed frames' controls, then those of the frames to generate.
+            seed_pose: ``(B, tau, P)``, the poses that start the history.
+            temperature: the prior's temperature (MoGlow: 0 gives the zero-latent path, each frame the image
+                of the latent mode ``z_t = 0``, which is not the mode of ``p(x_t | past)``; 1 the model's
+                distribution).
+            generator: draws the latents of all frames (generation never drops history inputs).
+
+        Raises ``ValueError`` on bad inputs (and, for MoGlow, naming the first frame when the generated
+        poses stop being finite).
+        """
+        where = f"{type(self).__name__}.sample"
+        return self.draw(
+            control, seed_pose, sampling_setup(self.cfg, control, seed_pose, temperature, generator, where)
+        )
+
+    def draw(self, control: Tensor, seed_pose: Tensor, latents: Tensor) -> Tensor:
+        """Poses ``(B, N, P)`` from checked inputs and the latents ``(B, N, P)`` (each model defines it)."""
+        raise NotImplementedError(f"{type(self).__name__} does not define draw")
 
 
 @dataclass(frozen=True)

@@ -23,7 +23,12 @@ import torch
 from torch import Tensor, nn
 
 from motionlab.models.motion_cell.data import PoseCodec, WindowBatch, pose_dim
-from motionlab.models.motion_cell.heads import OutputHead, PosePrediction, assemble_pose, split_raw_pose
+from motionlab.models.motion_cell.heads import (
+    PoseNetwork,
+    PosePrediction,
+    assemble_pose,
+    split_raw_pose,
+)
 from motionlab.models.motion_cell.losses import (
     LossConfig,
     LossFn,
@@ -64,18 +69,11 @@ class BaselineConfig(Checked):
         return pose_dim(self.n_joints)
 
 
-class FrameBaseline(nn.Module):
+class FrameBaseline(PoseNetwork[BaselineConfig]):
     """ERD or the QuaterNet-style RNN (``cfg.kind``), predicting one pose per recurrent step."""
 
     def __init__(self, cfg: BaselineConfig, codec: PoseCodec) -> None:
-        super().__init__()
-        if codec.n_joints != cfg.n_joints:
-            raise ValueError(
-                f"FrameBaseline: the codec has {codec.n_joints} joints, the config {cfg.n_joints}"
-            )
-        self.cfg = cfg
-        self.codec = codec
-        self.head = OutputHead("quaternion")
+        super().__init__(cfg, codec, "quaternion")
         raw_dim = self.head.raw_dim(cfg.n_joints)
         inputs = cfg.pose_dim + cfg.control_dim
         self.control = ControlEmbedding(cfg.n_actions, cfg.n_bodies, cfg.control_dim)

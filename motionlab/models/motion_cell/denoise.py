@@ -39,7 +39,7 @@ from motionlab.models.motion_cell.data import (
     motion_cell_features,
     pose_dim,
 )
-from motionlab.models.motion_cell.heads import OutputHead, PosePrediction, assemble_pose
+from motionlab.models.motion_cell.heads import PoseNetwork, PosePrediction, assemble_pose
 from motionlab.models.motion_cell.losses import LossConfig, LossFn, joint_weights, norm_loss, pose_loss
 from motionlab.train import TrainResult
 from motionlab.validation import Checked, check_scalar, check_tensor, integer
@@ -113,18 +113,11 @@ def noisy_features(rotations: np.ndarray, positions: np.ndarray, rng: np.random.
     return motion_cell_features(noisy_rotations, noisy_positions)
 
 
-class DenoisingAutoencoder(nn.Module):
+class DenoisingAutoencoder(PoseNetwork[DenoiserConfig]):
     """Conv1d encoder-decoder over time: noisy pose vectors ``(B, T, 90)`` -> clean ones."""
 
     def __init__(self, cfg: DenoiserConfig, codec: PoseCodec) -> None:
-        super().__init__()
-        if codec.n_joints != cfg.n_joints:
-            raise ValueError(
-                f"DenoisingAutoencoder: the codec has {codec.n_joints} joints, the config {cfg.n_joints}"
-            )
-        self.cfg = cfg
-        self.codec = codec
-        self.head = OutputHead("quaternion")
+        super().__init__(cfg, codec, "quaternion")
         k, pad = cfg.kernel_size, cfg.kernel_size // 2
         self.encoder = nn.Sequential(
             nn.Conv1d(cfg.pose_dim, cfg.channels, k, padding=pad),

@@ -146,11 +146,6 @@ class ExperimentConfig(config.ProfileConfig):
         )
 
     @classmethod
-    def full(cls) -> ExperimentConfig:
-        """The reported models (the defaults)."""
-        return cls()
-
-    @classmethod
     def long(cls) -> ExperimentConfig:
         """A longer, larger run for the training command (``python -m motionlab.apps.training motion_cell
         --config long``): the Motion Cell at :class:`MotionCellConfig`'s own sizes (hidden 128, words of 64),

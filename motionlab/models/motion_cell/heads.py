@@ -12,13 +12,13 @@ for every head.
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import NamedTuple
+from typing import Generic, NamedTuple, Protocol, TypeVar
 
 import torch
-from torch import Tensor
+from torch import Tensor, nn
 
 from motionlab.geometry import axis_angle_to_quat, gram_schmidt, matrix_to_quat, quat_normalize
-from motionlab.models.motion_cell.data import ROOT_DIM
+from motionlab.models.motion_cell.data import ROOT_DIM, PoseCodec
 from motionlab.validation import Checked, check_tensor, choice
 
 #: Rotation outputs a decoder can produce (compared in the chapter; the paper's §3 and §5.1).
@@ -93,3 +93,26 @@ class PosePrediction(NamedTuple):
 
     poses: Tensor
     rotation_params: Tensor
+
+
+class _JointCount(Protocol):
+    n_joints: int
+
+
+C = TypeVar("C", bound=_JointCount)
+
+
+class PoseNetwork(nn.Module, Generic[C]):
+    """What the chapter's pose networks share: their config ``cfg`` (with ``n_joints``), the ``codec``
+    with the root statistics and skeletons (checked to have as many joints), and the :class:`OutputHead` of
+    ``kind`` that reads their raw outputs."""
+
+    def __init__(self, cfg: C, codec: PoseCodec, kind: str) -> None:
+        super().__init__()
+        if codec.n_joints != cfg.n_joints:
+            raise ValueError(
+                f"{type(self).__name__}: the codec has {codec.n_joints} joints, the config {cfg.n_joints}"
+            )
+        self.cfg = cfg
+        self.codec = codec
+        self.head = OutputHead(kind)

@@ -47,7 +47,12 @@ from torch import Tensor, nn
 
 from motionlab.models.gaussian import reparameterize
 from motionlab.models.motion_cell.data import PoseCodec, pose_dim
-from motionlab.models.motion_cell.heads import OUTPUT_KINDS, OutputHead, assemble_pose, split_raw_pose
+from motionlab.models.motion_cell.heads import (
+    OUTPUT_KINDS,
+    PoseNetwork,
+    assemble_pose,
+    split_raw_pose,
+)
 from motionlab.models.motion_cell.smoothing import smooth_word_boundaries
 from motionlab.validation import Checked, check_scalar, check_tensor, choice, flag, integer
 
@@ -296,18 +301,11 @@ class MotionCellOutput(NamedTuple):
     prior_logvar: Tensor
 
 
-class MotionCellModel(nn.Module):
+class MotionCellModel(PoseNetwork[MotionCellConfig]):
     """Words -> Motion Cell -> words; ``codec`` carries the root statistics and the skeletons."""
 
     def __init__(self, cfg: MotionCellConfig, codec: PoseCodec) -> None:
-        super().__init__()
-        if codec.n_joints != cfg.n_joints:
-            raise ValueError(
-                f"MotionCellModel: the codec has {codec.n_joints} joints, the config {cfg.n_joints}"
-            )
-        self.cfg = cfg
-        self.codec = codec
-        self.head = OutputHead(cfg.output)
+        super().__init__(cfg, codec, cfg.output)
         raw_dim = self.head.raw_dim(cfg.n_joints)
         if cfg.word_layers:
             self.word_encoder: nn.Module = WordEncoder(cfg.pose_dim, cfg.word_length, cfg.word_dim)

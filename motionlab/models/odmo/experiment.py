@@ -82,7 +82,9 @@ def cache_name(variant: str) -> str:
 
 @dataclass(frozen=True)
 class ExperimentConfig(config.ProfileConfig):
-    """Every size and schedule of chapter 08; the defaults are the full profile (:meth:`full`).
+    """Every size and schedule of chapter 08; the defaults are the full profile (:meth:`full`): the paper's
+    encoder LSTM (64) and code size (20), generators of one 64-unit LSTM layer (the paper: two of 128), 300
+    steps, 10 sample sets per row.
 
     Attributes:
         model: the base model's config (sizes and objective); :data:`VARIANTS` change it.
@@ -132,12 +134,6 @@ class ExperimentConfig(config.ProfileConfig):
         ),
         choices=VARIANTS,
     )
-
-    @classmethod
-    def full(cls) -> ExperimentConfig:
-        """The chapter's sizes: the paper's encoder LSTM (64) and code size (20), generators of one 64-unit
-        LSTM layer (the paper: two of 128), 300 steps, 10 sample sets per row."""
-        return cls()
 
     @classmethod
     def quick(cls) -> ExperimentConfig:
@@ -345,7 +341,8 @@ REAL_VARIANTS = ("ODMO", "standard VAE", "-r_e", "-L_es")
 @dataclass(frozen=True)
 class RealExperimentConfig(ExperimentConfig):
     """ODMO on CMU MoCap (chapter 10): :class:`ExperimentConfig`'s model and schedule fields, plus the data
-    and the Table 2 protocol. The defaults are the full profile; :meth:`long` is a longer documented run.
+    and the Table 2 protocol. The defaults are the full profile (all 970 clips; ODMO, the standard VAE, -r_e
+    and -L_es, 200 steps each; 10 sets of 400 clips); :meth:`long` is a longer documented run.
 
     Attributes:
         model: :class:`ODMOConfig`'s defaults (the paper's wiring of encoder and decoder, with the
@@ -378,12 +375,6 @@ class RealExperimentConfig(ExperimentConfig):
                 f"RealExperimentConfig: the model's {self.model.n_frames} frames x frame_stride "
                 f"{self.frame_stride} must equal the window of {self.window} frames"
             )
-
-    @classmethod
-    def full(cls) -> RealExperimentConfig:
-        """The chapter's run: all 970 clips, ODMO, the standard VAE, -r_e and -L_es, 200 steps each, 10 sets
-        of 400 clips."""
-        return cls()
 
     @classmethod
     def quick(cls) -> RealExperimentConfig:

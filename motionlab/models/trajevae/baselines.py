@@ -24,9 +24,15 @@ import torch
 from torch import Tensor, nn
 
 from motionlab.models.gaussian import reparameterize
-from motionlab.models.trajevae.data import check_batch, check_task
+from motionlab.models.trajevae.data import check_batch
 from motionlab.models.trajevae.masks import KEEP_PROBABILITY, given_trajectories
-from motionlab.models.trajevae.model import RECONSTRUCTIONS, Gaussian, WindowShape
+from motionlab.models.trajevae.model import (
+    RECONSTRUCTIONS,
+    Completer,
+    CompletionTask,
+    Gaussian,
+    WindowShape,
+)
 from motionlab.validation import choice, flag, integer, real
 
 
@@ -89,7 +95,7 @@ class OffsetDecoder(nn.Module):
         return initial_pose[:, None, :] + torch.cumsum(self.offsets(hidden), dim=1)
 
 
-class _RecurrentCompletion(nn.Module):
+class _RecurrentCompletion(Completer):
     """What both baselines share: the config check, the context and the decoder."""
 
     def __init__(self, cfg: RecurrentConfig, stochastic: bool) -> None:
@@ -117,15 +123,6 @@ class _RecurrentCompletion(nn.Module):
         check_batch(windows, mask, self.cfg.n_frames, self.cfg.n_joints, where)
         return windows[:, 0], windows[:, 1:], given_trajectories(windows[:, 1:], mask)
 
-    def _check_task(
-        self, initial_pose: Tensor, trajectories: Tensor, n_samples: int, temperature: float, where: str
-    ) -> int:
-        """Check the arguments of ``sample``; return the batch size."""
-        cfg = self.cfg
-        return check_task(
-            initial_pose, trajectories, n_samples, temperature, cfg.n_frames, cfg.n_joints, where
-        )
-
 
 class GRUCompletion(_RecurrentCompletion):
     """The deterministic GRU baseline (``RecurrentConfig.latent_dim == 0``)."""
@@ -143,20 +140,11 @@ class GRUCompletion(_RecurrentCompletion):
         initial_pose, _, trajectories = self._check_batch(windows, mask, "GRUCompletion.forward")
         return self.complete(initial_pose, trajectories)
 
-    @torch.no_grad()
-    def sample(
-        self,
-        initial_pose: Tensor,
-        trajectories: Tensor,
-        n_samples: int,
-        temperature: float = 1.0,
-        generator: torch.Generator | None = None,
-    ) -> Tensor:
+    def draw(self, task: CompletionTask) -> Tensor:
         """``(B, K, F, J * 3)``: the one deterministic completion repeated ``K`` times (temperature, generator
         unused)."""
-        self._check_task(initial_pose, trajectories, n_samples, temperature, "GRUCompletion.sample")
-        completion = self.complete(initial_pose, trajectories)
-        return completion[:, None].expand(-1, n_samples, -1, -1)
+        completion = self.complete(task.initial_pose, task.trajectories)
+        return completion[:, None].expand(-1, task.n_samples, -1, -1)
 
 
 class CVAERNN(_RecurrentCompletion):
@@ -186,18 +174,10 @@ class CVAERNN(_RecurrentCompletion):
         z = reparameterize(posterior.mu, posterior.logvar, generator)
         return self.decoder(trajectories, initial_pose, torch.cat([context, z], dim=-1)), posterior
 
-    @torch.no_grad()
-    def sample(
-        self,
-        initial_pose: Tensor,
-        trajectories: Tensor,
-        n_samples: int,
-        temperature: float = 1.0,
-        generator: torch.Generator | None = None,
-    ) -> Tensor:
+    def draw(self, task: CompletionTask) -> Tensor:
         """Completions ``(B, K, F, J * 3)`` with ``z ~ N(0, temperature² I)`` (``K = 1``: ``z = 0``, the prior
         mean)."""
-        batch = self._check_task(initial_pose, trajectories, n_samples, temperature, "CVAERNN.sample")
+        initial_pose, trajectories, batch, n_samples, temperature, generator = task
         context = self.context(trajectories, initial_pose).repeat_interleave(n_samples, dim=0)
         shape = (batch * n_samples, self.cfg.latent_dim)
         z = torch.zeros(shape) if n_samples == 1 else temperature * torch.randn(shape, generator=generator)

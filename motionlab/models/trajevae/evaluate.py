@@ -26,7 +26,6 @@ from __future__ import annotations
 
 import numbers
 from collections.abc import Sequence
-from typing import Protocol
 
 import numpy as np
 import torch
@@ -42,6 +41,7 @@ from motionlab.models.trajevae.masks import (
     given_trajectories,
     hidden_poses,
 )
+from motionlab.models.trajevae.model import Completer
 from motionlab.validation import check_scalar, check_tensor
 
 #: Samples per input window, as in DLow and the paper.
@@ -64,19 +64,6 @@ DLOW_METRICS = ("apd", "ade", "fde", "mmade", "mmfde")
 
 #: One model's k sweep: ``{k: {metric: (mean, 95% CI half-width)}}`` (:func:`sweep_given_joints`).
 Sweep = dict[int, dict[str, tuple[float, float]]]
-
-
-class Completer(Protocol):
-    """What the evaluation needs from a model: ``sample`` (TrajeVAE, GRUCompletion and CVAERNN have it)."""
-
-    def sample(
-        self,
-        initial_pose: Tensor,
-        trajectories: Tensor,
-        n_samples: int,
-        temperature: float = 1.0,
-        generator: torch.Generator | None = None,
-    ) -> Tensor: ...
 
 
 def complete(

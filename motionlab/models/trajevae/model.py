@@ -254,7 +254,55 @@ class TrajeVAEDecoder(nn.Module):
         return initial_pose[:, None, :] + torch.cumsum(self.offsets(hidden), dim=1)
 
 
-class TrajeVAE(nn.Module):
+class CompletionTask(NamedTuple):
+    """A checked ``sample`` request: initial poses ``(B, J * 3)``, given trajectories ``(B, F, J * 3)``
+    (``Y = X ⊙ M``, zeros where unknown), the batch size ``B``, ``K = n_samples`` completions per window,
+    the temperature and the noise's generator."""
+
+    initial_pose: Tensor
+    trajectories: Tensor
+    batch: int
+    n_samples: int
+    temperature: float
+    generator: torch.Generator | None
+
+
+class Completer(nn.Module):
+    """A model that completes windows from their initial pose and given trajectories (TrajeVAE, and the
+    GRUCompletion and CVAERNN baselines): what the evaluation needs. :meth:`sample` checks a request once;
+    each model's :meth:`draw` answers it."""
+
+    cfg: WindowShape
+
+    @torch.no_grad()
+    def sample(
+        self,
+        initial_pose: Tensor,
+        trajectories: Tensor,
+        n_samples: int,
+        temperature: float = 1.0,
+        generator: torch.Generator | None = None,
+    ) -> Tensor:
+        """Completions ``(B, K, F, J * 3)``, ``K = n_samples`` (how each model draws them: :meth:`draw`).
+
+        Args:
+            initial_pose: ``(B, J * 3)``; trajectories: ``(B, F, J * 3)``, ``Y = X ⊙ M`` (zeros where
+            unknown). n_samples: ``K``. temperature: a number >= 0 scaling the model's noise. generator: the
+            noise's ``torch.Generator`` (same seed, bitwise-identical samples).
+        """
+        cfg = self.cfg
+        where = f"{type(self).__name__}.sample"
+        batch = check_task(
+            initial_pose, trajectories, n_samples, temperature, cfg.n_frames, cfg.n_joints, where
+        )
+        return self.draw(CompletionTask(initial_pose, trajectories, batch, n_samples, temperature, generator))
+
+    def draw(self, task: CompletionTask) -> Tensor:
+        """Completions ``(B, K, F, J * 3)`` of a checked request (each model defines it)."""
+        raise NotImplementedError(f"{type(self).__name__} does not define draw")
+
+
+class TrajeVAE(Completer):
     """The TrajeVAE model of a :class:`TrajeVAEConfig` (see the module docstring)."""
 
     def __init__(self, cfg: TrajeVAEConfig) -> None:
@@ -320,32 +368,11 @@ class TrajeVAE(nn.Module):
         return CompletionOutput(self.decoder(z, initial_pose, initial_embedding), prior, posterior)
 
     # --- sampling ------------------------------------------------------------------------------------
-    @torch.no_grad()
-    def sample(
-        self,
-        initial_pose: Tensor,
-        trajectories: Tensor,
-        n_samples: int,
-        temperature: float = 1.0,
-        generator: torch.Generator | None = None,
-    ) -> Tensor:
-        """Completions ``(B, K, F, J * 3)`` from the prior, ``K = n_samples``.
-
-        Args:
-            initial_pose: ``(B, J * 3)``; trajectories: ``(B, F, J * 3)``, ``Y = X ⊙ M`` (zeros where
-            unknown). n_samples: ``K``; with ``K = 1`` the prior means are decoded (the deterministic
-            prediction). temperature: scales the prior's standard deviation (0 decodes the means for every
-            sample). generator: the noise's ``torch.Generator`` (same seed, bitwise-identical samples).
-        """
-        batch = check_task(
-            initial_pose,
-            trajectories,
-            n_samples,
-            temperature,
-            self.cfg.n_frames,
-            self.cfg.n_joints,
-            "TrajeVAE.sample",
-        )
+    def draw(self, task: CompletionTask) -> Tensor:
+        """Completions ``(B, K, F, J * 3)`` from the prior: with ``K = 1`` the prior means are decoded (the
+        deterministic prediction); ``temperature`` scales the prior's standard deviation (0 decodes the
+        means for every sample)."""
+        initial_pose, trajectories, batch, n_samples, temperature, generator = task
         initial_embedding = self.initial_pose_encoder(initial_pose)
         prior = self.prior(trajectories, initial_embedding)
         mu = prior.mu.repeat_interleave(n_samples, dim=0)

@@ -72,11 +72,6 @@ class ExperimentConfig(config.ProfileConfig):
     n_repeats: int = integer(10, minimum=2)
 
     @classmethod
-    def full(cls) -> ExperimentConfig:
-        """The reported runs."""
-        return cls()
-
-    @classmethod
     def quick(cls) -> ExperimentConfig:
         """Every code path in seconds: small widths, few steps, few evaluation samples."""
         return cls(
