@@ -31,6 +31,7 @@ FAMILIES: dict[str, str] = {
     "trajevae": "motionlab.models.trajevae.experiment",
     "odmo": "motionlab.models.odmo.experiment",
     "odmo_cmu": "motionlab.models.odmo.real_experiment",
+    "diffusion": "motionlab.models.diffusion.experiment",
 }
 
 

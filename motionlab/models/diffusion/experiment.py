@@ -1,0 +1,281 @@
+r"""Chapter 11's experiment: MDM's sizes, its two runs, and training and measuring them on both cores.
+
+:class:`ExperimentConfig` holds every knob (the denoiser's config, the frame stride, the training schedule,
+the fast sampler and the sample sets); :data:`VARIANTS` lists the two runs as changes to the model's config:
+``"mdm"``, MDM with its geometric losses at the repository's action-to-motion weights (1, 1, 1), and
+``"mdm_no_geometry"``, the same model with :math:`\lambda_\text{pos} = \lambda_\text{vel} =
+\lambda_\text{foot} = 0` (the paper's ablation of the geometric losses). :func:`runs` gives one
+:class:`~motionlab.train.run.Run` per variant (:func:`diffusion_run`), :func:`train_all` trains them on both
+cores and :func:`measure` measures a trained model: sample sets drawn per action with the fast sampler
+(DDIM on a respaced schedule, with classifier-free guidance), turned into joint positions at 30 fps and
+measured with the benchmark's protocol (:func:`~motionlab.evaluation.benchmark.sample_metrics` with the
+GRU evaluator: accuracy, FID, Diversity, Multimodality, IS) and foot skating
+(:func:`~motionlab.metrics.physical.foot_skating`). Every sample set is seeded by the config alone.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, replace
+from functools import partial
+from typing import Any
+
+import numpy as np
+import torch
+from torch import Tensor, nn
+
+from motionlab import config
+from motionlab.evaluation.benchmark import benchmark_evaluator, load_benchmark, sample_metrics
+from motionlab.evaluation.evaluator import Evaluator, data_fingerprint
+from motionlab.metrics import Interval, repeat_metric
+from motionlab.metrics.physical import foot_skating
+from motionlab.models.diffusion.data import MDMData, prepare, to_positions
+from motionlab.models.diffusion.losses import diffusion_objective
+from motionlab.models.diffusion.model import MDM, MDMConfig
+from motionlab.models.diffusion.sampling import GUIDANCE_SCALE, sample
+from motionlab.train import TensorBatches, TrainConfig
+from motionlab.train.many import Trained, train_many
+from motionlab.train.run import Run, given
+from motionlab.validation import check_choice, instance, integer, real
+
+#: The chapter's runs as changes to the model's config; the names are the runs' cache names.
+VARIANTS: dict[str, dict[str, float]] = {
+    "mdm": {},
+    "mdm_no_geometry": {"lambda_pos": 0.0, "lambda_vel": 0.0, "lambda_foot": 0.0},
+}
+
+#: The chapter that trains this family, and its main run (the training command's default).
+CHAPTER, DEFAULT_RUN = "11_motion_diffusion", "mdm"
+
+
+def variant_config(name: str, base: MDMConfig) -> MDMConfig:
+    """``base`` with the changes of the variant ``name`` (a key of :data:`VARIANTS`)."""
+    check_choice(name, "name", "variant_config", VARIANTS)
+    return replace(base, **VARIANTS[name])
+
+
+@dataclass(frozen=True)
+class ExperimentConfig(config.ProfileConfig):
+    """Every size and schedule of chapter 11; the defaults are the full profile (:meth:`full`): the course's
+    MDM (:meth:`MDMConfig.course`: width 128, 4 layers, 1,000 diffusion steps), 300 steps of batches of 32,
+    5 sample sets of 20 clips per action, each drawn with 50 DDIM steps.
+
+    One training step of the course's MDM with the geometric losses takes 0.33 s on one core of the course
+    machine (batch 32; 0.55 s at the repository's batch of 64), so 300 steps train in about 100 s per run;
+    the paper trains its action-to-motion models for hundreds of thousands of steps.
+
+    Attributes:
+        model: the denoiser's config (sizes, diffusion length, loss weights); :data:`VARIANTS` change it.
+        frame_stride: frames of the 30 fps data per model frame (2: 15 fps, 60 frames per 4-second clip).
+        steps, batch_size, lr: optimiser steps, batch size and AdamW learning rate of every run (the
+            repository: AdamW at 1e-4, batches of 64; ours is higher for the short schedule).
+        seed: seeds every run's initialisation and batches, and the sample sets.
+        sample_steps: DDIM steps (``eta = 0``) of the respaced schedule the sample sets are drawn with.
+        guidance: the classifier-free guidance scale of the sample sets (the repository's sampling default
+            2.5; 1 is the plain conditional model).
+        n_per_action: clips per action in a sample set; n_sets: sample sets (each number is a mean with its
+            95 % interval over them).
+    """
+
+    model: MDMConfig = instance(MDMConfig, default_factory=MDMConfig.course)
+    frame_stride: int = integer(2, minimum=1)
+    steps: int = integer(300, minimum=1)
+    batch_size: int = integer(32, minimum=1)
+    lr: float = real(5e-4, above=0)
+    seed: int = integer(0, minimum=0)
+    sample_steps: int = integer(50, minimum=1)
+    guidance: float = real(GUIDANCE_SCALE, minimum=0)
+    n_per_action: int = integer(20, minimum=2)
+    n_sets: int = integer(5, minimum=2)
+
+    def __post_init__(self) -> None:
+        super().__post_init__()
+        if self.sample_steps > self.model.diffusion_steps:
+            raise ValueError(
+                f"ExperimentConfig: sample_steps={self.sample_steps} exceeds the model's "
+                f"{self.model.diffusion_steps} diffusion steps"
+            )
+
+    @classmethod
+    def quick(cls) -> ExperimentConfig:
+        """A tiny denoiser (width 16, one layer, 100 diffusion steps), 4 steps and 2 small sample sets of 4
+        DDIM steps: every code path in seconds."""
+        return cls(
+            model=MDMConfig.course(latent_dim=16, ff_size=32, layers=1, heads=2, diffusion_steps=100),
+            steps=4,
+            batch_size=16,
+            sample_steps=4,
+            n_per_action=4,
+            n_sets=2,
+        )
+
+    @classmethod
+    def long(cls) -> ExperimentConfig:
+        """A longer, larger run for the training command (``python -m motionlab.apps.training diffusion
+        --config long``): 20 times the full profile's steps (6,000) and a denoiser twice as wide (256,
+        feed-forward 512, 4 layers); the same sample sets as :meth:`full`."""
+        return cls(model=MDMConfig.course(latent_dim=256, ff_size=512), steps=6_000)
+
+    def train_config(self) -> TrainConfig:
+        """Every run's :class:`~motionlab.train.TrainConfig`."""
+        return TrainConfig(
+            steps=self.steps,
+            batch_size=self.batch_size,
+            lr=self.lr,
+            grad_clip=1.0,
+            seed=self.seed,
+            checkpoint_every=None,
+            log_every=20,
+        )
+
+
+def build_mdm(cfg: MDMConfig, data: MDMData, seed: int) -> MDM:
+    """MDM of ``cfg``, its weights drawn after seeding torch's global generator with ``seed``, its
+    standardiser fitted on ``data``."""
+    torch.manual_seed(seed)
+    return MDM(cfg).fit_standardizer(data.features)
+
+
+def training_batches(data: MDMData, model: nn.Module) -> TensorBatches:
+    """Shuffled batches of the training clips (:meth:`MDMData.batches`)."""
+    return data.batches()
+
+
+def diffusion_run(name: str, cfg: MDMConfig, train_config: TrainConfig, data: MDMData) -> Run:
+    """A variant's :class:`~motionlab.train.run.Run`, cached as ``name``: MDM of ``cfg`` (seeded by
+    ``train_config.seed``) on shuffled batches of ``data`` (its fingerprints and frame stride are the cache
+    key's data part)."""
+    shape = tuple(data.features.shape[1:])
+    if shape != (cfg.n_frames, cfg.n_features):
+        raise ValueError(
+            f"diffusion_run: the config expects clips of {cfg.n_frames} frames x {cfg.n_features} features, "
+            f"the data has {shape}"
+        )
+    return Run(
+        name,
+        cfg,
+        partial(build_mdm, cfg, data),
+        given(diffusion_objective),
+        partial(training_batches, data),
+        train_config,
+        {
+            "features": data_fingerprint(data.features),
+            "action": data_fingerprint(data.action.float()),
+            "frame_stride": data.frame_stride,
+        },
+    )
+
+
+@dataclass(frozen=True, eq=False)
+class ChapterData:
+    """What the runs train on and are measured with.
+
+    Attributes:
+        train: the prepared training clips.
+        evaluator: the benchmark's frozen GRU evaluator; train_features: its features of the training clips
+            ``(N, D)`` (FID's reference).
+        fps: the benchmark's frame rate (30), of the positions the sample sets are measured in.
+        real_skating: the foot skating (m/s) of the benchmark's test clips, the sample sets' target.
+    """
+
+    train: MDMData
+    evaluator: Evaluator
+    train_features: Tensor
+    fps: float
+    real_skating: float
+
+
+def load_data(cfg: ExperimentConfig) -> ChapterData:
+    """The benchmark's training clips prepared at ``cfg.frame_stride``, the GRU evaluator and its reference
+    features, and the test clips' foot skating."""
+    if not isinstance(cfg, ExperimentConfig):
+        raise TypeError(f"load_data: cfg must be an ExperimentConfig, got {type(cfg).__name__}")
+    benchmark = load_benchmark()
+    evaluator = benchmark_evaluator("gru", progress=False)
+    fps = float(benchmark.train.fps)
+    return ChapterData(
+        prepare(benchmark.train, cfg.frame_stride),
+        evaluator,
+        evaluator.features(benchmark.train.positions),
+        fps,
+        foot_skating(benchmark.test.positions, fps=fps),
+    )
+
+
+def runs(cfg: ExperimentConfig, data: ChapterData) -> dict[str, Run]:
+    """Both variants' runs ``{name: Run}`` in :data:`VARIANTS`' order."""
+    if data.train.frame_stride != cfg.frame_stride:
+        raise ValueError(
+            f"runs: the data was prepared with frame_stride {data.train.frame_stride}, the config has "
+            f"{cfg.frame_stride}"
+        )
+    training = cfg.train_config()
+    return {
+        name: diffusion_run(name, variant_config(name, cfg.model), training, data.train) for name in VARIANTS
+    }
+
+
+def sample_set(model: MDM, cfg: ExperimentConfig, generator: torch.Generator) -> tuple[Tensor, np.ndarray]:
+    """One sample set: ``cfg.n_per_action`` clips per action drawn with ``cfg.sample_steps`` DDIM steps and
+    guidance ``cfg.guidance``, as joint positions at the data's frame rate ``(N, T · stride, J, 3)``, with
+    their actions ``(N,)``."""
+    action = torch.arange(model.cfg.n_actions).repeat_interleave(cfg.n_per_action)
+    features = sample(
+        model,
+        action,
+        steps=cfg.sample_steps,
+        method="ddim",
+        guidance=cfg.guidance,
+        generator=generator,
+    )
+    return to_positions(features, cfg.frame_stride), action.numpy()
+
+
+def set_metrics(
+    data: ChapterData, drawn: tuple[Tensor, np.ndarray], rng: np.random.Generator
+) -> dict[str, float]:
+    """The benchmark's metric row of one sample set (positions ``(N, T, J, 3)``, actions ``(N,)``) and its
+    foot skating (m/s)."""
+    positions, action = drawn
+    row = sample_metrics(data.evaluator, positions, action, data.train_features, rng)
+    row["skating"] = foot_skating(positions.numpy(), fps=data.fps)
+    return row
+
+
+def sample_row(cfg: ExperimentConfig, data: ChapterData, model: MDM) -> dict[str, Interval]:
+    """``{metric: Interval}`` over ``cfg.n_sets`` sample sets (:func:`sample_set`, :func:`set_metrics`),
+    seeded by ``cfg.seed``."""
+
+    def draw(generator: torch.Generator) -> tuple[tuple[Tensor, np.ndarray], np.random.Generator]:
+        return sample_set(model, cfg, generator), np.random.default_rng(generator.initial_seed())
+
+    return repeat_metric(lambda drawn: set_metrics(data, *drawn), draw, cfg.n_sets, cfg.seed)
+
+
+def measure(cfg: ExperimentConfig, data: ChapterData, name: str, model: nn.Module) -> dict[str, Any]:
+    """The training command's measurement of run ``name``: the sample sets' metrics ``{metric: Interval}``
+    (:func:`sample_row`), the sampler that drew them, and the real test clips' foot skating beside them."""
+    check_choice(name, "name", "measure", VARIANTS)
+    if not isinstance(model, MDM):
+        raise TypeError(f"measure: model must be an MDM, got {type(model).__name__}")
+    return {
+        "samples": sample_row(cfg, data, model),
+        "sampler": {"method": "ddim", "steps": cfg.sample_steps, "guidance": cfg.guidance},
+        "real_skating": data.real_skating,
+    }
+
+
+def with_steps(cfg: ExperimentConfig, name: str, steps: int) -> ExperimentConfig:
+    """``cfg`` with every run (``name`` too) trained for ``steps`` steps."""
+    return replace(cfg, steps=steps)
+
+
+def train_all(
+    cfg: ExperimentConfig, data: ChapterData, processes: int = 2, progress: bool | None = None
+) -> dict[str, Trained[dict[str, Any]]]:
+    """Train (or load) both runs on ``processes`` cores and :func:`measure` each as soon as it is trained.
+
+    Returns ``{name: Trained}`` in :data:`VARIANTS`' order, each model loaded here from the cache and its
+    measurement in ``measured``.
+    """
+    then = partial(measure, cfg, data)
+    return train_many(runs(cfg, data), then=then, processes=processes, progress=progress)
