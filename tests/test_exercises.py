@@ -81,6 +81,7 @@ def test_skeletons_raise_not_implemented_with_a_message_and_the_checker_says_not
         ("02", "my_foot_skating"),
         ("03", "my_reparameterize"),
         ("03", "my_gaussian_kl"),
+        ("03", "my_negative_elbo"),
         ("04", "my_subtree_reach"),
         ("04", "my_impact_weights"),
         ("05", "my_affine_forward"),
@@ -256,6 +257,46 @@ def test_reparameterize_checker_names_the_mistake(wrong, says) -> None:
 )
 def test_gaussian_kl_checker_names_the_mistake(wrong, says) -> None:
     result = exercises.check_gaussian_kl(wrong)
+    assert result.status == "wrong" and says in result.message, result
+
+
+def _elbo(z_of=lambda mu, logvar, eps: mu + torch.exp(0.5 * logvar) * eps, recon_scale=0.5, kl_of=None):
+    """A negative ELBO with one piece replaced: the draw, the reconstruction's factor or the KL."""
+
+    def kl_right(mu, logvar):
+        return 0.5 * (mu**2 + logvar.exp() - 1 - logvar).sum(-1)
+
+    def fn(x, mu, logvar, eps, decode, obs_var):
+        recon = recon_scale * ((x - decode(z_of(mu, logvar, eps))) ** 2).flatten(1).sum(-1) / obs_var
+        return recon, (kl_of or kl_right)(mu, logvar)
+
+    return fn
+
+
+@pytest.mark.parametrize(
+    "wrong, says",
+    [
+        (
+            _elbo(kl_of=lambda mu, logvar: -0.5 * (mu**2 + logvar.exp() - 1 - logvar).sum(-1)),
+            "sign is flipped",
+        ),
+        (_elbo(kl_of=lambda mu, logvar: (mu**2 + logvar.exp() - 1 - logvar).sum(-1)), "factor 1/2"),
+        (_elbo(kl_of=lambda mu, logvar: 0.5 * (mu**2 + logvar.exp() - 1 - logvar)), "sum it over the latent"),
+        (
+            _elbo(kl_of=lambda mu, logvar: 0.5 * (mu**2 + logvar.exp() ** 2 - 1 - 2 * logvar).sum(-1)),
+            "σ², not σ",
+        ),
+        (_elbo(kl_of=lambda mu, logvar: 0.5 * (mu**2 - 1).sum(-1)), "logvar is log σ²"),
+        (_elbo(recon_scale=1.0), "factor 1/2"),
+        (_elbo(z_of=lambda mu, logvar, eps: mu), "the decoder got mu"),
+        (_elbo(z_of=lambda mu, logvar, eps: mu + logvar.exp() * eps), "the variance, as σ"),
+        (_elbo(z_of=lambda mu, logvar, eps: mu + logvar * eps), "logvar as σ"),
+        (_elbo(z_of=lambda mu, logvar, eps: mu + torch.exp(0.5 * logvar.detach()) * eps), "no gradient"),
+        (lambda x, mu, logvar, eps, decode, obs_var: x.sum(), "tuple (recon, kl)"),
+    ],
+)
+def test_negative_elbo_checker_names_the_mistake(wrong, says) -> None:
+    result = exercises.check_negative_elbo(wrong)
     assert result.status == "wrong" and says in result.message, result
 
 

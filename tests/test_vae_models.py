@@ -9,7 +9,7 @@ import torch
 from torch.distributions import Normal, kl_divergence
 
 from motionlab.models.vae.evaluate import encode_all
-from motionlab.models.vae.losses import elbo_loss, elbo_terms
+from motionlab.models.vae.losses import elbo_loss, elbo_terms, negative_elbo
 from motionlab.models.vae.model import MLPVAE, RecurrentVAE, RecurrentVAEConfig, VAEConfig
 from motionlab.models.vae.sampling import interpolate_codes
 from motionlab.train import Constant, TensorBatches, TrainConfig, train
@@ -51,6 +51,23 @@ def test_elbo_terms_match_hand_computation():
     loss = elbo_loss(model, (x, label), 0, {"beta": 0.25})
     assert set(loss) == {"loss", "recon", "kl"}
     assert loss["loss"].item() == pytest.approx(loss["recon"].item() + 0.25 * loss["kl"].item(), rel=1e-6)
+
+
+def test_negative_elbo_is_the_model_free_elbo_terms_up_to_the_constant():
+    model = _pose_cvae(obs_logvar=math.log(2.0))
+    x, label = torch.randn(5, 6, dtype=torch.float32), torch.tensor([0, 1, 1, 0, 1])
+    terms = elbo_terms(model, x, label, torch.Generator().manual_seed(3))
+    mu, logvar = model.encode(x, label)
+    eps = torch.randn(mu.shape, generator=torch.Generator().manual_seed(3))  # the draw elbo_terms made
+    recon, kl = negative_elbo(x, mu, logvar, eps, lambda z: model.decode(z, label), 2.0)
+    constant = 0.5 * math.log(2 * math.pi * 2.0) * 6
+    assert recon.shape == kl.shape == (5,)
+    assert recon.mean().item() + constant == pytest.approx(terms["recon"].item(), rel=1e-5)
+    assert kl.mean().item() == pytest.approx(terms["kl"].item(), rel=1e-5)
+    with pytest.raises(ValueError, match="eps"):
+        negative_elbo(x, mu, logvar, eps[:, :2], lambda z: model.decode(z, label), 2.0)
+    with pytest.raises(ValueError, match="obs_var"):
+        negative_elbo(x, mu, logvar, eps, lambda z: model.decode(z, label), 0.0)
 
 
 def test_autoencoder_has_no_noise_and_no_kl():

@@ -27,7 +27,12 @@ from motionlab.exercises.mocap import check_bone_length_variation, check_mirror
 from motionlab.exercises.rotations import check_quat_mul, check_slerp
 from motionlab.exercises.sequences import check_contrastive_loss, check_dct_matrix, check_given_trajectories
 from motionlab.exercises.skating import check_foot_skating
-from motionlab.exercises.vae import check_covariance_prior, check_gaussian_kl, check_reparameterize
+from motionlab.exercises.vae import (
+    check_covariance_prior,
+    check_gaussian_kl,
+    check_negative_elbo,
+    check_reparameterize,
+)
 
 __all__ = [
     "CheckResult",
@@ -46,6 +51,7 @@ __all__ = [
     "check_impact_weights",
     "check_keep_mask",
     "check_mirror",
+    "check_negative_elbo",
     "check_quat_mul",
     "check_reparameterize",
     "check_sample_loop",

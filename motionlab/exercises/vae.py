@@ -1,5 +1,7 @@
-"""Chapter 03's exercises, the reparameterisation trick and the closed-form Gaussian KL, checked against
-:mod:`motionlab.models.gaussian`; and chapter 08's σ² prior on the code covariance (ODMO's eq. 1), checked
+"""Chapter 03's exercises: the negative ELBO of one batch, checked against
+:func:`motionlab.models.vae.losses.negative_elbo`, and (in its appendix) the reparameterisation trick and the
+closed-form Gaussian KL, checked against :mod:`motionlab.models.gaussian`; and chapter 08's σ² prior on the
+code covariance (ODMO's eq. 1), checked
 against :func:`motionlab.models.odmo.losses.prior_term`."""
 
 from __future__ import annotations
@@ -12,6 +14,7 @@ import torch
 from motionlab.exercises.checking import CheckResult, Diagnosis, as_result, checker, close
 from motionlab.models.gaussian import gaussian_kl
 from motionlab.models.odmo.losses import prior_term
+from motionlab.models.vae.losses import negative_elbo
 
 Reparameterize = Callable[[torch.Tensor, torch.Tensor, torch.Generator], torch.Tensor]
 GaussianKL = Callable[[torch.Tensor, torch.Tensor], torch.Tensor]
@@ -195,3 +198,132 @@ def _covariance_minimum_and_gradient(fn: CovariancePrior) -> None:
 def check_covariance_prior(fn: CovariancePrior) -> CheckResult:
     """Check ``fn(mu, logvar, prior_variance) -> (B,)``: ODMO's eq. 1 prior term ``-ln det Σ + Tr Σ / σ²`` for
     ``Σ = diag(exp(logvar))``, codes ``(B, D)``, no term on ``mu``."""
+
+
+NegativeElbo = Callable[
+    [torch.Tensor, torch.Tensor, torch.Tensor, torch.Tensor, Callable[[torch.Tensor], torch.Tensor], float],
+    tuple[torch.Tensor, torch.Tensor],
+]
+
+
+def _elbo_inputs(seed: int) -> tuple[torch.Tensor, ...]:
+    """A batch of 5 examples ``(5, 4, 2)``, codes of 3 dimensions and a fixed nonlinear decoder's weights."""
+    generator = torch.Generator().manual_seed(seed)
+    x = torch.randn(5, 4, 2, generator=generator, dtype=torch.float64)
+    mu = torch.randn(5, 3, generator=generator, dtype=torch.float64)
+    logvar = torch.tensor([-1.5, 0.3, 1.0], dtype=torch.float64).expand(5, 3).clone()
+    eps = torch.randn(5, 3, generator=generator, dtype=torch.float64)
+    weight = torch.randn(3, 8, generator=generator, dtype=torch.float64)
+    return x, mu, logvar, eps, weight
+
+
+def _elbo_terms(fn: NegativeElbo, seed: int, obs_var: float) -> tuple[torch.Tensor, ...]:
+    """The reader's two terms and the reference's, on the inputs of ``seed``."""
+    x, mu, logvar, eps, weight = _elbo_inputs(seed)
+
+    def decode(z: torch.Tensor) -> torch.Tensor:
+        return torch.tanh(z @ weight).reshape(-1, 4, 2)
+
+    result = fn(x, mu, logvar, eps, decode, obs_var)
+    if not isinstance(result, tuple) or len(result) != 2:
+        raise Diagnosis(f"return the two terms as a tuple (recon, kl), got {type(result).__name__}")
+    recon, kl = (as_result(term, "negative_elbo") for term in result)
+    want_recon, want_kl = negative_elbo(x, mu, logvar, eps, decode, obs_var)
+    return recon, kl, want_recon, want_kl, x, mu, logvar, eps, decode
+
+
+def _one_per_example(term: torch.Tensor, want: torch.Tensor, name: str) -> None:
+    if term.shape == want.shape:
+        return
+    if term.shape == ():
+        raise Diagnosis(f"{name} is one number: return one value per example, shape (B,), not the batch mean")
+    raise Diagnosis(
+        f"{name} should have one value per example, shape {tuple(want.shape)}, got {tuple(term.shape)}"
+    )
+
+
+def _elbo_kl(fn: NegativeElbo) -> None:
+    _, kl, _, want, _, mu, logvar, _, _ = _elbo_terms(fn, 6, 0.5)
+    if kl.shape == mu.shape and close(kl.sum(-1), want):
+        raise Diagnosis("kl is per dimension: sum it over the latent dimensions, one value per example")
+    _one_per_example(kl, want, "kl")
+    if close(kl, want):
+        return
+    variance = logvar.exp()
+    for wrong, text in (
+        (-want, "the KL's sign is flipped: a KL is never negative, and the loss adds it"),
+        (2 * want, "the KL lost its factor 1/2"),
+        (want + 0.5 * mu.shape[-1], "the KL lost its -1 (the KL of the prior with itself is 0)"),
+        (
+            0.5 * (mu**2 + variance**2 - 1 - 2 * logvar).sum(-1),
+            "exp(logvar) is already the variance σ², not σ",
+        ),
+        (0.5 * (mu**2 - 1).sum(-1), "logvar is log σ², not σ²: σ² = exp(logvar)"),
+        (
+            0.5 * (mu**2 + variance.sqrt() - 1 - 0.5 * logvar).sum(-1),
+            "the KL uses the variance σ² = exp(logvar), not the standard deviation",
+        ),
+        (0.5 * (mu**2 + variance - 1 + logvar).sum(-1), "the sign of log σ² in the KL is flipped"),
+    ):
+        if wrong.shape == kl.shape and close(kl, wrong):
+            raise Diagnosis(text)
+    raise Diagnosis("kl is wrong: it should be the closed-form KL of N(mu, exp(logvar)) from N(0, 1), summed")
+
+
+def _elbo_recon(fn: NegativeElbo) -> None:
+    recon, _, want, _, x, mu, logvar, eps, decode = _elbo_terms(fn, 7, 0.5)
+    _one_per_example(recon, want, "recon")
+    if close(recon, want):
+        return
+
+    def squared_error(z: torch.Tensor) -> torch.Tensor:
+        return ((x - decode(z)) ** 2).flatten(1).sum(-1)
+
+    obs_var, sigma = 0.5, torch.exp(0.5 * logvar)
+    constant = 0.5 * math.log(2 * math.pi * obs_var) * x[0].numel()
+    for wrong, text in (
+        (2 * want, "recon lost its factor 1/2: -log N(x; x̂, σ_x²) = |x - x̂|² / (2 σ_x²) + const"),
+        (want * obs_var, "recon is not divided by σ_x² (obs_var)"),
+        (want * obs_var**2, "recon is multiplied by σ_x² instead of divided by it"),
+        (want + constant, "drop the constant 0.5 log(2π σ_x²) per number: it has no gradient"),
+        (
+            want / x[0].numel(),
+            "recon is a mean over an example's numbers: sum them (the likelihood multiplies over all)",
+        ),
+        (0.5 * squared_error(mu) / obs_var, "the decoder got mu, not a draw: z = mu + σ * eps"),
+        (0.5 * squared_error(mu + logvar.exp() * eps) / obs_var, "z used exp(logvar), the variance, as σ"),
+        (0.5 * squared_error(mu + logvar * eps) / obs_var, "z used logvar as σ: σ = exp(logvar / 2)"),
+        (0.5 * squared_error(eps) / obs_var, "the decoder got eps alone: z = mu + σ * eps"),
+        (
+            0.5 * squared_error(mu + sigma * eps).sqrt() / obs_var,
+            "recon needs the squared error, not the norm",
+        ),
+    ):
+        if close(recon, wrong):
+            raise Diagnosis(text)
+    raise Diagnosis(
+        "recon is wrong: the squared error of decode(z) over 2 σ_x², summed over an example's numbers"
+    )
+
+
+def _elbo_gradients(fn: NegativeElbo) -> None:
+    x, mu, logvar, eps, weight = _elbo_inputs(8)
+    mu.requires_grad_(True)
+    logvar.requires_grad_(True)
+    recon, kl = fn(x, mu, logvar, eps, lambda z: torch.tanh(z @ weight).reshape(-1, 4, 2), 0.5)
+    (through_recon,) = torch.autograd.grad(recon.sum(), logvar, allow_unused=True)
+    if through_recon is None or not bool(through_recon.abs().sum() > 0):
+        raise Diagnosis(
+            "no gradient reaches logvar through recon: compute z = mu + σ * eps with torch operations"
+        )
+    if not kl.requires_grad:
+        raise Diagnosis("no gradient reaches the KL: compute it with torch operations only")
+
+
+@checker(
+    [_elbo_kl, _elbo_recon, _elbo_gradients],
+    "both terms match per example, with gradients through the draw z = mu + σ * eps",
+)
+def check_negative_elbo(fn: NegativeElbo) -> CheckResult:
+    """Check ``fn(x, mu, logvar, eps, decode, obs_var) -> (recon, kl)``, the negative ELBO's two terms per
+    example ``(B,)`` (:func:`motionlab.models.vae.losses.negative_elbo`)."""
