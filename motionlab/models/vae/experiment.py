@@ -45,8 +45,9 @@ class ExperimentConfig(config.ProfileConfig):
         pose_every: take every this many frames of a clip as a pose.
         pose_latent, pose_hidden, pose_steps: the pose models' latent size, width and training steps.
         pose_obs_var: sigma_x^2 of the pose VAEs' likelihood (standardised units).
-        small_prior_var: sigma_p^2 of the section-5 pose VAE, the variance of its full N(0, sigma_p^2 I) prior
-            (ODMO's number, 0.05; ODMO's own term constrains only the posterior variances, towards it).
+        small_prior_var: sigma_p^2 of the small-prior pose VAE (appendix 08a), the variance of its full
+            N(0, sigma_p^2 I) prior (ODMO's number, 0.05; ODMO's own term constrains only the posterior
+            variances, towards it).
         clip_length, clip_stride: window length and hop in frames (30 fps).
         clip_latent, clip_hidden, clip_steps: the clip CVAEs' latent size, width and training steps.
         batch_size, lr, grad_clip, seed: for every run.
@@ -169,8 +170,8 @@ def vae_run(
 def runs(cfg: ExperimentConfig, n_actions: int) -> dict[str, Run]:
     """The chapter's runs by name, the clip CVAEs (the longest) first.
 
-    ``pose_ae`` and ``pose_vae`` (section 1), ``cvae`` and ``cvae_no_anneal`` (sections 3 and 4: the KL
-    weight ramped, or 1 from the first step) and ``pose_vae_small_prior`` (section 5: sigma_p^2 =
+    ``cvae`` and ``cvae_no_anneal`` (chapter 03, sections 3 and 4: the KL weight ramped, or 1 from the first
+    step), ``pose_ae`` and ``pose_vae`` (appendix 03a) and ``pose_vae_small_prior`` (appendix 08a: sigma_p^2 =
     ``cfg.small_prior_var``). ``n_actions`` is the number of actions the CVAEs are conditioned on.
     """
     clip_cvae = cfg.clip_model(n_actions)
@@ -222,7 +223,7 @@ def load_data(cfg: ExperimentConfig) -> int:
 
 def measure(cfg: ExperimentConfig, n_actions: int, name: str, model: nn.Module) -> dict[str, Any]:
     """The training command's measurement of run ``name``: for the clip CVAEs the chapter's sample metrics
-    (section 2), for the pose models the held-out reconstruction and KL terms of the negative ELBO."""
+    (section 3), for the pose models the held-out reconstruction and KL terms of the negative ELBO."""
     if name in CLIP_RUNS:
         evaluator = benchmark_evaluator("gru", progress=False)
         codec, train, _ = cfg.clips.load()
