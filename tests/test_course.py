@@ -1,11 +1,13 @@
-"""The course build executes chapters, records their time, and writes the report."""
+"""The course build executes chapters and their appendices, records their time, and writes the report."""
 
 import json
 
 import nbformat
 import pytest
 
+from motionlab import config
 from motionlab.course import run as course
+from motionlab.course.chapters import is_appendix, notebook_number
 
 
 def _notebook(tmp_path, name, source):
@@ -53,3 +55,62 @@ def test_main_exits_non_zero_when_a_chapter_fails(tmp_path, build):
 def test_missing_chapters_are_reported(tmp_path):
     with pytest.raises(FileNotFoundError, match="no chapters"):
         course.chapter_notebooks(tmp_path)
+
+
+def test_an_appendix_is_built_like_a_chapter_right_after_it(tmp_path, build):
+    _notebook(tmp_path, "02_later", "raise RuntimeError('--only 01 must not run chapter 02')")
+    _notebook(
+        tmp_path,
+        "01a_ok_appendix",
+        "from motionlab.course.results import Chapter\n"
+        "c = Chapter('01a_ok_appendix')\nc.metric('x.audit', 4.0)\n"
+        "c.claim('01a.audited', 4.0, 5.0, '<', 'the audit passes')\nprint('appendix ran')",
+    )
+    _notebook(tmp_path, "01_ok", "print('chapter ran')")
+    runs = course.build(tmp_path / "notebooks", only=["01"])
+    assert [(r.name, r.error) for r in runs] == [("01_ok", None), ("01a_ok_appendix", None)]
+    out = build / "course-quick"
+    entry = json.loads((out / "results.json").read_text())["notebooks"]["01a_ok_appendix"]
+    assert entry["metrics"] == {"x.audit": 4.0} and entry["claims"]["01a.audited"]["holds"]
+    assert entry["seconds"] > 0
+    assert "appendix ran" in (out / "01a_ok_appendix.html").read_text()
+    index = (out / "index.html").read_text()
+    chapter, appendix = index.index("id='01_ok'"), index.index("id='01a_ok_appendix'")
+    assert chapter < appendix and "class='card appendix'" in index[appendix - 40 : appendix]
+    assert "appendix to chapter 01" in index and "01a.audited" in index and "02_later" not in index
+
+
+def test_only_selects_a_chapter_with_its_appendices_or_an_appendix_alone(tmp_path):
+    for name in ("04_cell", "04a_cell_appendix", "04b_cell_primer", "05_flow", "10_real"):
+        _notebook(tmp_path, name, "pass")
+    notebooks = tmp_path / "notebooks"
+    names = [p.stem for p in course.select_chapters(notebooks)]
+    assert names == ["04_cell", "04a_cell_appendix", "04b_cell_primer", "05_flow", "10_real"]
+    assert [p.stem for p in course.select_chapters(notebooks, ["04"])] == names[:3]
+    assert [p.stem for p in course.select_chapters(notebooks, ["04a", "05"])] == names[1:2] + names[3:4]
+    with pytest.raises(ValueError, match="no chapter 05a"):
+        course.select_chapters(notebooks, ["05a"])
+    with pytest.raises(ValueError, match="appendix numbers such as 04a"):
+        course.select_chapters(notebooks, ["4a"])
+
+
+def test_notebook_numbers_and_budgets(monkeypatch):
+    assert notebook_number("04_motion_cell") == "04" and notebook_number("04a_motion_cell_appendix") == "04a"
+    assert is_appendix("04a_motion_cell_appendix") and not is_appendix("04_motion_cell")
+    for bad in ("motion_cell", "4a_x", "04A_x", "04ab_x", "04a"):
+        with pytest.raises(ValueError, match="NN_ or NNa_"):
+            notebook_number(bad)
+    monkeypatch.setenv("MOTIONLAB_PROFILE", "full")
+    assert course.budget_seconds("04_motion_cell") == course.BUDGETS["04"][0]
+    assert course.budget_seconds("04a_motion_cell_appendix") == course.APPENDIX_BUDGET[0]
+    assert course.budget_seconds("99_new") is None
+    monkeypatch.setitem(course.BUDGETS, "04a", (300.0, 50.0))
+    assert course.budget_seconds("04a_motion_cell_appendix") == 300.0
+    monkeypatch.setenv("MOTIONLAB_PROFILE", "quick")
+    assert config.is_quick() and course.budget_seconds("04a_motion_cell_appendix") == 50.0
+
+
+def test_appendices_without_a_chapter_are_no_course(tmp_path):
+    _notebook(tmp_path, "04a_orphan_appendix", "pass")
+    with pytest.raises(FileNotFoundError, match="no chapters"):
+        course.chapter_notebooks(tmp_path / "notebooks")

@@ -15,6 +15,7 @@ import torch
 
 import motionlab.exercises as exercises
 from motionlab import geometry as geo
+from motionlab.course.chapters import numbered_notebooks
 from motionlab.exercises.checking import CheckResult
 from motionlab.paths import REPO_ROOT
 
@@ -30,9 +31,10 @@ def solutions(chapter: str) -> ModuleType:
 
 
 def your_turn_cells() -> list[tuple[str, str]]:
-    """(chapter file name, cell source) of every cell tagged ``your-turn``."""
+    """(chapter file name, cell source) of every cell tagged ``your-turn``, in chapters and appendices (an
+    appendix's solutions live in its chapter's solutions file)."""
     cells = []
-    for path in sorted(NOTEBOOKS.glob("[0-9][0-9]_*.ipynb")):
+    for path in numbered_notebooks(NOTEBOOKS):
         for cell in json.loads(path.read_text())["cells"]:
             if "your-turn" in cell.get("metadata", {}).get("tags", []):
                 cells.append((path.name, "".join(cell["source"])))
@@ -645,9 +647,9 @@ def test_moglow_history_dropout_can_be_overridden_in_a_subclass() -> None:
 
 
 def exercise_sections() -> list[tuple[str, str]]:
-    """(chapter file name, its '## Exercises' text) of every chapter."""
+    """(chapter file name, its '## Exercises' text) of every chapter and appendix."""
     sections = []
-    for path in sorted(NOTEBOOKS.glob("[0-9][0-9]_*.ipynb")):
+    for path in numbered_notebooks(NOTEBOOKS):
         text = "\n".join("".join(c["source"]) for c in json.loads(path.read_text())["cells"])
         if "## Exercises" in text:
             sections.append((path.name, text.split("## Exercises", 1)[1].split("\n## ", 1)[0]))

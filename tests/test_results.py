@@ -86,3 +86,11 @@ def test_corrupt_results_file_is_reported(build):
     path.write_text("{not json")
     with pytest.raises(ValueError, match="not valid JSON"):
         load_results()
+
+
+def test_an_appendix_records_under_its_own_name(build):
+    Chapter("04_motion_cell").metric("mcell.fid", 0.42)
+    Chapter("04a_motion_cell_appendix").metric("mcell.audit", 1.5)
+    notebooks = load_results()["notebooks"]
+    assert notebooks["04a_motion_cell_appendix"]["metrics"] == {"mcell.audit": 1.5}
+    assert notebooks["04_motion_cell"]["metrics"] == {"mcell.fid": 0.42}

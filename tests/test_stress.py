@@ -49,7 +49,7 @@ def test_a_session_counts_executions_and_failures_and_writes_its_summary(tmp_pat
 
 @pytest.mark.parametrize(
     ("argv", "message"),
-    [(["--runs", "0"], "--runs"), (["--only", "99"], "matches --only"), (["--patterns", "x"], "--patterns")],
+    [(["--runs", "0"], "--runs"), (["--only", "99"], "no chapter 99"), (["--patterns", "x"], "--patterns")],
 )
 def test_bad_arguments_get_one_line(argv: list[str], message: str, capsys) -> None:
     with pytest.raises(SystemExit) as exit_info:

@@ -8,7 +8,8 @@ the report directory. From top to bottom:
 3. the headline comparison of chapter 09 (the four generators on one benchmark): its table, read from the
    chapter's recorded metrics ``common.<method>.<column>``, and its key figure;
 4. one card per chapter: its opening paragraph, its key figure, its time against its budget, its claims
-   (holds / known gap / fails, in colour) and a link to the executed chapter;
+   (holds / known gap / fails, in colour) and a link to the executed chapter; a chapter's appendix
+   (``NNa_*``, :mod:`motionlab.course.chapters`) has a card of its own, indented under its chapter's;
 5. every recorded metric, in a collapsed table.
 
 A chapter's *key figure* is the first PNG output of a cell tagged ``key-figure`` in the executed notebook, or
@@ -27,6 +28,8 @@ from pathlib import Path
 from typing import Any
 
 import nbformat
+
+from motionlab.course.chapters import is_appendix, notebook_number
 
 #: The chapter whose metrics give the headline comparison, and the prefix of those metrics.
 COMPARISON_CHAPTER = "09_evaluating_and_comparing"
@@ -75,6 +78,7 @@ th { background: #f4f4f4; }
 .card { border: 1px solid #ddd; border-radius: 6px; padding: 0.8em 1em; margin: 1em 0; display: flow-root; }
 .card img { float: right; max-width: 42%; margin: 0 0 0.5em 1em; border: 1px solid #eee; }
 .card h3 { margin-top: 0.1em; } .summary { max-width: 60em; }
+.card.appendix { margin-left: 2.5em; background: #fafafa; }
 figure { margin: 0.5em 0; } figure img { max-width: 100%; } .muted { color: #666; font-size: 0.9em; }
 ul.claims { padding-left: 1.2em; } ul.claims li { margin: 0.25em 0; }
 """
@@ -208,7 +212,7 @@ def _claims_at_a_glance(results: Mapping[str, Any]) -> str:
             if css != "ok":
                 notable.append(
                     f"<li><span class='pill {css}'>{'known gap' if css == 'gap' else 'fails'}</span> "
-                    f"<a href='{html.escape(chapter)}.html'>{html.escape(chapter[:2])}</a> "
+                    f"<a href='{html.escape(chapter)}.html'>{html.escape(chapter.split('_', 1)[0])}</a> "
                     f"<code>{html.escape(claim_id)}</code>: {html.escape(str(claim.get('text', '')))} — "
                     f"<span class='{css}'>{html.escape(verdict)}</span></li>"
                 )
@@ -288,9 +292,12 @@ def write_front_page(
         status, css = _status(chapter, budget)
         seconds = "–" if chapter.seconds is None else f"{chapter.seconds:.1f} s"
         claims = results.get("notebooks", {}).get(chapter.name, {}).get("claims", {})
+        appendix = is_appendix(chapter.name)
+        label = f"<span class='muted'>appendix to chapter {notebook_number(chapter.name)[:2]}:</span> "
+        link = f"<a href='{html.escape(chapter.name)}.html'>{html.escape(title or chapter.name)}</a>"
         cards.append(
-            f"<div class='card' id='{html.escape(chapter.name)}'>{image}"
-            f"<h3><a href='{html.escape(chapter.name)}.html'>{html.escape(title or chapter.name)}</a></h3>"
+            f"<div class='card{' appendix' if appendix else ''}' id='{html.escape(chapter.name)}'>{image}"
+            f"<h3>{label if appendix else ''}{link}</h3>"
             f"<p class='summary'>{_inline_markdown(intro)}</p>"
             f"<p><b>time</b> {seconds}"
             + ("" if budget is None else f" of a {budget:.0f} s budget")
@@ -318,7 +325,7 @@ def write_front_page(
 <p class="muted">Profile <b>{html.escape(str(results.get("profile", "")))}</b>, Python
 {html.escape(str(results.get("python", "")))}, torch {html.escape(str(results.get("torch", "")))}.
 Chapter time <span class="{"bad" if total > COURSE_BUDGET_SECONDS else "ok"}">{total / 60:.1f} min</span>
-(the whole course's budget: {COURSE_BUDGET_SECONDS / 60:.0f} min).
+(appendices included; the whole course's budget: {COURSE_BUDGET_SECONDS / 60:.0f} min).
 Raw numbers: <a href="results.json">results.json</a>.</p>
 <h2>Claims at a glance</h2>
 <p>Statements from the papers (and a few of ours) checked on our data. A known gap is a claim that does not

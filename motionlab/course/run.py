@@ -1,6 +1,8 @@
 """``make course``: execute every chapter and build the report in ``build/course/``.
 
-For each ``notebooks/NN_name.ipynb`` in order: execute it headless in a fresh kernel (cwd ``notebooks/``,
+For each ``notebooks/NN_name.ipynb`` in order, each followed by its appendix ``NNa_name.ipynb`` if it has one
+(the chapter's audits, ablations, extra measurements and primers; built exactly like a chapter, with its own
+budget, page, results and card): execute it headless in a fresh kernel (cwd ``notebooks/``,
 widget state stored in the notebook), record its wall time in ``results.json``, and write the executed
 notebook and an HTML rendering. Then write the front page ``index.html`` (:mod:`motionlab.course.report`):
 what the course is, the claims at a glance, chapter 09's comparison of the four generators, one card per
@@ -16,7 +18,8 @@ killed within half a minute and the chapter is executed once more in a fresh ker
 cached, so a second execution costs little. The retry is recorded in ``results.json`` (the chapter's
 ``"retries"``) and shown in the report; a second hang fails the chapter with the cell and the diagnosis.
 
-Usage: ``python -m motionlab.course [--only 01 03] [--notebooks DIR]``.
+Usage: ``python -m motionlab.course [--only 01 03] [--notebooks DIR]``; ``--only 04`` runs chapter 04 and its
+appendix, ``--only 04a`` the appendix alone.
 """
 
 from __future__ import annotations
@@ -32,11 +35,13 @@ from nbconvert import HTMLExporter
 
 from motionlab import config
 from motionlab.course.assets import install_assets, localize_page
+from motionlab.course.chapters import NUMBER, is_appendix, notebook_number, numbered_notebooks
 from motionlab.course.kernel import CellLimits, execute_notebook, read_notebook
 from motionlab.course.report import ChapterStatus, write_front_page
 from motionlab.course.results import load_results, results_path, update_notebook
 
-#: Wall-clock budgets per chapter in seconds (design notes), as (full, quick).
+#: Wall-clock budgets per notebook in seconds (design notes), as (full, quick), keyed by the notebook's number
+#: (:func:`notebook_number`: ``"04"`` for a chapter, ``"04a"`` for its appendix).
 BUDGETS: dict[str, tuple[float, float]] = {
     "01": (30, 20),
     "02": (60, 30),
@@ -49,6 +54,9 @@ BUDGETS: dict[str, tuple[float, float]] = {
     "09": (180, 40),
     "10": (240, 40),
 }
+
+#: Budget of an appendix not listed in :data:`BUDGETS`, as (full, quick).
+APPENDIX_BUDGET: tuple[float, float] = (120, 40)
 
 #: A cell may take at most this many times its chapter's budget. Some chapters spend most of their time in
 #: one training cell (chapter 07: 232 of 262 s on a machine twice as slow as the reference one), so the limit
@@ -81,16 +89,17 @@ class ChapterRun:
 
 
 def chapter_notebooks(directory: Path) -> list[Path]:
-    """The numbered chapters ``NN_*.ipynb`` in ``directory``, in course order."""
-    found = sorted(p for p in directory.glob("[0-9][0-9]_*.ipynb") if p.is_file())
-    if not found:
+    """:func:`numbered_notebooks` of ``directory``; ``FileNotFoundError`` when it holds no chapter."""
+    found = numbered_notebooks(directory)
+    if all(is_appendix(p.stem) for p in found):
         raise FileNotFoundError(f"no chapters (NN_name.ipynb) found in {directory}")
     return found
 
 
 def budget_seconds(name: str) -> float | None:
-    """The active profile's budget for chapter ``name`` (None for a chapter without one)."""
-    pair = BUDGETS.get(name[:2])
+    """The active profile's budget for notebook ``name``: its entry in :data:`BUDGETS`, else
+    :data:`APPENDIX_BUDGET` for an appendix, else None (a chapter without a budget)."""
+    pair = BUDGETS.get(notebook_number(name), APPENDIX_BUDGET if is_appendix(name) else None)
     if pair is None:
         return None
     return pair[1] if config.is_quick() else pair[0]
@@ -153,42 +162,45 @@ def execute_chapter(path: Path, out_dir: Path, assets: dict[str, str] | None = N
 def write_index(out_dir: Path, runs: list[ChapterRun]) -> Path:
     """Write the report's front page ``index.html`` (:mod:`motionlab.course.report`) from ``results.json``.
 
-    It shows the chapters that ran now (``runs``) and, from earlier builds of the same profile, every other
-    chapter whose executed notebook is in ``out_dir`` (its time from ``results.json``).
+    It shows the chapters and appendices that ran now (``runs``) and, from earlier builds of the same
+    profile, every other one whose executed notebook is in ``out_dir`` (its time from ``results.json``).
     """
     results = load_results()
     ran = {run.name: run for run in runs}
-    earlier = {path.stem for path in out_dir.glob("[0-9][0-9]_*.ipynb")} - set(ran)
+    earlier = {path.stem for path in numbered_notebooks(out_dir)} - set(ran)
     chapters = [
         ChapterStatus(run.name, run.seconds, run.error, run.retries)
         if (run := ran.get(name)) is not None
         else ChapterStatus(name, results.get("notebooks", {}).get(name, {}).get("seconds"), current=False)
-        for name in sorted(set(ran) | earlier)
+        for name in sorted(set(ran) | earlier, key=notebook_number)
     ]
     budgets = {chapter.name: budget_seconds(chapter.name) for chapter in chapters}
     return write_front_page(out_dir, results, chapters, budgets)
 
 
 def select_chapters(notebook_dir: Path, only: list[str] | None = None) -> list[Path]:
-    """The chapters of ``notebook_dir`` in course order: all, or those whose two-digit number is in ``only``.
+    """The chapters and appendices of ``notebook_dir`` in course order: all, or those ``only`` names. A
+    chapter's number (``04``) selects the chapter and its appendices, an appendix's (``04a``) that appendix.
 
-    Raises ``ValueError`` for a number that is not two digits or matches no chapter, ``FileNotFoundError``
-    when the directory holds no chapter."""
+    Raises ``ValueError`` for a number that is not ``NN`` or ``NNa`` or matches no notebook,
+    ``FileNotFoundError`` when the directory holds no chapter."""
     if not notebook_dir.is_dir():
         raise FileNotFoundError(f"--notebooks {notebook_dir}: no such directory")
     chapters = chapter_notebooks(notebook_dir)
     if not only:
         return chapters
-    numbers = {path.stem[:2] for path in chapters}
+    numbers = [notebook_number(path.stem) for path in chapters]
     for number in only:
-        if len(number) != 2 or not number.isdigit():
-            raise ValueError(f"--only takes two-digit chapter numbers such as 01 or 07, got {number!r}")
+        if not NUMBER.fullmatch(number):
+            raise ValueError(
+                "--only takes chapter numbers such as 01 or 07, or appendix numbers such as 04a, "
+                f"got {number!r}"
+            )
         if number not in numbers:
             raise ValueError(
-                f"--only {number}: no chapter {number} in {notebook_dir} (there are "
-                f"{', '.join(sorted(numbers))})"
+                f"--only {number}: no chapter {number} in {notebook_dir} (there are {', '.join(numbers)})"
             )
-    return [path for path in chapters if path.stem[:2] in only]
+    return [path for path, number in zip(chapters, numbers, strict=True) if {number, number[:2]} & set(only)]
 
 
 def build(notebook_dir: Path, only: list[str] | None = None) -> list[ChapterRun]:
@@ -225,9 +237,14 @@ def main(argv: list[str] | None = None) -> int:
         "--notebooks",
         type=Path,
         default=config.REPO_ROOT / "notebooks",
-        help="directory of the chapters NN_name.ipynb (default: the course's)",
+        help="directory of the chapters NN_name.ipynb and appendices NNa_name.ipynb (default: the course's)",
     )
-    parser.add_argument("--only", nargs="+", metavar="NN", help="chapter numbers to run, e.g. 01 03")
+    parser.add_argument(
+        "--only",
+        nargs="+",
+        metavar="NN",
+        help="chapter numbers to run, e.g. 01 03 (each with its appendix), or appendix numbers, e.g. 04a",
+    )
     args = parser.parse_args(argv)
     try:
         config.profile()

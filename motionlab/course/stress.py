@@ -3,7 +3,7 @@
 A hang that strikes one cell in a few hundred is invisible in one build and costs a whole build when it
 strikes. This harness makes it measurable::
 
-    python -m motionlab.course.stress --runs 30              # the course's chapters, quick profile, 30 times
+    python -m motionlab.course.stress --runs 30              # every chapter and appendix, 30 times
     python -m motionlab.course.stress --runs 200 --patterns  # a notebook of the chapters' cell patterns
 
 Every execution goes through :func:`motionlab.course.kernel.execute_notebook` with the limits the course build
@@ -41,7 +41,7 @@ from nbformat import NotebookNode
 from motionlab import config
 from motionlab.arguments import positive_int
 from motionlab.course.kernel import CellLimits, execute_notebook, read_notebook
-from motionlab.course.run import cell_limits, chapter_notebooks
+from motionlab.course.run import cell_limits, notebook_number, select_chapters
 
 #: Packages whose versions decide how a kernel talks to its client (recorded in every summary).
 KERNEL_STACK = ("ipykernel", "jupyter_client", "pyzmq", "tornado", "nbclient", "ipywidgets", "comm")
@@ -205,7 +205,12 @@ def main(argv: list[str] | None = None) -> int:
         help="execute a generated notebook of BLOCKS repetitions of the chapters' cell patterns "
         "instead of the chapters",
     )
-    parser.add_argument("--only", nargs="+", metavar="NN", help="chapter numbers to execute, e.g. 02 07")
+    parser.add_argument(
+        "--only",
+        nargs="+",
+        metavar="NN",
+        help="chapter numbers to execute (each with its appendix), e.g. 02 07",
+    )
     parser.add_argument("--notebooks", type=Path, default=config.REPO_ROOT / "notebooks")
     parser.add_argument(
         "--stock-client",
@@ -223,15 +228,11 @@ def main(argv: list[str] | None = None) -> int:
         what = f"pattern notebook, {args.patterns} blocks ({len(notebook.cells)} cells)"
     else:
         try:
-            paths = chapter_notebooks(args.notebooks)
-        except FileNotFoundError as exc:
+            paths = select_chapters(args.notebooks, args.only)
+        except (OSError, ValueError) as exc:
             parser.error(str(exc))
-        if args.only:
-            paths = [p for p in paths if p.stem[:2] in args.only]
-            if not paths:
-                parser.error(f"no chapter in {args.notebooks} matches --only {' '.join(args.only)}")
         targets = [(p.stem, read_notebook(p), p.parent, cell_limits(p.stem)) for p in paths]
-        what = f"course chapters {', '.join(p.stem[:2] for p in paths)}"
+        what = f"course chapters {', '.join(notebook_number(p.stem) for p in paths)}"
     client = "nbclient's own client" if args.stock_client else "WatchedClient"
     print(
         f"[stress] {what}, {args.runs} runs, profile {config.profile()}, {client}; summary: {out}", flush=True
