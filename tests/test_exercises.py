@@ -290,7 +290,7 @@ def _coupling(
     "wrong, says",
     [
         (_coupling(order="scale-first"), "shift first"),
-        (_coupling(swap=True), "shift t first"),
+        (_coupling(swap=True), "shift u first"),
         (_coupling(offset=0.0), "Glow's offset"),
         (_coupling(squash=torch.exp), "not exp"),
         (_coupling(reduce=False), "one value per point"),
@@ -327,7 +327,7 @@ def _inverse(order="scale-first", sign=-1.0, mask_output=True):
 @pytest.mark.parametrize(
     "wrong, says",
     [
-        (_inverse(sign=1.0), "subtracting t"),
+        (_inverse(sign=1.0), "subtracting u"),
         (_inverse(order="shift-first"), "reverse order"),
         (_inverse(mask_output=False), "passes through the inverse unchanged"),
         (lambda y, mask, net: y, "is not x"),

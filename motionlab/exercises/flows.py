@@ -3,7 +3,7 @@ checked against :mod:`motionlab.models.flows.coupling`.
 
 The reader's layer takes points ``x (N, D)``, a mask ``(D,)`` with 1 on the conditioning half (passed
 unchanged) and 0 on the transformed half, and a network ``net`` mapping ``(N, D)`` to ``(N, 2D)``: the shift
-``t`` and then the raw scale ``r`` of every coordinate (only the transformed ones are used).
+``u`` (MoGlow's ``t``) and then the raw scale ``r`` of every coordinate (only the transformed ones are used).
 """
 
 from __future__ import annotations
@@ -66,33 +66,33 @@ def _forward_values(fn: CouplingForward) -> None:
         wrong_shift, wrong_raw = net(x).chunk(2, dim=-1)
         for scale_of, text in (
             (
-                lambda t, r: (x + wrong_shift) * torch.sigmoid(wrong_raw + SCALE_OFFSET),
+                lambda u, r: (x + wrong_shift) * torch.sigmoid(wrong_raw + SCALE_OFFSET),
                 "the network may read only the conditioning half, net(x * mask): if it reads the coordinates "
                 "it transforms, the layer cannot be inverted and its Jacobian is not triangular",
             ),
-            (lambda t, r: x * torch.sigmoid(r + SCALE_OFFSET) + t, "shift first, then scale: (x + t) * s"),
+            (lambda u, r: x * torch.sigmoid(r + SCALE_OFFSET) + u, "shift first, then scale: (x + u) * s"),
             (
-                lambda t, r: (x + r) * torch.sigmoid(t + SCALE_OFFSET),
-                "the network's output holds the shift t first, then the raw scale r",
+                lambda u, r: (x + r) * torch.sigmoid(u + SCALE_OFFSET),
+                "the network's output holds the shift u first, then the raw scale r",
             ),
             (
-                lambda t, r: (x + t) * torch.sigmoid(r),
+                lambda u, r: (x + u) * torch.sigmoid(r),
                 f"the scale is sigmoid(r + {SCALE_OFFSET:g}) (Glow's offset)",
             ),
-            (lambda t, r: (x + t) * torch.exp(r), "the scale is a sigmoid, sigmoid(r + 2), not exp(r)"),
+            (lambda u, r: (x + u) * torch.exp(r), "the scale is a sigmoid, sigmoid(r + 2), not exp(r)"),
             (
-                lambda t, r: (x + t) * torch.exp(r + SCALE_OFFSET),
+                lambda u, r: (x + u) * torch.exp(r + SCALE_OFFSET),
                 "the scale is a sigmoid, sigmoid(r + 2), not exp",
             ),
             (
-                lambda t, r: (x + t) * (r + SCALE_OFFSET),
+                lambda u, r: (x + u) * (r + SCALE_OFFSET),
                 "multiply by the scale s = sigmoid(r + 2), not by r + 2",
             ),
         ):
             wrong = scale_of(shift, raw) * (1 - _MASK) + x * _MASK
             if close(y, wrong):
                 raise Diagnosis(text)
-        raise Diagnosis("the transformed half is wrong: y = (x + t) * sigmoid(r + 2) where mask = 0")
+        raise Diagnosis("the transformed half is wrong: y = (x + u) * sigmoid(r + 2) where mask = 0")
     if logdet.shape == x.shape:
         raise Diagnosis(
             f"the log-determinant should have one value per point, shape ({x.shape[0]},), got "
@@ -145,7 +145,7 @@ def _inverse_undoes_forward(fn: CouplingInverse) -> None:
     shift, raw = net(y * _MASK).chunk(2, dim=-1)
     scale = torch.sigmoid(raw + SCALE_OFFSET)
     for wrong, text in (
-        (y / scale + shift, "undo the shift by subtracting t"),
+        (y / scale + shift, "undo the shift by subtracting u"),
         ((y - shift) / scale, "undo the steps in reverse order: first the scale, then the shift"),
     ):
         if close(got, wrong * (1 - _MASK) + y * _MASK):
