@@ -86,8 +86,8 @@ def test_skeletons_raise_not_implemented_with_a_message_and_the_checker_says_not
         ("03", "my_negative_elbo"),
         ("04", "my_subtree_reach"),
         ("04", "my_impact_weights"),
-        ("05", "my_affine_forward"),
-        ("05", "my_affine_inverse"),
+        ("05", "my_coupling_forward"),
+        ("05", "my_coupling_inverse"),
         ("06", "my_sample_loop"),
         ("06", "my_keep_mask"),
         ("07", "my_dct_matrix"),
@@ -302,15 +302,29 @@ def test_negative_elbo_checker_names_the_mistake(wrong, says) -> None:
     assert result.status == "wrong" and says in result.message, result
 
 
-def _coupling(order="shift-first", offset=2.0, squash=torch.sigmoid, swap=False, reduce=True, stable=True):
-    def forward(x_b, params):
-        shift, raw = params.chunk(2, dim=1)
+def _coupling(
+    order="shift-first",
+    offset=2.0,
+    squash=torch.sigmoid,
+    swap=False,
+    reduce=True,
+    stable=True,
+    mask_output=True,
+    mask_input=True,
+    log_of="scale",
+):
+    def forward(x, mask, net):
+        shift, raw = net(x * mask if mask_input else x).chunk(2, dim=-1)
         if swap:
             shift, raw = raw, shift
         scale = squash(raw + offset)
-        y_b = (x_b + shift) * scale if order == "shift-first" else x_b * scale + shift
+        moved = (x + shift) * scale if order == "shift-first" else x * scale + shift
+        y = mask * x + (1 - mask) * moved if mask_output else moved
         log_scale = torch.nn.functional.logsigmoid(raw + offset) if stable else torch.log(scale)
-        return y_b, log_scale.sum(dim=(1, 2)) if reduce else log_scale
+        if log_of == "nothing":
+            log_scale = scale
+        terms = (1 - mask) * log_scale if mask_output else log_scale
+        return y, terms.sum(dim=-1) if reduce else terms
 
     return forward
 
@@ -319,36 +333,51 @@ def _coupling(order="shift-first", offset=2.0, squash=torch.sigmoid, swap=False,
     "wrong, says",
     [
         (_coupling(order="scale-first"), "shift first"),
-        (_coupling(swap=True), "shift t first"),
+        (_coupling(swap=True), "shift u first"),
         (_coupling(offset=0.0), "Glow's offset"),
         (_coupling(squash=torch.exp), "not exp"),
-        (_coupling(reduce=False), "one value per sequence"),
+        (_coupling(reduce=False), "one value per point"),
         (_coupling(stable=False), "logsigmoid"),
-        (lambda x_b, params: (_coupling()(x_b, params)[0], -_coupling()(x_b, params)[1]), "wrong sign"),
-        (lambda x_b, params: _coupling()(x_b, params)[0], "pair"),
+        (_coupling(mask_output=False), "conditioning half (mask = 1) must leave the layer unchanged"),
+        (_coupling(mask_input=False), "read only the conditioning half"),
+        (_coupling(log_of="nothing"), "not the scales"),
+        (lambda x, mask, net: (_coupling()(x, mask, net)[0], -_coupling()(x, mask, net)[1]), "wrong sign"),
+        (
+            lambda x, mask, net: (
+                _coupling()(x, mask, net)[0],
+                torch.nn.functional.logsigmoid(net(x * mask).chunk(2, dim=-1)[1] + 2).sum(dim=-1),
+            ),
+            "counts the conditioning half",
+        ),
+        (lambda x, mask, net: _coupling()(x, mask, net)[0], "pair"),
     ],
 )
-def test_affine_forward_checker_names_the_mistake(wrong, says) -> None:
-    result = exercises.check_affine_forward(wrong)
+def test_coupling_forward_checker_names_the_mistake(wrong, says) -> None:
+    result = exercises.check_coupling_forward(wrong)
     assert result.status == "wrong" and says in result.message, result
+
+
+def _inverse(order="scale-first", sign=-1.0, mask_output=True):
+    def inverse(y, mask, net):
+        shift, raw = net(y * mask).chunk(2, dim=-1)
+        scale = torch.sigmoid(raw + 2)
+        moved = y / scale + sign * shift if order == "scale-first" else (y + sign * shift) / scale
+        return mask * y + (1 - mask) * moved if mask_output else moved
+
+    return inverse
 
 
 @pytest.mark.parametrize(
     "wrong, says",
     [
-        (
-            lambda y_b, params: y_b / torch.sigmoid(params.chunk(2, 1)[1] + 2) + params.chunk(2, 1)[0],
-            "subtracting t",
-        ),
-        (
-            lambda y_b, params: (y_b - params.chunk(2, 1)[0]) / torch.sigmoid(params.chunk(2, 1)[1] + 2),
-            "reverse order",
-        ),
-        (lambda y_b, params: y_b, "is not x_b"),
+        (_inverse(sign=1.0), "subtracting u"),
+        (_inverse(order="shift-first"), "reverse order"),
+        (_inverse(mask_output=False), "passes through the inverse unchanged"),
+        (lambda y, mask, net: y, "is not x"),
     ],
 )
-def test_affine_inverse_checker_names_the_mistake(wrong, says) -> None:
-    result = exercises.check_affine_inverse(wrong)
+def test_coupling_inverse_checker_names_the_mistake(wrong, says) -> None:
+    result = exercises.check_coupling_inverse(wrong)
     assert result.status == "wrong" and says in result.message, result
 
 

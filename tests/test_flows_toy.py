@@ -10,6 +10,7 @@ from motionlab.models.flows import (
     grid_density,
     perturb_parameters_,
     toy_nll_loss,
+    train_toy_flow,
     two_moons,
 )
 from motionlab.train import TensorBatches, TrainConfig, train
@@ -89,3 +90,13 @@ def test_toy_temperature_widget_callback_draws_seeded_samples():
         np.asarray(offsets), flow.sample(200, 0.5, torch.Generator().manual_seed(1)).numpy()
     )
     plt.close("all")
+
+
+def test_the_chapters_toy_flow_trains_once_then_loads(monkeypatch, tmp_path):
+    monkeypatch.setenv("MOTIONLAB_BUILD", str(tmp_path))
+    flow, result = train_toy_flow(hidden=4, steps=3)
+    assert not result.loaded_from_cache and result.metrics["steps"] == 3
+    again, cached = train_toy_flow(hidden=4, steps=3)
+    assert cached.loaded_from_cache
+    points = two_moons(8, seed=1)
+    assert torch.equal(again.log_prob(points), flow.log_prob(points))

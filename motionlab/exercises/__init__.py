@@ -19,7 +19,7 @@ and 08), :mod:`~motionlab.exercises.metrics` (chapter 09), :mod:`~motionlab.exer
 
 from motionlab.exercises.autoregressive import check_keep_mask, check_sample_loop
 from motionlab.exercises.checking import CheckResult
-from motionlab.exercises.flows import check_affine_forward, check_affine_inverse
+from motionlab.exercises.flows import check_coupling_forward, check_coupling_inverse
 from motionlab.exercises.hierarchy import check_impact_weights, check_subtree_reach
 from motionlab.exercises.kinematics import check_chain_positions
 from motionlab.exercises.metrics import check_apd, check_fid
@@ -36,12 +36,12 @@ from motionlab.exercises.vae import (
 
 __all__ = [
     "CheckResult",
-    "check_affine_forward",
-    "check_affine_inverse",
     "check_apd",
     "check_bone_length_variation",
     "check_chain_positions",
     "check_contrastive_loss",
+    "check_coupling_forward",
+    "check_coupling_inverse",
     "check_covariance_prior",
     "check_dct_matrix",
     "check_fid",

@@ -25,7 +25,14 @@ from motionlab.models.flows.glow import (
 )
 from motionlab.models.flows.invconv import InvertibleConv1x1
 from motionlab.models.flows.prior import StandardNormal
-from motionlab.models.flows.toy import ToyFlow, ToyFlowConfig, grid_density, toy_nll_loss, two_moons
+from motionlab.models.flows.toy import (
+    ToyFlow,
+    ToyFlowConfig,
+    grid_density,
+    toy_nll_loss,
+    train_toy_flow,
+    two_moons,
+)
 
 __all__ = [
     "ActNorm",
@@ -53,6 +60,7 @@ __all__ = [
     "roundtrip_error",
     "squeeze_time",
     "toy_nll_loss",
+    "train_toy_flow",
     "two_moons",
     "unsqueeze_time",
 ]
