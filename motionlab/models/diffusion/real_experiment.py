@@ -1,0 +1,255 @@
+r"""MDM on the CMU motion capture (chapter 10), beside ODMO under Table 2's protocol, in the shape every
+family has for the training command (``python -m motionlab.apps.training diffusion_cmu``): :data:`CHAPTER`,
+:data:`DEFAULT_RUN`, :class:`ExperimentConfig` (``quick()``, ``full()``, ``long()``), :func:`load_data`,
+:func:`runs`, :func:`measure`, :func:`with_steps` and :func:`train_all`.
+
+**The representation.** The CMU clips hold 20 joint positions per frame and no rotations, so MDM reads
+positions here: every frame is the xyz of the 20 joints, 60 channels (:class:`~.model.PositionMDMConfig`, the
+repository's ``data_rep='xyz'``). The training windows are ODMO's: ``draws`` random ``window``-frame windows
+of every training clip (shorter clips padded with their last frame), each with its first root at the origin
+and turned to face +x at its first frame, every ``frame_stride``-th frame kept (:func:`prepare_real`).
+
+**Table 2** (:func:`measure`): each sample set draws its classes stratified as the training clips
+(:meth:`~motionlab.evaluation.real.Protocol.stratified_actions`), samples one clip per class label with the
+fast sampler (DDIM on a respaced schedule, classifier-free guidance), interpolates the model frames back to
+the window's frame rate and measures it with the real-data evaluator
+(:func:`~motionlab.evaluation.real.table2_row`), as ODMO's rows are measured.
+"""
+
+from __future__ import annotations
+
+import numbers
+from dataclasses import dataclass, replace
+from functools import partial
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import torch
+from torch import Tensor, nn
+
+from motionlab import config
+from motionlab.data.cmu_mocap import FEET, FPS, N_JOINTS, MocapClips, face_x, random_windows
+from motionlab.evaluation import real
+from motionlab.metrics import Interval
+from motionlab.models.diffusion.data import MDMData
+from motionlab.models.diffusion.experiment import diffusion_run
+from motionlab.models.diffusion.model import MDM, PositionMDMConfig
+from motionlab.models.diffusion.sampling import GUIDANCE_SCALE, sample
+from motionlab.models.odmo.data import upsample_frames
+from motionlab.train import TrainConfig
+from motionlab.train.many import Trained, train_many
+from motionlab.train.run import Run
+from motionlab.validation import check_scalar, instance, integer
+from motionlab.validation import real as real_number
+
+#: The chapter that trains this family, and its main run (the training command's default).
+CHAPTER, DEFAULT_RUN = "10_real_motion_capture", "mdm"
+
+#: ``load_data`` reads a folder of clips given as ``--data PATH``.
+READS_FOLDER = True
+
+#: The repository's foot-contact threshold, 0.01 m per frame at its 20 fps, as a speed (m/s).
+CONTACT_SPEED = 0.01 * 20
+
+
+def real_model(
+    n_classes: int = 7, n_frames: int = 50, frame_stride: int = 2, **overrides: Any
+) -> PositionMDMConfig:
+    """The course's MDM size (:meth:`~.model.MDMConfig.course`) on CMU positions: 20 joints, ``n_classes``
+    actions, ``n_frames`` model frames, the CMU feet, the repository's contact speed at the model's frame rate
+    (the data's 12 fps over ``frame_stride``); ``overrides`` replace any field."""
+    model_fps = FPS / frame_stride
+    base = PositionMDMConfig.course(
+        n_joints=N_JOINTS,
+        n_frames=n_frames,
+        n_actions=n_classes,
+        foot_joints=FEET,
+        contact_threshold=CONTACT_SPEED / model_fps,
+    )
+    return replace(base, **overrides)
+
+
+@dataclass(frozen=True)
+class ExperimentConfig(config.ProfileConfig):
+    """MDM on CMU MoCap. The defaults are the full profile: all 970 clips, the course's MDM size on
+    positions (width 128, 4 layers, 1,000 diffusion steps), 300 steps of batches of 32, Table 2's 10 sets of
+    400 clips drawn with 10 guided DDIM steps each.
+
+    Attributes:
+        model: the denoiser on positions (:func:`real_model`).
+        n_clips: keep a stratified subset of this many benchmark clips (``None``: all 970).
+        window: frames per window (ODMO: 100); frame_stride: every ``frame_stride``-th frame is a model frame
+            (2: 6 fps, 50 model frames); draws: random windows per training clip.
+        steps, batch_size, lr, seed: the training schedule (as chapter 11's) and the seed of the runs, the
+            windows and the sample sets.
+        sample_steps: DDIM steps of the respaced schedule the sample sets are drawn with (fewer than chapter
+            11's 50: Table 2 draws 4,000 clips per row); guidance: the classifier-free guidance scale.
+        n_per_set, n_sets: Table 2's clips per sample set (the paper: 400) and sets per row (10).
+    """
+
+    model: PositionMDMConfig = instance(PositionMDMConfig, default_factory=real_model)
+    n_clips: int | None = integer(None, minimum=28, optional=True)
+    window: int = integer(100, minimum=1)
+    frame_stride: int = integer(2, minimum=1)
+    draws: int = integer(4, minimum=1)
+    steps: int = integer(300, minimum=1)
+    batch_size: int = integer(32, minimum=1)
+    lr: float = real_number(5e-4, above=0)
+    seed: int = integer(0, minimum=0)
+    sample_steps: int = integer(10, minimum=1)
+    guidance: float = real_number(GUIDANCE_SCALE, minimum=0)
+    n_per_set: int = integer(400, minimum=1)
+    n_sets: int = integer(10, minimum=2)
+
+    def __post_init__(self) -> None:
+        super().__post_init__()
+        if self.window != self.model.n_frames * self.frame_stride:
+            raise ValueError(
+                f"ExperimentConfig: the model's {self.model.n_frames} frames x frame_stride "
+                f"{self.frame_stride} "
+                f"must equal the window of {self.window} frames"
+            )
+        if self.sample_steps > self.model.diffusion_steps:
+            raise ValueError(
+                f"ExperimentConfig: sample_steps={self.sample_steps} exceeds the model's "
+                f"{self.model.diffusion_steps} diffusion steps"
+            )
+
+    @classmethod
+    def quick(cls) -> ExperimentConfig:
+        """About a hundred clips, a tiny denoiser (width 16, one layer, 100 diffusion steps), 4 steps, 2 sets
+        of 112 clips drawn with 4 DDIM steps: the code paths, in seconds."""
+        model = real_model(latent_dim=16, ff_size=32, layers=1, heads=2, diffusion_steps=100)
+        return cls(model=model, n_clips=112, steps=4, batch_size=14, sample_steps=4, n_sets=2, n_per_set=112)
+
+    @classmethod
+    def long(cls) -> ExperimentConfig:
+        """A longer, larger run for the training command: 20 times the full profile's steps (6,000) on 8
+        windows per clip, a denoiser twice as wide (256, feed-forward 512); the same protocol."""
+        return cls(model=real_model(latent_dim=256, ff_size=512), steps=6_000, draws=8)
+
+    def train_config(self) -> TrainConfig:
+        """Every run's :class:`~motionlab.train.TrainConfig`."""
+        return TrainConfig(
+            steps=self.steps,
+            batch_size=self.batch_size,
+            lr=self.lr,
+            grad_clip=1.0,
+            seed=self.seed,
+            checkpoint_every=None,
+            log_every=20,
+        )
+
+
+def prepare_real(
+    clips: MocapClips, window: int = 100, frame_stride: int = 2, draws: int = 4, seed: int = 0
+) -> MDMData:
+    """MDM features of real clips (20 joints): ``draws`` random ``window``-frame windows of every clip, each
+    turned to face +x at its first frame (first root at the origin), every ``frame_stride``-th frame kept,
+    flattened to ``(N, window / frame_stride, 60)`` in metres. The data has no style labels: ``mode`` and
+    ``body`` are zeros."""
+    where = "prepare_real"
+    for name, value in (("window", window), ("frame_stride", frame_stride), ("draws", draws)):
+        check_scalar(value, name, where, kind=numbers.Integral, minimum=1)
+    if window % frame_stride or window < 2 * frame_stride:
+        raise ValueError(f"{where}: windows of {window} frames do not fit frame_stride {frame_stride}")
+    windows = [random_windows(clips, window, np.random.default_rng([seed, d])) for d in range(draws)]
+    positions = np.concatenate([face_x(w.positions) for w in windows])[:, ::frame_stride]
+    features = torch.as_tensor(positions, dtype=torch.float32).flatten(2).contiguous()
+    action = torch.as_tensor(np.concatenate([w.action for w in windows]), dtype=torch.int64)
+    zeros = torch.zeros_like(action)
+    return MDMData(features, action, zeros, zeros, frame_stride)
+
+
+@dataclass(frozen=True, eq=False)
+class ChapterData:
+    """MDM's windows of the training clips ``train``, the real-data ``evaluator`` and Table 2's
+    ``protocol`` (chapter 10's, shared with ODMO's rows)."""
+
+    train: MDMData
+    evaluator: real.XYZEvaluator
+    protocol: real.Protocol
+
+
+def load_data(cfg: ExperimentConfig, folder: Path | None = None) -> ChapterData:
+    """Chapter 10's data: the CMU clips (floors levelled, stratified split), MDM's windows of the training
+    clips, the real-data evaluator (chapter 10's sizes) and Table 2's protocol. ``folder``: a downloaded
+    Action2Motion folder instead of the compact copy."""
+    if not isinstance(cfg, ExperimentConfig):
+        raise TypeError(f"load_data: cfg must be an ExperimentConfig, got {type(cfg).__name__}")
+    bench = real.load_real_benchmark(cfg.n_clips, source=folder)
+    evaluator_cfg = real.RealEvaluatorConfig(
+        steps=config.choose(quick=20, full=250), hidden=config.choose(quick=32, full=128)
+    )
+    evaluator, _ = real.load_real_evaluator(bench.train, evaluator_cfg, progress=False)
+    protocol = real.Protocol.build(evaluator, bench.train, cfg.n_per_set, cfg.n_sets, cfg.window)
+    train = prepare_real(bench.train, cfg.window, cfg.frame_stride, cfg.draws, cfg.seed)
+    return ChapterData(train, evaluator, protocol)
+
+
+def runs(cfg: ExperimentConfig, data: ChapterData) -> dict[str, Run]:
+    """The one run ``{"mdm": Run}``, cached as ``real_mdm``: MDM with its geometric losses on the real
+    windows."""
+    if data.train.frame_stride != cfg.frame_stride:
+        raise ValueError(
+            f"runs: the data was prepared with frame_stride {data.train.frame_stride}, the config has "
+            f"{cfg.frame_stride}"
+        )
+    return {DEFAULT_RUN: diffusion_run("real_mdm", cfg.model, cfg.train_config(), data.train)}
+
+
+def generate_windows(model: MDM, cfg: ExperimentConfig, action: Tensor, generator: torch.Generator) -> Tensor:
+    """One window per action of ``action`` ``(N,)``, drawn with ``cfg.sample_steps`` guided DDIM steps, as
+    joint positions at the data's frame rate ``(N, window, 20, 3)``."""
+    features = sample(
+        model, action, steps=cfg.sample_steps, method="ddim", guidance=cfg.guidance, generator=generator
+    )
+    return upsample_frames(model.joint_positions(features), cfg.frame_stride)
+
+
+def draw_generated(
+    rng: np.random.Generator, model: MDM, cfg: ExperimentConfig, protocol: real.Protocol
+) -> tuple[Tensor, np.ndarray]:
+    """A Table 2 sample set: classes stratified as the training clips, one generated window each (the
+    sampler's noise seeded from ``rng``)."""
+    action = np.sort(protocol.stratified_actions(rng))
+    generator = torch.Generator().manual_seed(int(rng.integers(2**62)))
+    return generate_windows(model, cfg, torch.as_tensor(action), generator), action
+
+
+def table2_row(cfg: ExperimentConfig, data: ChapterData, model: MDM) -> dict[str, Interval]:
+    """MDM's row of Table 2 ``{metric: Interval}`` (accuracy as a fraction) under ``data.protocol``."""
+    if not isinstance(model, MDM):
+        raise TypeError(f"table2_row: model must be an MDM, got {type(model).__name__}")
+    draw = partial(draw_generated, model=model, cfg=cfg, protocol=data.protocol)
+    return real.table2_row(data.evaluator, data.protocol, draw)
+
+
+def measure(cfg: ExperimentConfig, data: ChapterData, name: str, model: nn.Module) -> dict[str, Any]:
+    """The run's row of chapter 10's Table 2 (accuracy, FID, diversity, multimodality) and the sampler that
+    drew it."""
+    if name != DEFAULT_RUN:
+        raise ValueError(f"measure: the only run is {DEFAULT_RUN!r}, got {name!r}")
+    return {
+        "table2": table2_row(cfg, data, model),
+        "sampler": {"method": "ddim", "steps": cfg.sample_steps, "guidance": cfg.guidance},
+    }
+
+
+def with_steps(cfg: ExperimentConfig, name: str, steps: int) -> ExperimentConfig:
+    """``cfg`` with the run trained for ``steps`` steps."""
+    return replace(cfg, steps=steps)
+
+
+def train_all(
+    cfg: ExperimentConfig,
+    data: ChapterData,
+    processes: int = 2,
+    progress: bool | None = None,
+    alongside: dict[str, Run] | None = None,
+) -> dict[str, Trained[dict[str, Any]]]:
+    """Train (or load) the run on ``processes`` cores and :func:`measure` it in a worker as soon as it is
+    trained; the runs ``alongside`` train on the same workers beside it. Returns ``{"mdm": Trained}``."""
+    then = partial(measure, cfg, data)
+    return train_many(runs(cfg, data), then=then, processes=processes, progress=progress, alongside=alongside)
