@@ -62,5 +62,6 @@ def test_mdm_is_a_method_of_the_comparison_given_each_test_clips_action():
     # the clips answer the test clips' actions: the same draw for those actions through the experiment
     action = torch.as_tensor(test.clips.action, dtype=torch.int64)
     cfg = diffusion.ExperimentConfig.quick()
+    assert cfg.sample_steps <= comparison.MDM_SAMPLE_STEPS  # the quick profile samples as chapter 11
     want = diffusion.generate_positions(method.model, cfg, action, torch.Generator().manual_seed(3))
     assert torch.equal(clips, want)
