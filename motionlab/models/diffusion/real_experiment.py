@@ -49,6 +49,41 @@ CHAPTER, DEFAULT_RUN = "10_real_motion_capture", "mdm"
 #: ``load_data`` reads a folder of clips given as ``--data PATH``.
 READS_FOLDER = True
 
+#: MDM's own action-to-motion results (Tevet et al., ICLR 2023), on other data sets than chapter 10's:
+#: ``{data set (table): {row: {metric: (mean, 95 % half-width)}}}`` as the paper prints them (accuracy as a
+#: fraction; UESTC's FID is its FID against the training set, FID_train). Each row is 20 evaluations of
+#: 1,000 samples (§4.2); the models were trained for 750K (HumanAct12) and 2M (UESTC) steps.
+PAPER_TABLES: dict[str, dict[str, dict[str, tuple[float, float]]]] = {
+    "HumanAct12 (Table 3)": {
+        "Real (ours)": {
+            "accuracy": (0.990, 0.000),
+            "fid": (0.050, 0.000),
+            "diversity": (6.880, 0.020),
+            "multimodality": (2.590, 0.010),
+        },
+        "MDM (ours)": {
+            "accuracy": (0.990, 0.000),
+            "fid": (0.100, 0.000),
+            "diversity": (6.860, 0.050),
+            "multimodality": (2.520, 0.010),
+        },
+    },
+    "UESTC (Table 4)": {
+        "Real": {
+            "accuracy": (0.988, 0.001),
+            "fid": (2.92, 0.26),
+            "diversity": (33.34, 0.320),
+            "multimodality": (14.16, 0.06),
+        },
+        "MDM (ours)": {
+            "accuracy": (0.950, 0.000),
+            "fid": (9.98, 1.33),
+            "diversity": (33.02, 0.28),
+            "multimodality": (14.26, 0.12),
+        },
+    },
+}
+
 #: The repository's foot-contact threshold, 0.01 m per frame at its 20 fps, as a speed (m/s).
 CONTACT_SPEED = 0.01 * 20
 
@@ -56,11 +91,15 @@ CONTACT_SPEED = 0.01 * 20
 def real_model(
     n_classes: int = 7, n_frames: int = 50, frame_stride: int = 2, **overrides: Any
 ) -> PositionMDMConfig:
-    """The course's MDM size (:meth:`~.model.MDMConfig.course`) on CMU positions: 20 joints, ``n_classes``
-    actions, ``n_frames`` model frames, the CMU feet, the repository's contact speed at the model's frame rate
-    (the data's 12 fps over ``frame_stride``); ``overrides`` replace any field."""
+    """MDM on CMU positions at half the course's width (64, feed-forward 128, 2 layers, 4 heads; Table 2
+    draws 4,000 clips per row): 20 joints, ``n_classes`` actions, ``n_frames`` model frames, the CMU feet, the
+    repository's contact speed at the model's frame rate (the data's 12 fps over ``frame_stride``);
+    ``overrides`` replace any field."""
     model_fps = FPS / frame_stride
     base = PositionMDMConfig.course(
+        latent_dim=64,
+        ff_size=128,
+        layers=2,
         n_joints=N_JOINTS,
         n_frames=n_frames,
         n_actions=n_classes,
@@ -72,9 +111,9 @@ def real_model(
 
 @dataclass(frozen=True)
 class ExperimentConfig(config.ProfileConfig):
-    """MDM on CMU MoCap. The defaults are the full profile: all 970 clips, the course's MDM size on
-    positions (width 128, 4 layers, 1,000 diffusion steps), 300 steps of batches of 32, Table 2's 10 sets of
-    400 clips drawn with 10 guided DDIM steps each.
+    """MDM on CMU MoCap. The defaults are the full profile: all 970 clips, a denoiser on positions of width
+    64 and 2 layers (1,000 diffusion steps), 300 steps of batches of 32, Table 2's 10 sets of 400 clips drawn
+    with 10 guided DDIM steps each.
 
     Attributes:
         model: the denoiser on positions (:func:`real_model`).
@@ -126,8 +165,9 @@ class ExperimentConfig(config.ProfileConfig):
     @classmethod
     def long(cls) -> ExperimentConfig:
         """A longer, larger run for the training command: 20 times the full profile's steps (6,000) on 8
-        windows per clip, a denoiser twice as wide (256, feed-forward 512); the same protocol."""
-        return cls(model=real_model(latent_dim=256, ff_size=512), steps=6_000, draws=8)
+        windows per clip, chapter 11's denoiser size (width 128, feed-forward 256, 4 layers); the same
+        protocol."""
+        return cls(model=real_model(latent_dim=128, ff_size=256, layers=4), steps=6_000, draws=8)
 
     def train_config(self) -> TrainConfig:
         """Every run's :class:`~motionlab.train.TrainConfig`."""
