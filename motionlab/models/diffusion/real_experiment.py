@@ -28,20 +28,18 @@ import numpy as np
 import torch
 from torch import Tensor, nn
 
-from motionlab import config
 from motionlab.data.cmu_mocap import FEET, FPS, N_JOINTS, MocapClips, face_x, random_windows
 from motionlab.evaluation import real
 from motionlab.metrics import Interval
+from motionlab.models.diffusion import experiment
 from motionlab.models.diffusion.data import MDMData
 from motionlab.models.diffusion.experiment import diffusion_run
 from motionlab.models.diffusion.model import MDM, PositionMDMConfig
-from motionlab.models.diffusion.sampling import GUIDANCE_SCALE, sample
+from motionlab.models.diffusion.sampling import sample
 from motionlab.models.odmo.data import upsample_frames
-from motionlab.train import TrainConfig
 from motionlab.train.many import Trained, train_many
 from motionlab.train.run import Run
 from motionlab.validation import check_scalar, instance, integer
-from motionlab.validation import real as real_number
 
 #: The chapter that trains this family, and its main run (the training command's default).
 CHAPTER, DEFAULT_RUN = "10_real_motion_capture", "mdm"
@@ -110,49 +108,37 @@ def real_model(
 
 
 @dataclass(frozen=True)
-class ExperimentConfig(config.ProfileConfig):
-    """MDM on CMU MoCap. The defaults are the full profile: all 970 clips, a denoiser on positions of width
-    64 and 2 layers (1,000 diffusion steps), 300 steps of batches of 32, Table 2's 10 sets of 400 clips drawn
-    with 10 guided DDIM steps each.
+class ExperimentConfig(experiment.ExperimentConfig):
+    """MDM on CMU MoCap: chapter 11's fields (:class:`~.experiment.ExperimentConfig`: the training schedule,
+    the sampler, ``n_sets``) plus the data and Table 2's protocol. The defaults are the full profile: all 970
+    clips, a denoiser on positions of width 64 and 2 layers (1,000 diffusion steps), 300 steps of batches of
+    32, Table 2's 10 sets of 400 clips drawn with 10 guided DDIM steps each (the inherited ``n_per_action``
+    is not used: Table 2's sets are stratified as the data).
 
     Attributes:
         model: the denoiser on positions (:func:`real_model`).
         n_clips: keep a stratified subset of this many benchmark clips (``None``: all 970).
-        window: frames per window (ODMO: 100); frame_stride: every ``frame_stride``-th frame is a model frame
-            (2: 6 fps, 50 model frames); draws: random windows per training clip.
-        steps, batch_size, lr, seed: the training schedule (as chapter 11's) and the seed of the runs, the
-            windows and the sample sets.
+        window: frames per window (ODMO: 100); ``frame_stride`` (inherited): every ``frame_stride``-th frame
+            is a model frame (2: 6 fps, 50 model frames); draws: random windows per training clip.
         sample_steps: DDIM steps of the respaced schedule the sample sets are drawn with (fewer than chapter
-            11's 50: Table 2 draws 4,000 clips per row); guidance: the classifier-free guidance scale.
-        n_per_set, n_sets: Table 2's clips per sample set (the paper: 400) and sets per row (10).
+            11's 50: Table 2 draws 4,000 clips per row).
+        n_per_set: Table 2's clips per sample set (the paper: 400); n_sets: sets per row (10).
     """
 
     model: PositionMDMConfig = instance(PositionMDMConfig, default_factory=real_model)
+    sample_steps: int = integer(10, minimum=1)
+    n_sets: int = integer(10, minimum=2)
     n_clips: int | None = integer(None, minimum=28, optional=True)
     window: int = integer(100, minimum=1)
-    frame_stride: int = integer(2, minimum=1)
     draws: int = integer(4, minimum=1)
-    steps: int = integer(300, minimum=1)
-    batch_size: int = integer(32, minimum=1)
-    lr: float = real_number(5e-4, above=0)
-    seed: int = integer(0, minimum=0)
-    sample_steps: int = integer(10, minimum=1)
-    guidance: float = real_number(GUIDANCE_SCALE, minimum=0)
     n_per_set: int = integer(400, minimum=1)
-    n_sets: int = integer(10, minimum=2)
 
     def __post_init__(self) -> None:
         super().__post_init__()
         if self.window != self.model.n_frames * self.frame_stride:
             raise ValueError(
                 f"ExperimentConfig: the model's {self.model.n_frames} frames x frame_stride "
-                f"{self.frame_stride} "
-                f"must equal the window of {self.window} frames"
-            )
-        if self.sample_steps > self.model.diffusion_steps:
-            raise ValueError(
-                f"ExperimentConfig: sample_steps={self.sample_steps} exceeds the model's "
-                f"{self.model.diffusion_steps} diffusion steps"
+                f"{self.frame_stride} must equal the window of {self.window} frames"
             )
 
     @classmethod
@@ -168,18 +154,6 @@ class ExperimentConfig(config.ProfileConfig):
         windows per clip, chapter 11's denoiser size (width 128, feed-forward 256, 4 layers); the same
         protocol."""
         return cls(model=real_model(latent_dim=128, ff_size=256, layers=4), steps=6_000, draws=8)
-
-    def train_config(self) -> TrainConfig:
-        """Every run's :class:`~motionlab.train.TrainConfig`."""
-        return TrainConfig(
-            steps=self.steps,
-            batch_size=self.batch_size,
-            lr=self.lr,
-            grad_clip=1.0,
-            seed=self.seed,
-            checkpoint_every=None,
-            log_every=20,
-        )
 
 
 def prepare_real(
@@ -218,12 +192,9 @@ def load_data(cfg: ExperimentConfig, folder: Path | None = None) -> ChapterData:
     Action2Motion folder instead of the compact copy."""
     if not isinstance(cfg, ExperimentConfig):
         raise TypeError(f"load_data: cfg must be an ExperimentConfig, got {type(cfg).__name__}")
-    bench = real.load_real_benchmark(cfg.n_clips, source=folder)
-    evaluator_cfg = real.RealEvaluatorConfig(
-        steps=config.choose(quick=20, full=250), hidden=config.choose(quick=32, full=128)
+    bench, evaluator, protocol = real.chapter_table2(
+        cfg.n_clips, cfg.n_per_set, cfg.n_sets, cfg.window, folder
     )
-    evaluator, _ = real.load_real_evaluator(bench.train, evaluator_cfg, progress=False)
-    protocol = real.Protocol.build(evaluator, bench.train, cfg.n_per_set, cfg.n_sets, cfg.window)
     train = prepare_real(bench.train, cfg.window, cfg.frame_stride, cfg.draws, cfg.seed)
     return ChapterData(train, evaluator, protocol)
 
