@@ -48,6 +48,8 @@ from motionlab.models.trajevae import experiment as trajevae
 from motionlab.models.trajevae.data import FPS as TRAJEVAE_FPS
 from motionlab.models.trajevae.data import completion_windows, decimate
 from motionlab.models.trajevae.masks import given_trajectories, joint_mask
+from motionlab.train.many import train_meanwhile
+from motionlab.train.run import Run
 from motionlab.validation import check_scalar, check_tensor
 
 #: The actions of the common test set: locomotion, MoGlow's task (its chapter adds only wave), which every
@@ -291,6 +293,13 @@ def odmo_methods(benchmark: Benchmark, test: CommonTest) -> dict[str, Method]:
 MDM_SAMPLE_STEPS = 10
 
 
+def diffusion_runs(benchmark: Benchmark) -> dict[str, Run]:
+    """Chapter 11's run ``"mdm"`` (its settings, the benchmark's training clips) ``{"mdm": Run}``."""
+    cfg = diffusion.ExperimentConfig.current()
+    train = prepare_mdm(benchmark.train, cfg.frame_stride)
+    return {diffusion.DEFAULT_RUN: diffusion.variant_runs(cfg, train)[diffusion.DEFAULT_RUN]}
+
+
 def diffusion_methods(benchmark: Benchmark, test: CommonTest) -> dict[str, Method]:
     """Chapter 11's MDM (its run ``"mdm"``, with the geometric losses), given each test clip's action and
     sampled with its chapter's fast sampler (``diffusion.experiment.generate_positions``:
@@ -299,8 +308,7 @@ def diffusion_methods(benchmark: Benchmark, test: CommonTest) -> dict[str, Metho
     told the body type)."""
     chapter_cfg = diffusion.ExperimentConfig.current()
     cfg = replace(chapter_cfg, sample_steps=min(chapter_cfg.sample_steps, MDM_SAMPLE_STEPS))
-    train = prepare_mdm(benchmark.train, cfg.frame_stride)
-    model, result = diffusion.variant_runs(cfg, train)[diffusion.DEFAULT_RUN].train(progress=False)
+    model, result = diffusion_runs(benchmark)[diffusion.DEFAULT_RUN].train(progress=False)
     model.eval()
     action = torch.as_tensor(test.clips.action, dtype=torch.int64)
 
@@ -329,9 +337,17 @@ METHODS: tuple[Callable[[Benchmark, CommonTest], dict[str, Method]], ...] = (
 )
 
 
-def load_methods(benchmark: Benchmark, test: CommonTest) -> dict[str, Method]:
-    """Every method of the comparison by name (the models from the checkpoint cache)."""
-    return {name: method for family in METHODS for name, method in family(benchmark, test).items()}
+def load_methods(benchmark: Benchmark, test: CommonTest, processes: int = 2) -> dict[str, Method]:
+    """Every method of the comparison by name, in :data:`METHODS`' order (the models from the checkpoint
+    cache). MDM's chapter (11) comes after this one, so a first run of the course trains MDM here: its run
+    trains in a worker while the other families load (:func:`~motionlab.train.many.train_meanwhile`)."""
+
+    def earlier_chapters() -> dict[str, Method]:
+        families = [family for family in METHODS if family is not diffusion_methods]
+        return {name: method for family in families for name, method in family(benchmark, test).items()}
+
+    methods = train_meanwhile(diffusion_runs(benchmark), earlier_chapters, processes)
+    return methods | diffusion_methods(benchmark, test)
 
 
 def measured_part(positions: Tensor) -> Tensor:
