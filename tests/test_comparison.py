@@ -37,3 +37,31 @@ def test_measured_part_keeps_the_last_frames():
     assert torch.equal(part[:, -1], clips[:, -1].float())
     with pytest.raises(ValueError, match="at least"):
         measured_part(clips[:, :10])
+
+
+def test_mdm_is_a_method_of_the_comparison_given_each_test_clips_action():
+    """Chapter 11's quick MDM goes through the comparison like the other generators: one 30 fps sample per
+    test clip, of at least FRAMES frames, drawn for that clip's action and seeded by the generator alone."""
+    from motionlab.apps import comparison
+    from motionlab.evaluation.benchmark import load_benchmark
+    from motionlab.models.diffusion import experiment as diffusion
+
+    assert comparison.diffusion_methods in comparison.METHODS
+    benchmark = load_benchmark()
+    test = comparison.common_test(benchmark)
+    method = comparison.diffusion_methods(benchmark, test)["MDM"]
+    assert method.chapter == "11" and method.given == "action label"
+    assert method.model.cfg == diffusion.ExperimentConfig.quick().model
+    clips = method.generate(torch.Generator().manual_seed(3))
+    assert clips.shape == (len(test.action), test.clips.positions.shape[1], 22, 3)
+    assert clips.shape[1] >= FRAMES and torch.isfinite(clips).all()
+    again = method.generate(torch.Generator().manual_seed(3))
+    assert torch.equal(clips, again)
+    one = method.generate_one(torch.Generator().manual_seed(3))
+    assert one.shape == (1, *clips.shape[1:])
+    # the clips answer the test clips' actions: the same draw for those actions through the experiment
+    action = torch.as_tensor(test.clips.action, dtype=torch.int64)
+    cfg = diffusion.ExperimentConfig.quick()
+    assert cfg.sample_steps <= comparison.MDM_SAMPLE_STEPS  # the quick profile samples as chapter 11
+    want = diffusion.generate_positions(method.model, cfg, action, torch.Generator().manual_seed(3))
+    assert torch.equal(clips, want)

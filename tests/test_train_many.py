@@ -90,6 +90,12 @@ def test_train_meanwhile_trains_while_the_work_runs_here(processes: int) -> None
     assert done == 3 and all(run.is_cached() for run in RUNS.values())
 
 
+def test_train_meanwhile_starts_no_worker_when_every_run_is_cached(monkeypatch) -> None:
+    train_meanwhile(RUNS, functools.partial(sum, (1, 2)), processes=1)  # into the cache
+    monkeypatch.setattr("motionlab.train.many.shared_pool", lambda processes: pytest.fail("a worker started"))
+    assert train_meanwhile(RUNS, functools.partial(sum, (3, 4)), processes=2) == 7
+
+
 @pytest.mark.parametrize("processes", [1, 2])
 def test_runs_alongside_are_trained_into_the_cache_not_loaded(processes: int) -> None:
     extra = line_run("line_extra", 5)

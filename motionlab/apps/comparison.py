@@ -1,17 +1,17 @@
 """All generators on one benchmark (chapter 09): the same test clips, evaluator, sample count and frame rate.
 
 Each model family was measured in its own chapter on its own terms (MoGlow on locomotion at 30 fps, TrajeVAE
-at 15 fps, ODMO at 10 fps upsampled to 30). Here every generator gets the *same* held-out clips, the
-benchmark's test clips of :data:`COMMON_ACTIONS` (locomotion, which every model was trained on), and produces
-one sample per clip from what that clip gives it (:attr:`Method.given`): the Motion Cell its action and body
-type, MoGlow the clip's root-velocity control and its first frames, TrajeVAE its first pose and the pelvis
-trajectory, ODMO its action and end point. Every output is resampled to :data:`FPS` (linear interpolation in
-time, :func:`resample`) and its last :data:`FRAMES` frames are measured, so a seed of real frames never
-counts.
+at 15 fps, ODMO at 10 fps upsampled to 30, MDM at 15 fps). Here every generator gets the *same* held-out
+clips, the benchmark's test clips of :data:`COMMON_ACTIONS` (locomotion, which every model was trained on),
+and produces one sample per clip from what that clip gives it (:attr:`Method.given`): the Motion Cell its
+action and body type, MoGlow the clip's root-velocity control and its first frames, TrajeVAE its first pose
+and the pelvis trajectory, ODMO its action and end point, MDM its action. Every output is resampled to
+:data:`FPS` (linear interpolation in time, :func:`resample`) and its last :data:`FRAMES` frames are
+measured, so a seed of real frames never counts.
 
 The models are the chapters' own, loaded from the checkpoint cache through each family's ``runs`` (trained
-there when the cache does not hold them). :func:`method_row` measures a method on ``n_repeats`` sample
-sets and returns means with 95 % intervals.
+with their chapters' settings when the cache does not hold them: MDM's chapter, 11, runs after chapter 09).
+:func:`method_row` measures a method on ``n_repeats`` sample sets and returns means with 95 % intervals.
 """
 
 from __future__ import annotations
@@ -35,6 +35,8 @@ from motionlab.metrics import (
     jerk,
     mean_ci,
 )
+from motionlab.models.diffusion import experiment as diffusion
+from motionlab.models.diffusion.data import prepare as prepare_mdm
 from motionlab.models.moglow import experiment as moglow
 from motionlab.models.moglow.data import clip_features, select_actions
 from motionlab.models.moglow.sampling import generate_motion, seed_features
@@ -46,6 +48,8 @@ from motionlab.models.trajevae import experiment as trajevae
 from motionlab.models.trajevae.data import FPS as TRAJEVAE_FPS
 from motionlab.models.trajevae.data import completion_windows, decimate
 from motionlab.models.trajevae.masks import given_trajectories, joint_mask
+from motionlab.train.many import train_meanwhile
+from motionlab.train.run import Run
 from motionlab.validation import check_scalar, check_tensor
 
 #: The actions of the common test set: locomotion, MoGlow's task (its chapter adds only wave), which every
@@ -284,18 +288,66 @@ def odmo_methods(benchmark: Benchmark, test: CommonTest) -> dict[str, Method]:
     return {"ODMO": method}
 
 
+#: DDIM steps of MDM's samples here (chapter 11 measures with 50): five sample sets of every test clip at 50
+#: guided steps would take most of the chapter's time budget.
+MDM_SAMPLE_STEPS = 10
+
+
+def diffusion_runs(benchmark: Benchmark) -> dict[str, Run]:
+    """Chapter 11's run ``"mdm"`` (its settings, the benchmark's training clips) ``{"mdm": Run}``."""
+    cfg = diffusion.ExperimentConfig.current()
+    train = prepare_mdm(benchmark.train, cfg.frame_stride)
+    return {diffusion.DEFAULT_RUN: diffusion.variant_runs(cfg, train)[diffusion.DEFAULT_RUN]}
+
+
+def diffusion_methods(benchmark: Benchmark, test: CommonTest) -> dict[str, Method]:
+    """Chapter 11's MDM (its run ``"mdm"``, with the geometric losses), given each test clip's action and
+    sampled with its chapter's fast sampler (``diffusion.experiment.generate_positions``:
+    DDIM on a respaced schedule, classifier-free guidance) at :data:`MDM_SAMPLE_STEPS` steps (at most the
+    chapter's); its 15 fps frames are interpolated to 30 fps and posed on the average skeleton (MDM is not
+    told the body type)."""
+    chapter_cfg = diffusion.ExperimentConfig.current()
+    cfg = replace(chapter_cfg, sample_steps=min(chapter_cfg.sample_steps, MDM_SAMPLE_STEPS))
+    model, result = diffusion_runs(benchmark)[diffusion.DEFAULT_RUN].train(progress=False)
+    model.eval()
+    action = torch.as_tensor(test.clips.action, dtype=torch.int64)
+
+    def generate(generator: torch.Generator, n: int | None = None) -> Tensor:
+        return diffusion.generate_positions(model, cfg, action[_select(n, len(action))], generator)
+
+    method = Method(
+        "MDM",
+        "action label",
+        model,
+        result.metrics["train_seconds"],
+        generate,
+        lambda g: generate(g, 1),
+        "11",
+    )
+    return {"MDM": method}
+
+
 #: Each family's methods ``{name: Method}``, in the course's order.
 METHODS: tuple[Callable[[Benchmark, CommonTest], dict[str, Method]], ...] = (
     motion_cell_methods,
     moglow_methods,
     trajevae_methods,
     odmo_methods,
+    diffusion_methods,
 )
 
 
-def load_methods(benchmark: Benchmark, test: CommonTest) -> dict[str, Method]:
-    """Every method of the comparison by name (the models from the checkpoint cache)."""
-    return {name: method for family in METHODS for name, method in family(benchmark, test).items()}
+def load_methods(benchmark: Benchmark, test: CommonTest, processes: int = 2) -> dict[str, Method]:
+    """Every method of the comparison by name, in :data:`METHODS`' order (the models from the checkpoint
+    cache). MDM's chapter (11) comes after this one, so a first run of the course trains MDM here: its run
+    trains in a worker while the other families load (:func:`~motionlab.train.many.train_meanwhile`)."""
+
+    def earlier_chapters() -> dict[str, Method]:
+        families = [family for family in METHODS if family is not diffusion_methods]
+        return {name: method for family in families for name, method in family(benchmark, test).items()}
+
+    methods = train_meanwhile(diffusion_runs(benchmark), earlier_chapters, processes)
+    return methods | diffusion_methods(benchmark, test)
 
 
 def measured_part(positions: Tensor) -> Tensor:

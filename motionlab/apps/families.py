@@ -13,7 +13,8 @@ the chapter does:
 * ``with_steps(cfg, name, steps)``: ``cfg`` with run ``name`` trained for ``steps`` optimiser steps.
 
 Modules are imported only when a family is used, so ``--help`` is quick. Adding a family (or a data set,
-as ``odmo_cmu`` is ODMO on the CMU clips of chapter 10) is one entry here and a module of that shape.
+as ``odmo_cmu`` and ``diffusion_cmu`` are ODMO and MDM on the CMU clips of chapter 10) is one entry here
+and a module of that shape.
 """
 
 from __future__ import annotations
@@ -32,6 +33,7 @@ FAMILIES: dict[str, str] = {
     "odmo": "motionlab.models.odmo.experiment",
     "odmo_cmu": "motionlab.models.odmo.real_experiment",
     "diffusion": "motionlab.models.diffusion.experiment",
+    "diffusion_cmu": "motionlab.models.diffusion.real_experiment",
 }
 
 

@@ -36,6 +36,7 @@ import torch
 import torch.nn.functional as F
 from torch import Tensor
 
+from motionlab import config
 from motionlab.data.cmu_mocap import (
     N_JOINTS,
     MocapClips,
@@ -323,6 +324,21 @@ def table2_row(evaluator: Evaluator, protocol: Protocol, draw: Draw) -> dict[str
         features, probs = evaluator.features_and_probs(positions, "action")
         rows.append(feature_metrics(features, probs, np.asarray(action), reference, rng))
     return {name: interval([row[name] for row in rows]) for name in TABLE2_METRICS}
+
+
+def chapter_table2(
+    n_clips: int | None, n: int, n_sets: int, window: int, source: str | Path | None = None
+) -> tuple[RealBenchmark, XYZEvaluator, Protocol]:
+    """Chapter 10's Table 2 set-up, as every family measured there loads it: the benchmark
+    (:func:`load_real_benchmark` of ``n_clips`` clips from ``source``), the evaluator at the chapter's sizes
+    (trained on the training clips once, then from the cache) and the :class:`Protocol` of ``n_sets`` sets of
+    ``n`` windows of ``window`` frames."""
+    bench = load_real_benchmark(n_clips, source=source)
+    evaluator_cfg = RealEvaluatorConfig(
+        steps=config.choose(quick=20, full=250), hidden=config.choose(quick=32, full=128)
+    )
+    evaluator, _ = load_real_evaluator(bench.train, evaluator_cfg, progress=False)
+    return bench, evaluator, Protocol.build(evaluator, bench.train, n, n_sets, window)
 
 
 def interval(values: list[float]) -> Interval:

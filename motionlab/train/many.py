@@ -72,16 +72,17 @@ def train_meanwhile(runs: Mapping[str, Run], work: Callable[[], T], processes: i
     and return what ``work`` returned (the runs are in the cache then; load them with their ``train``).
 
     A chapter's data preparation uses it to train the evaluators it needs on the idle cores. With one
-    process, ``work()`` runs first and the runs train here afterwards.
+    process, ``work()`` runs first and the runs train here afterwards; when every run is cached, no worker
+    starts.
     """
-    if processes == 1:
+    pending = [run for run in runs.values() if not run.is_cached()]
+    if processes == 1 or not pending:
         done = work()
-        for run in runs.values():
-            if not run.is_cached():
-                _train_run(run)
+        for run in pending:
+            _train_run(run)
         return done
     pool = shared_pool(processes)
-    futures = [submit(pool, _train_run, run) for run in runs.values() if not run.is_cached()]
+    futures = [submit(pool, _train_run, run) for run in pending]
     done = work()
     for future in futures:
         outcome(future)  # raises the first failed run's exception

@@ -204,24 +204,29 @@ def load_data(cfg: ExperimentConfig) -> ChapterData:
     )
 
 
-def runs(cfg: ExperimentConfig, data: ChapterData) -> dict[str, Run]:
-    """Both variants' runs ``{name: Run}`` in :data:`VARIANTS`' order."""
-    if data.train.frame_stride != cfg.frame_stride:
+def variant_runs(cfg: ExperimentConfig, train: MDMData) -> dict[str, Run]:
+    """Both variants' runs ``{name: Run}`` on the prepared training clips ``train``, in :data:`VARIANTS`'
+    order."""
+    if train.frame_stride != cfg.frame_stride:
         raise ValueError(
-            f"runs: the data was prepared with frame_stride {data.train.frame_stride}, the config has "
+            f"variant_runs: the data was prepared with frame_stride {train.frame_stride}, the config has "
             f"{cfg.frame_stride}"
         )
     training = cfg.train_config()
-    return {
-        name: diffusion_run(name, variant_config(name, cfg.model), training, data.train) for name in VARIANTS
-    }
+    return {name: diffusion_run(name, variant_config(name, cfg.model), training, train) for name in VARIANTS}
 
 
-def sample_set(model: MDM, cfg: ExperimentConfig, generator: torch.Generator) -> tuple[Tensor, np.ndarray]:
-    """One sample set: ``cfg.n_per_action`` clips per action drawn with ``cfg.sample_steps`` DDIM steps and
-    guidance ``cfg.guidance``, as joint positions at the data's frame rate ``(N, T · stride, J, 3)``, with
-    their actions ``(N,)``."""
-    action = torch.arange(model.cfg.n_actions).repeat_interleave(cfg.n_per_action)
+def runs(cfg: ExperimentConfig, data: ChapterData) -> dict[str, Run]:
+    """Both variants' runs ``{name: Run}`` in :data:`VARIANTS`' order (:func:`variant_runs`)."""
+    return variant_runs(cfg, data.train)
+
+
+def generate_positions(
+    model: MDM, cfg: ExperimentConfig, action: Tensor, generator: torch.Generator
+) -> Tensor:
+    """One clip per action of ``action`` ``(N,)`` drawn with the chapter's sampler (``cfg.sample_steps`` DDIM
+    steps, guidance ``cfg.guidance``), as joint positions at the data's frame rate ``(N, T · stride, J, 3)``
+    on the average skeleton."""
     features = sample(
         model,
         action,
@@ -230,7 +235,14 @@ def sample_set(model: MDM, cfg: ExperimentConfig, generator: torch.Generator) ->
         guidance=cfg.guidance,
         generator=generator,
     )
-    return to_positions(features, cfg.frame_stride), action.numpy()
+    return to_positions(features, cfg.frame_stride)
+
+
+def sample_set(model: MDM, cfg: ExperimentConfig, generator: torch.Generator) -> tuple[Tensor, np.ndarray]:
+    """One sample set: ``cfg.n_per_action`` clips per action (:func:`generate_positions`), as joint
+    positions ``(N, T · stride, J, 3)``, with their actions ``(N,)``."""
+    action = torch.arange(model.cfg.n_actions).repeat_interleave(cfg.n_per_action)
+    return generate_positions(model, cfg, action, generator), action.numpy()
 
 
 def set_metrics(

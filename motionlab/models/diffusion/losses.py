@@ -4,7 +4,8 @@ One training step draws, for every clip :math:`x_0` of the batch (standardised, 
 :math:`t` uniformly from the ``S`` steps and a noise :math:`\epsilon \sim \mathcal N(0, I)`, noises the clip
 in one draw (:meth:`~.schedule.NoiseSchedule.q_sample`) and asks the network for :math:`\hat x_0 = G(x_t, t,
 c)` (the action dropped to the null condition for 10 % of the clips, :class:`~.model.MDM`). With ``N``
-frames, :math:`FK` the forward kinematics of :func:`~.data.joint_positions` and :math:`f_i` the foot-contact
+frames, :math:`FK` the forward kinematics of :func:`~.data.joint_positions` (the identity for a model on
+joint positions, :class:`~.model.PositionMDMConfig`) and :math:`f_i` the foot-contact
 mask of frame ``i``:
 
 .. math::
@@ -45,7 +46,6 @@ from __future__ import annotations
 import torch
 from torch import Tensor
 
-from motionlab.models.diffusion.data import joint_positions
 from motionlab.models.diffusion.model import FOOT_JOINTS, MDM
 from motionlab.validation import check_scalar, check_tensor
 
@@ -114,12 +114,12 @@ def diffusion_objective(
     terms = {"simple": frame_error(predicted, x0).mean()}
     total = terms["simple"]
     if max(cfg.lambda_pos, cfg.lambda_vel, cfg.lambda_foot) > 0:
-        real = joint_positions(features)
-        generated = joint_positions(model.standardizer.inverse(predicted))
-        contact = foot_contact_mask(real, cfg.contact_threshold)
+        real = model.joint_positions(features)
+        generated = model.joint_positions(model.standardizer.inverse(predicted))
+        contact = foot_contact_mask(real, cfg.contact_threshold, cfg.feet)
         terms["position"] = frame_error(generated, real).mean()
         terms["velocity"] = velocity_error(predicted, x0).mean()
-        terms["foot_contact"] = foot_contact_error(generated, contact).mean()
+        terms["foot_contact"] = foot_contact_error(generated, contact, cfg.feet).mean()
         total = (
             total
             + cfg.lambda_pos * terms["position"]

@@ -38,12 +38,13 @@ from __future__ import annotations
 
 import numbers
 from dataclasses import dataclass, replace
+from typing import ClassVar
 
 import torch
 from torch import Tensor, nn
 
 from motionlab.data.datasets import Standardizer
-from motionlab.models.diffusion.data import n_features
+from motionlab.models.diffusion.data import joint_positions, n_features
 from motionlab.models.diffusion.schedule import NoiseSchedule, check_steps
 from motionlab.models.trajevae.model import sinusoidal_encoding
 from motionlab.skeleton import JOINT
@@ -121,10 +122,54 @@ class MDMConfig:
         paper's, 1,000 diffusion steps included); ``overrides`` replace any field."""
         return replace(cls(latent_dim=128, ff_size=256, layers=4, heads=4), **overrides)
 
+    #: What a frame's channels hold: per-joint 6-D rotations and the root position (:mod:`.data`).
+    representation: ClassVar[str] = "rot6d"
+
     @property
     def n_features(self) -> int:
         """Channels per frame ``F = 6 J + 3``."""
         return n_features(self.n_joints)
+
+    @property
+    def feet(self) -> tuple[int, ...]:
+        """The joints the foot-contact loss reads (:data:`FOOT_JOINTS` of the course skeleton)."""
+        return FOOT_JOINTS
+
+
+@dataclass(frozen=True)
+class PositionMDMConfig(MDMConfig):
+    """MDM on joint positions: every frame is the xyz of the ``J`` joints in metres, ``F = 3 J`` channels (the
+    repository's ``data_rep='xyz'``), for motion recorded without rotations (chapter 10's CMU clips). The
+    joint-position loss then compares the channels themselves in metres (forward kinematics is the identity);
+    the velocity and foot-contact losses are as for rotations.
+
+    Attributes:
+        foot_joints: the joints the foot-contact loss reads (the skeleton's ankles and toes).
+    """
+
+    foot_joints: tuple[int, ...] = FOOT_JOINTS
+
+    representation: ClassVar[str] = "xyz"
+
+    def __post_init__(self) -> None:
+        super().__post_init__()
+        if not self.foot_joints or any(
+            not isinstance(j, numbers.Integral) or not 0 <= j < self.n_joints for j in self.foot_joints
+        ):
+            raise ValueError(
+                f"PositionMDMConfig: foot_joints must be joints in [0, {self.n_joints}), "
+                f"got {self.foot_joints}"
+            )
+
+    @property
+    def n_features(self) -> int:
+        """Channels per frame ``F = 3 J``."""
+        return 3 * self.n_joints
+
+    @property
+    def feet(self) -> tuple[int, ...]:
+        """The joints the foot-contact loss reads (:attr:`foot_joints`)."""
+        return self.foot_joints
 
 
 class TimestepEmbedder(nn.Module):
@@ -171,6 +216,16 @@ class MDM(nn.Module):
         )
         self.encoder = nn.TransformerEncoder(layer, cfg.layers, enable_nested_tensor=False)
         self.output_process = nn.Linear(d, cfg.n_features)
+
+    def joint_positions(self, features: Tensor) -> Tensor:
+        """Joint positions ``(..., T, J, 3)`` in metres of features ``(..., T, F)`` in the units of
+        :mod:`.data`: forward kinematics of the rotations on the average skeleton
+        (:func:`~motionlab.models.diffusion.data.joint_positions`), or the channels themselves for a
+        :class:`PositionMDMConfig`."""
+        if self.cfg.representation == "xyz":
+            check_tensor(features, "features", "MDM.joint_positions", trailing=(self.cfg.n_features,))
+            return features.unflatten(-1, (self.cfg.n_joints, 3))
+        return joint_positions(features)
 
     def fit_standardizer(self, features: Tensor) -> MDM:
         """Fit the standardiser on training clips ``(N, T, F)`` (metres and 6-D rotations); returns self."""

@@ -12,7 +12,6 @@ from typing import Any
 
 from torch import nn
 
-from motionlab import config
 from motionlab.evaluation import real
 from motionlab.models.odmo.data import ODMOData, prepare_real
 from motionlab.models.odmo.experiment import RealExperimentConfig as ExperimentConfig
@@ -40,12 +39,9 @@ def load_data(cfg: ExperimentConfig, folder: Path | None = None) -> ChapterData:
     """Chapter 10's data: the CMU clips (floors levelled, stratified split), ODMO's windows of the training
     clips, the real-data evaluator (chapter 10's sizes) and Table 2's protocol. ``folder``: a downloaded
     Action2Motion folder (``pose_clip.csv`` and one ``.npy`` per clip) instead of the compact copy."""
-    bench = real.load_real_benchmark(cfg.n_clips, source=folder)
-    evaluator_cfg = real.RealEvaluatorConfig(
-        steps=config.choose(quick=20, full=250), hidden=config.choose(quick=32, full=128)
+    bench, evaluator, protocol = real.chapter_table2(
+        cfg.n_clips, cfg.n_per_set, cfg.n_sets, cfg.window, folder
     )
-    evaluator, _ = real.load_real_evaluator(bench.train, evaluator_cfg, progress=False)
-    protocol = real.Protocol.build(evaluator, bench.train, cfg.n_per_set, cfg.n_sets, cfg.window)
     train = prepare_real(bench.train, cfg.window, cfg.frame_stride, cfg.draws, cfg.seed)
     return ChapterData(train, evaluator, protocol)
 
