@@ -191,6 +191,13 @@ def _sampler_words(steps: int, guidance: float) -> str:
     return f"{steps} DDIM steps, guidance {float(guidance):g}"
 
 
+def _clip_strip(features: Tensor, fps: float, title: str) -> Figure:
+    """Six keyframes of one sampled clip ``(T, F)`` at ``fps`` frames per second."""
+    return filmstrip(
+        clip_positions(features), PARENTS, n_frames=6, fps=fps, color=GENERATED_COLOR, title=title
+    )
+
+
 def sample_figure(
     model: MDM,
     action: int,
@@ -210,9 +217,7 @@ def sample_figure(
         f"{_action_name(action, action_names)}, seed {seed}: {_sampler_words(steps, guidance)}, "
         f"sampled in {seconds:.2f} s"
     )
-    return filmstrip(
-        clip_positions(features), PARENTS, n_frames=6, fps=fps, color=GENERATED_COLOR, title=title
-    )
+    return _clip_strip(features, fps, title)
 
 
 def interpolated_motion(
@@ -246,9 +251,7 @@ def interpolation_figure(
         f"{_action_name(action, action_names)}: start noise slerp(seed {seed_a}, seed {seed_b}; "
         f"alpha = {alpha:.2f}), {_sampler_words(steps, guidance)}"
     )
-    return filmstrip(
-        clip_positions(features), PARENTS, n_frames=6, fps=fps, color=GENERATED_COLOR, title=title
-    )
+    return _clip_strip(features, fps, title)
 
 
 def _check_data(model: MDM, data: MDMData, where: str) -> MDMData:
