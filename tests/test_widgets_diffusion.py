@@ -117,6 +117,13 @@ def test_interpolation_goes_from_one_seed_clip_to_the_other_smoothly(model):
     assert 0 < step < 0.25 * float((ends[1] - ends[0]).abs().mean())
 
 
+def test_editor_keyframes_show_the_seams():
+    assert dw.editor_keyframes(60, "ends", 5).tolist() == [0, 4, 21, 38, 55, 59]
+    assert dw.editor_keyframes(60, "ends", 1).tolist() == [0, 20, 39, 59]
+    assert dw.editor_keyframes(60, "ends", 30).tolist() == [0, 29, 30, 59]
+    assert dw.editor_keyframes(60, "legs", 5).tolist() == [0, 12, 24, 35, 47, 59]
+
+
 def test_editing_masks_and_the_joints_they_fix():
     ends = dw.editing_mask(FRAMES, 22, "ends", 3)
     assert ends.shape == (FRAMES, 135)
@@ -166,7 +173,10 @@ def test_figures_draw_keyframes_and_say_what_they_show(model, data):
     assert len(editor.axes) == 12
     assert [ax.get_title().split(",")[0] for ax in editor.axes] == ["reference"] * 6 + ["completion"] * 6
     green = [ax for ax in editor.axes if any(line.get_color() == dw.GIVEN_COLOR for line in ax.lines)]
-    assert [ax.get_title().split(", ")[1] for ax in green] == ["t = 0.00 s", "t = 0.93 s"] * 2  # first, last
+    titles = [ax.get_title().split(", ")[1] for ax in editor.axes[:6]]
+    assert titles == [f"t = {t / 15:.2f} s" for t in (0, 1, 5, 9, 13, 14)]  # the ends, the seams, the gap
+    given = ["t = 0.00 s", "t = 0.07 s", "t = 0.87 s", "t = 0.93 s"]
+    assert [ax.get_title().split(", ")[1] for ax in green] == given * 2
 
 
 @pytest.mark.parametrize(

@@ -334,10 +334,22 @@ def complete_clip(
     return Completion(reference, known, completion)
 
 
-def _draw_rows(rows: Sequence[tuple[str, np.ndarray, str]], fixed: np.ndarray, fps: float) -> Figure:
-    """One row of keyframes per ``(label, positions (T, J, 3), colour)``, all at one scale, the joints fixed
-    in a frame (``fixed`` ``(T, J)``) drawn over each in :data:`GIVEN_COLOR`."""
-    frames = keyframe_indices(rows[0][1].shape[0], 6)
+def editor_keyframes(n_frames: int, keep: Keep, k: int) -> np.ndarray:
+    """The frames the editor's figure shows (sorted indices): for ``keep="ends"`` the first and last frame,
+    the given frames next to the gap (``k - 1`` and ``n_frames - k``) and two frames evenly inside it, so the
+    seams show; for ``keep="legs"`` six frames evenly over the clip."""
+    check_choice(keep, "keep", "editor_keyframes", KEEP_CHOICES)
+    if keep == "legs":
+        return keyframe_indices(n_frames, 6)
+    inside = np.linspace(k - 1, n_frames - k, 4)[1:3].round()
+    return np.unique(np.r_[0, k - 1, inside, n_frames - k, n_frames - 1].astype(np.int64))
+
+
+def _draw_rows(
+    rows: Sequence[tuple[str, np.ndarray, str]], fixed: np.ndarray, frames: np.ndarray, fps: float
+) -> Figure:
+    """One row of the keyframes ``frames`` per ``(label, positions (T, J, 3), colour)``, all at one scale, the
+    joints fixed in a frame (``fixed`` ``(T, J)``) drawn over each in :data:`GIVEN_COLOR`."""
     scenes = [Scene.following(motion[frames], motion[frames, 0, :2]) for _, motion, _ in rows]
     extent = common_extent(scenes)
     panel = 2.0
@@ -381,6 +393,7 @@ def inbetween_figure(
             ("completion", clip_positions(completion), GENERATED_COLOR),
         ],
         fixed,
+        editor_keyframes(len(known), keep, k),
         fps,
     )
     kept = f"first and last {k} frames" if keep == "ends" else "legs and root"
