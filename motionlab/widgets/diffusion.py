@@ -46,8 +46,9 @@ Keep = Literal["ends", "legs"]
 KEEP_CHOICES: tuple[str, ...] = ("ends", "legs")
 
 #: The joints kept by ``keep="legs"``: the pelvis (its rotation is the body's global orientation) and the
-#: legs down to the balls of the feet; with the root position they fix where the legs are (MDM's lower-body
-#: editing likewise keeps the root with the legs).
+#: legs down to the balls of the feet; with the root position they fix where the legs are. They are the
+#: repository's lower body for editing (``HML_LOWER_BODY_JOINTS`` in ``data_loaders/humanml_utils.py``,
+#: whose mask keeps the root's channels with them too).
 LEG_JOINTS: tuple[int, ...] = tuple(
     JOINT[name]
     for name in (
@@ -321,8 +322,8 @@ def complete_clip(
     steps: int,
     guidance: float,
 ) -> Completion:
-    """Keep part of clip ``clip`` of ``data`` (:func:`editing_mask`) and sample the rest for ``action`` by
-    inpainting (MDM's editing: the known part of every prediction :math:`\\hat x_0` replaced by the given
+    r"""Keep part of clip ``clip`` of ``data`` (:func:`editing_mask`) and sample the rest for ``action`` by
+    inpainting (MDM's editing: the known part of every prediction :math:`\hat x_0` replaced by the given
     motion, :func:`~motionlab.models.diffusion.sampling.sample`)."""
     where = "complete_clip"
     _check_model(model, where)
