@@ -62,6 +62,37 @@ def test_samples_have_the_shape_and_are_reproducible():
     assert ddim.shape == (1, 10, 135) and torch.isfinite(ddim).all()
 
 
+def test_ddim_without_noise_is_fixed_by_its_start():
+    model = tiny()
+    start = torch.randn(2, 10, 135, generator=torch.Generator().manual_seed(1))
+    runs = [
+        sample(
+            model,
+            torch.tensor([0, 1]),
+            steps=5,
+            method="ddim",
+            guidance=2.5,
+            initial_noise=start,
+            generator=torch.Generator().manual_seed(seed),
+        )
+        for seed in (0, 1)
+    ]
+    assert torch.equal(runs[0], runs[1])  # eta 0: the generator's later draws are unused
+    drawn = sample(
+        model,
+        torch.tensor([0, 1]),
+        steps=5,
+        method="ddim",
+        guidance=2.5,
+        generator=torch.Generator().manual_seed(1),
+    )
+    assert torch.equal(drawn, runs[0])  # the start is the generator's first draw otherwise
+    ancestral = sample(
+        model, torch.tensor([0, 1]), steps=5, initial_noise=start, generator=torch.Generator().manual_seed(0)
+    )
+    assert not torch.allclose(ancestral, runs[0])
+
+
 @pytest.mark.parametrize(
     ("kwargs", "error", "match"),
     [
@@ -85,6 +116,16 @@ def test_samples_have_the_shape_and_are_reproducible():
             {"action": torch.tensor([0]), "edit": Edit(torch.zeros(1, 10, 135), torch.ones(10, 135))},
             TypeError,
             "known",
+        ),
+        (
+            {"action": torch.tensor([0]), "initial_noise": torch.zeros(2, 10, 135)},
+            ValueError,
+            "initial_noise",
+        ),
+        (
+            {"action": torch.tensor([0]), "initial_noise": torch.zeros(1, 10, 135).long()},
+            TypeError,
+            "initial_noise",
         ),
     ],
 )

@@ -1,7 +1,7 @@
-"""The widgets in a live JupyterLab, driven by headless Chromium: chapter 08 runs in the quick profile, then
-a slider of its sampling widget and a slider of its interpolation widget are moved with the keyboard, and
-each widget's figure must change, with no error output anywhere. Skipped, with how to enable it, when
-Chromium is not installed. The server is stopped at the end, whatever happens.
+"""The widgets in a live JupyterLab, driven by headless Chromium: each chapter of :data:`CHAPTERS` runs in
+the quick profile, then one slider of each of its listed widgets is moved with the keyboard, and each
+widget's figure must change, with no error output anywhere. Skipped, with how to enable it, when Chromium
+is not installed. The server is stopped at the end, whatever happens.
 
 Nothing here follows the focus: the notebook is found among the main area's widgets by its path (not as
 JupyterLab's current widget, which is whatever had the focus last) and run through its own id. Each wait has
@@ -30,7 +30,19 @@ pytestmark = pytest.mark.skipif(
     reason="needs Debian's chromium and chromium-driver (apt-get install chromium chromium-driver)",
 )
 
-CHAPTER = "notebooks/08_contrastive_mode_discovery.ipynb"
+#: The chapters driven, each with its widgets: a snippet of the code cell that builds the widget and the
+#: label of the slider moved in it.
+CHAPTERS: dict[str, tuple[tuple[str, str], ...]] = {
+    "notebooks/08_contrastive_mode_discovery.ipynb": (
+        ("mode_sampler_widget(", "seed"),
+        ("interpolation_widget(", "weight"),
+    ),
+    "notebooks/11_motion_diffusion.ipynb": (
+        ("sample_widget(", "seed"),
+        ("interpolation_widget(", "alpha"),
+        ("inbetween_widget(", "k"),
+    ),
+}
 #: Seconds for JupyterLab to answer, for the chapter to open with an idle kernel, and for a slider's new
 #: figure: each takes seconds here.
 WAIT_SECONDS = 300
@@ -84,9 +96,10 @@ def _log_tail(log: Path, lines: int = 15) -> str:
     return "\n".join(log.read_text(errors="replace").splitlines()[-lines:])
 
 
-def _wait_for_notebook(driver, log: Path, done, seconds: float, what: str) -> dict:
-    """Poll the notebook's state until ``done`` holds for it; past ``seconds``, fail saying what was seen."""
-    state = poll(lambda: driver.execute_script(_NOTEBOOK_STATE, CHAPTER), done, seconds)
+def _wait_for_notebook(driver, chapter: str, log: Path, done, seconds: float, what: str) -> dict:
+    """Poll the state of the notebook ``chapter`` until ``done`` holds for it; past ``seconds``, fail saying
+    what was seen."""
+    state = poll(lambda: driver.execute_script(_NOTEBOOK_STATE, chapter), done, seconds)
     assert done(state), (
         f"waited {seconds:.0f} s for {what}; the notebook's state last: {json.dumps(state)}; "
         f"console errors: {console_errors(driver)}; the end of JupyterLab's log:\n{_log_tail(log)}"
@@ -141,7 +154,15 @@ def _seen(before: dict, now: dict | None) -> str:
     return f"the readout {now['readout']}, the figure {figure}"
 
 
-def test_widgets_respond_in_a_live_jupyterlab(tmp_path: Path) -> None:
+@pytest.mark.parametrize("chapter", list(CHAPTERS))
+def test_widgets_respond_in_a_live_jupyterlab(tmp_path: Path, chapter: str) -> None:
+    drive_chapter(tmp_path, REPO_ROOT, chapter, CHAPTERS[chapter])
+
+
+def drive_chapter(tmp_path: Path, root: Path, chapter: str, sliders: tuple[tuple[str, str], ...]) -> None:
+    """Serve ``root`` with JupyterLab, run the notebook ``chapter`` (a path under ``root``) in the quick
+    profile and move each slider of ``sliders`` (cell snippet, slider label); the notebook's file must be
+    left unchanged."""
     from selenium.webdriver.common.keys import Keys
 
     port, token = _free_port(), secrets.token_hex(16)
@@ -150,7 +171,7 @@ def test_widgets_respond_in_a_live_jupyterlab(tmp_path: Path) -> None:
     settings.mkdir(parents=True)
     # The chapter runs in the repository's own file: JupyterLab must not save its outputs into it.
     (settings / "plugin.jupyterlab-settings").write_text(json.dumps({"autosave": False}))
-    chapter = (REPO_ROOT / CHAPTER).read_bytes()
+    original = (root / chapter).read_bytes()
     environment = {**os.environ, "MOTIONLAB_PROFILE": "quick", "JUPYTER_CONFIG_DIR": str(config)}
     log = tmp_path / "jupyterlab.log"
     server = subprocess.Popen(
@@ -162,7 +183,7 @@ def test_widgets_respond_in_a_live_jupyterlab(tmp_path: Path) -> None:
             "--ServerApp.ip=127.0.0.1",
             f"--ServerApp.port={port}",
             f"--IdentityProvider.token={token}",
-            f"--ServerApp.root_dir={REPO_ROOT}",
+            f"--ServerApp.root_dir={root}",
             "--LabApp.expose_app_in_browser=True",
             "--allow-root",
             "--LabApp.news_url=",
@@ -182,13 +203,14 @@ def test_widgets_respond_in_a_live_jupyterlab(tmp_path: Path) -> None:
             f"waited {WAIT_SECONDS} s for JupyterLab to answer: {answer}; its log:\n{_log_tail(log)}"
         )
         with chromium() as driver:
-            driver.get(f"{base}/lab/tree/{CHAPTER}?token={token}")
+            driver.get(f"{base}/lab/tree/{chapter}?token={token}")
             state = _wait_for_notebook(
                 driver,
+                chapter,
                 log,
                 lambda s: s["found"] and s["loaded"] and s["cells"] > 0 and s["kernel"] == "idle",
                 WAIT_SECONDS,
-                f"{CHAPTER} to open, its cells loaded and its kernel idle",
+                f"{chapter} to open, its cells loaded and its kernel idle",
             )
             driver.execute_script(
                 "window.jupyterapp.commands.execute('notebook:run-all-cells', {widgetId: arguments[0]});",
@@ -196,6 +218,7 @@ def test_widgets_respond_in_a_live_jupyterlab(tmp_path: Path) -> None:
             )
             state = _wait_for_notebook(
                 driver,
+                chapter,
                 log,
                 lambda s: (
                     s["found"]
@@ -208,10 +231,7 @@ def test_widgets_respond_in_a_live_jupyterlab(tmp_path: Path) -> None:
                 "the chapter to run",
             )
             assert state["errors"] == [], state["errors"]
-            for snippet, description in (
-                ("mode_sampler_widget(", "seed"),
-                ("interpolation_widget(", "weight"),
-            ):
+            for snippet, description in sliders:
                 output = _widget_output(driver, snippet)
                 driver.execute_script("arguments[0].scrollIntoView({block: 'center'});", output)
                 before = poll(lambda o=output, d=description: _slider(o, d), bool, WAIT_SECONDS)
@@ -231,7 +251,7 @@ def test_widgets_respond_in_a_live_jupyterlab(tmp_path: Path) -> None:
                     f"and its figure to change; last saw {_seen(before, now)}; "
                     f"console errors: {console_errors(driver)}"
                 )
-            state = driver.execute_script(_NOTEBOOK_STATE, CHAPTER)
+            state = driver.execute_script(_NOTEBOOK_STATE, chapter)
             assert state["errors"] == [], state["errors"]
     finally:
         server.terminate()
@@ -240,4 +260,4 @@ def test_widgets_respond_in_a_live_jupyterlab(tmp_path: Path) -> None:
         except subprocess.TimeoutExpired:
             server.kill()
             server.wait()
-    assert (REPO_ROOT / CHAPTER).read_bytes() == chapter, f"{CHAPTER} was changed by the test"
+    assert (root / chapter).read_bytes() == original, f"{chapter} was changed by the test"

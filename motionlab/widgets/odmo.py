@@ -18,6 +18,7 @@ from matplotlib.figure import Figure
 
 from motionlab.models.odmo.sampling import ODMOSampler, Samples, mode_interpolation, styles_to_end_point
 from motionlab.viz import GENERATED_COLOR, filmstrip, plot_root_paths
+from motionlab.widgets.controls import action_dropdown
 
 
 def _check_mode(sampler: ODMOSampler, action: int, mode: int) -> None:
@@ -102,12 +103,6 @@ def _shown(callback):
     return show
 
 
-def _action_dropdown(action_names: Sequence[str]) -> widgets.Dropdown:
-    return widgets.Dropdown(
-        options=[(name, i) for i, name in enumerate(action_names)], value=0, description="action"
-    )
-
-
 def _mode_slider(sampler: ODMOSampler, action: int, description: str, value: int = 0) -> widgets.IntSlider:
     n_modes = sampler.modes.classes[action].n_modes
     return widgets.IntSlider(
@@ -133,7 +128,7 @@ def mode_sampler_widget(
     sampler: ODMOSampler, parents: Sequence[int], action_names: Sequence[str]
 ) -> widgets.VBox:
     """Pick an action and one of its discovered modes, and draw a clip from it."""
-    action = _action_dropdown(action_names)
+    action = action_dropdown(action_names)
     mode = _mode_slider(sampler, 0, "mode")
     seed = widgets.IntSlider(value=0, min=0, max=20, description="seed", continuous_update=False)
     _follow_action(action, sampler, mode)
@@ -147,7 +142,7 @@ def interpolation_widget(
     sampler: ODMOSampler, parents: Sequence[int], action_names: Sequence[str]
 ) -> widgets.VBox:
     """Slide a code between the centres of two discovered modes of one action."""
-    action = _action_dropdown(action_names)
+    action = action_dropdown(action_names)
     mode_a = _mode_slider(sampler, 0, "from mode", 0)
     mode_b = _mode_slider(sampler, 0, "to mode", 1)
     weight = widgets.FloatSlider(
@@ -163,7 +158,7 @@ def interpolation_widget(
 
 def end_point_widget(sampler: ODMOSampler, action_names: Sequence[str]) -> widgets.VBox:
     """Set an end point and watch clips of every discovered mode of an action walk to it."""
-    action = _action_dropdown(action_names)
+    action = action_dropdown(action_names)
     x = widgets.FloatSlider(
         value=4.0, min=-2.0, max=12.0, step=0.5, description="x (m)", continuous_update=False
     )

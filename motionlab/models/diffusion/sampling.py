@@ -116,6 +116,7 @@ def sample(
     edit: Edit | None = None,
     inpaint: Inpaint = "prediction",
     generator: torch.Generator | None = None,
+    initial_noise: Tensor | None = None,
 ) -> Tensor:
     """Motions ``(B, T, F)`` in the units of :mod:`.data` (see the module notes).
 
@@ -128,6 +129,9 @@ def sample(
         edit: the given motion and its known channels, to inpaint the rest.
         inpaint: ``"prediction"`` (the repository's) or ``"noised"``, see :data:`Inpaint`.
         generator: draws the noise (the global generator when ``None``).
+        initial_noise: the loop's start :math:`x_S` ``(B, T, F)`` in standardised units (``None``: drawn
+            from ``generator``). With DDIM at ``eta = 0`` it is the only randomness: the same start gives
+            the same motion.
     """
     where = "sample"
     if not isinstance(model, MDM):
@@ -150,7 +154,13 @@ def sample(
     model.eval()
     shape = (batch, model.cfg.n_frames, model.cfg.n_features)
     edit = _check_edit(edit, shape, model)
-    x = torch.randn(shape, generator=generator)
+    if initial_noise is None:
+        x = torch.randn(shape, generator=generator)
+    else:
+        check_tensor(initial_noise, "initial_noise", where, ndim=3)
+        if initial_noise.shape != shape:
+            raise ValueError(f"{where}: initial_noise must be {shape}, got {tuple(initial_noise.shape)}")
+        x = initial_noise.to(torch.float32)
     for i in reversed(range(schedule.n_steps)):
         t = torch.full((batch,), i, dtype=torch.int64)
         x0 = guided_prediction(model, x, schedule.timesteps[t], action, guidance)
