@@ -5,7 +5,7 @@ the report directory. From top to bottom:
 
 1. what the course is, the profile and the total time against the 20-minute budget;
 2. the claims at a glance: how many hold, and every known gap and failure in plain sight;
-3. the headline comparison of chapter 09 (the four generators on one benchmark): its table, read from the
+3. the headline comparison of chapter 09 (the five generators on one benchmark): its table, read from the
    chapter's recorded metrics ``common.<method>.<column>``, and its key figure;
 4. one card per chapter: its opening paragraph, its key figure, its time against its budget, its claims
    (holds / known gap / fails, in colour) and a link to the executed chapter; a chapter's appendix
@@ -306,7 +306,7 @@ def write_front_page(
         )
     comparison = comparison_table(results.get("notebooks", {}).get(COMPARISON_CHAPTER, {}).get("metrics", {}))
     headline = (
-        "<h2>The four generators on one benchmark</h2>"
+        "<h2>The five generators on one benchmark</h2>"
         "<p>Chapter 09's comparison: the same held-out walk and jog clips, one evaluator, the same number of "
         "samples, everything at 30 fps; each method given what its paper conditions on. Means ± 95 % "
         "interval "
@@ -314,7 +314,7 @@ def write_front_page(
         f"{COMPARISON_CHAPTER}.html'>How it was measured, and what each method is given.</a></p>"
         f"{comparison}{comparison_figure}"
         if comparison
-        else "<h2>The four generators on one benchmark</h2>"
+        else "<h2>The five generators on one benchmark</h2>"
         "<p class='muted'>Chapter 09 has not run in this build.</p>"
     )
     page = f"""<!DOCTYPE html>

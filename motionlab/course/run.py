@@ -5,7 +5,7 @@ For each ``notebooks/NN_name.ipynb`` in order, each followed by its appendix ``N
 budget, page, results and card): execute it headless in a fresh kernel (cwd ``notebooks/``,
 widget state stored in the notebook), record its wall time in ``results.json``, and write the executed
 notebook and an HTML rendering. Then write the front page ``index.html`` (:mod:`motionlab.course.report`):
-what the course is, the claims at a glance, chapter 09's comparison of the four generators, one card per
+what the course is, the claims at a glance, chapter 09's comparison of the five generators, one card per
 chapter (summary, key figure, time against budget, claims) and every metric.
 
 A chapter that fails (an error, or a claim that stopped holding in the full profile) does not stop the
