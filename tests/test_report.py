@@ -105,6 +105,6 @@ def test_front_page(tmp_path):
     assert "figures/01_intro.png" in page and "<b>idea</b>" in page and "<i>q(z" in page
     assert "1 of 2</b> claims hold" in page and "known gap: too few clips" in page
     assert "over budget" in page and "from an earlier build" in page
-    assert "The four generators on one benchmark" in page and "accuracy against diversity" in page
+    assert "The five generators on one benchmark" in page and "accuracy against diversity" in page
     assert "<details>" in page and "common.ODMO.fid" in page
     assert not re.search(r"""(src|href)=["']https?://""", page)
