@@ -119,7 +119,7 @@ def test_a_chapter_whose_kernel_hangs_twice_fails_naming_the_cell(tmp_path: Path
 @pytest.mark.parametrize(
     ("argv", "message"),
     [
-        (["--only", "7"], "two-digit"),
+        (["--only", "7"], "chapter numbers such as 01"),
         (["--only", "42"], "no chapter 42"),
         (["--notebooks", "/no/such/dir"], "no such directory"),
         (["--bogus"], "unrecognized arguments"),

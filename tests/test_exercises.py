@@ -17,6 +17,7 @@ import motionlab.exercises as exercises
 from motionlab import geometry as geo
 from motionlab.course.chapters import numbered_notebooks
 from motionlab.exercises.checking import CheckResult
+from motionlab.models.gaussian import gaussian_kl
 from motionlab.paths import REPO_ROOT
 
 NOTEBOOKS = REPO_ROOT / "notebooks"
@@ -86,6 +87,7 @@ def test_skeletons_raise_not_implemented_with_a_message_and_the_checker_says_not
         ("03", "my_negative_elbo"),
         ("04", "my_subtree_reach"),
         ("04", "my_impact_weights"),
+        ("04", "my_motion_cell_step"),
         ("05", "my_coupling_forward"),
         ("05", "my_coupling_inverse"),
         ("06", "my_sample_loop"),
@@ -299,6 +301,49 @@ def _elbo(z_of=lambda mu, logvar, eps: mu + torch.exp(0.5 * logvar) * eps, recon
 )
 def test_negative_elbo_checker_names_the_mistake(wrong, says) -> None:
     result = exercises.check_negative_elbo(wrong)
+    assert result.status == "wrong" and says in result.message, result
+
+
+def _cell_step(z_from="posterior", sigma=lambda logvar: torch.exp(0.5 * logvar), kl_to="prior", feed="word"):
+    """A Motion Cell step with one piece replaced: where z comes from, its spread, the KL's prior or
+    direction, the state the decoder reads, or the word the transition reads."""
+
+    def fn(word, state, eps, prior, posterior, decode, transition):
+        mu_p, logvar_p = prior(state)
+        mu_q, logvar_q = posterior(word, state)
+        mu, logvar = (mu_q, logvar_q) if z_from == "posterior" else (mu_p, logvar_p)
+        z = mu + sigma(logvar) * eps
+        kl = {
+            "prior": lambda: gaussian_kl(mu_q, logvar_q, mu_p, logvar_p).sum(-1),
+            "reversed": lambda: gaussian_kl(mu_p, logvar_p, mu_q, logvar_q).sum(-1),
+            "standard": lambda: gaussian_kl(mu_q, logvar_q).sum(-1),
+            "per dimension": lambda: gaussian_kl(mu_q, logvar_q, mu_p, logvar_p),
+        }[kl_to]()
+        next_state = transition(word, z, state)
+        if feed == "decoded":
+            next_state = transition(decode(z, state), z, state)
+        word_hat = decode(z, next_state if feed == "new state" else state)
+        return word_hat, kl, next_state
+
+    return fn
+
+
+@pytest.mark.parametrize(
+    "wrong, says",
+    [
+        (_cell_step(z_from="prior"), "drawn from the prior"),
+        (_cell_step(sigma=torch.exp), "exp(logvar) is the variance"),
+        (_cell_step(sigma=lambda logvar: 0 * logvar), "the posterior's mean"),
+        (_cell_step(kl_to="reversed"), "reversed"),
+        (_cell_step(kl_to="standard"), "not N(0, I)"),
+        (_cell_step(kl_to="per dimension"), "sum over them"),
+        (_cell_step(feed="decoded"), "teacher forcing"),
+        (_cell_step(feed="new state"), "h_{t-1}, the state before the word"),
+        (lambda *args: _cell_step()(*args)[:2], "three tensors"),
+    ],
+)
+def test_motion_cell_step_checker_names_the_mistake(wrong, says) -> None:
+    result = exercises.check_motion_cell_step(wrong)
     assert result.status == "wrong" and says in result.message, result
 
 

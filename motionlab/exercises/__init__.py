@@ -11,10 +11,10 @@ several typical mistakes.
 
 Modules: :mod:`~motionlab.exercises.rotations` (chapter 01), :mod:`~motionlab.exercises.kinematics` and
 :mod:`~motionlab.exercises.skating` (chapter 02), :mod:`~motionlab.exercises.vae` (chapters 03 and 08),
-:mod:`~motionlab.exercises.hierarchy` (chapter 04), :mod:`~motionlab.exercises.flows` (chapter 05),
-:mod:`~motionlab.exercises.autoregressive` (chapter 06), :mod:`~motionlab.exercises.sequences` (chapters 07
-and 08), :mod:`~motionlab.exercises.metrics` (chapter 09), :mod:`~motionlab.exercises.mocap` (chapter 10);
-:mod:`~motionlab.exercises.checking` holds what they share.
+:mod:`~motionlab.exercises.vrnn` (chapter 04), :mod:`~motionlab.exercises.hierarchy` (its appendix),
+:mod:`~motionlab.exercises.flows` (chapter 05), :mod:`~motionlab.exercises.autoregressive` (chapter 06),
+:mod:`~motionlab.exercises.sequences` (chapters 07 and 08), :mod:`~motionlab.exercises.metrics` (chapter 09),
+:mod:`~motionlab.exercises.mocap` (chapter 10); :mod:`~motionlab.exercises.checking` holds what they share.
 """
 
 from motionlab.exercises.autoregressive import check_keep_mask, check_sample_loop
@@ -33,6 +33,7 @@ from motionlab.exercises.vae import (
     check_negative_elbo,
     check_reparameterize,
 )
+from motionlab.exercises.vrnn import check_motion_cell_step
 
 __all__ = [
     "CheckResult",
@@ -51,6 +52,7 @@ __all__ = [
     "check_impact_weights",
     "check_keep_mask",
     "check_mirror",
+    "check_motion_cell_step",
     "check_negative_elbo",
     "check_quat_mul",
     "check_reparameterize",

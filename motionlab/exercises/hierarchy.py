@@ -1,4 +1,4 @@
-"""Chapter 04's exercises: how far each joint's rotation reaches, the ``L_k`` behind the Motion Cell's joint
+"""Appendix 04a's exercises: how far each joint's rotation reaches, the ``L_k`` behind the Motion Cell's joint
 weights (eq. 23), and the weights themselves, checked against :func:`motionlab.skeleton.subtree_reach` and
 :func:`motionlab.skeleton.joint_impact_weights`."""
 

@@ -1,10 +1,12 @@
-"""Worked solutions to chapter 04's "your turn" exercises (checked by tests/test_exercises.py)."""
+"""Worked solutions to chapter 04's "your turn" exercises and its appendix's (checked by
+tests/test_exercises.py)."""
 
 from __future__ import annotations
 
 from collections.abc import Sequence
 
 import numpy as np
+import torch
 
 
 def my_subtree_reach(parents: Sequence[int], bone_lengths: np.ndarray) -> np.ndarray:
@@ -25,3 +27,17 @@ def my_impact_weights(reach: np.ndarray, leaf_floor: float) -> np.ndarray:
     orientation still counts), then divided by the mean (so that a weighted loss keeps its scale)."""
     floored = np.maximum(reach, leaf_floor * reach.max())
     return floored / floored.mean()
+
+
+def my_motion_cell_step(word, state, eps, prior, posterior, decode, transition):
+    """One teacher-forced step over a motion word: (word_hat (B, W), kl (B,), next_state (B, H)).
+
+    Draw z_t from the posterior, which reads the real word, decode it with the state before the word, score
+    the posterior against the learned prior with the closed-form Gaussian KL, and update the state from the
+    real word (teacher forcing) and the drawn z_t.
+    """
+    mu_p, logvar_p = prior(state)
+    mu_q, logvar_q = posterior(word, state)
+    z = mu_q + torch.exp(0.5 * logvar_q) * eps
+    kl = 0.5 * (logvar_p - logvar_q + (logvar_q.exp() + (mu_q - mu_p) ** 2) / logvar_p.exp() - 1)
+    return decode(z, state), kl.sum(-1), transition(word, z, state)

@@ -38,6 +38,7 @@ from __future__ import annotations
 
 import math
 import numbers
+from collections.abc import Callable
 from dataclasses import dataclass
 from typing import NamedTuple
 
@@ -45,7 +46,7 @@ import torch
 import torch.nn.functional as F
 from torch import Tensor, nn
 
-from motionlab.models.gaussian import reparameterize
+from motionlab.models.gaussian import gaussian_kl, reparameterize
 from motionlab.models.motion_cell.data import PoseCodec, pose_dim
 from motionlab.models.motion_cell.heads import (
     OUTPUT_KINDS,
@@ -212,6 +213,42 @@ class InitialState(nn.Module):
         action, body = check_attributes(action, body, self.n_actions, self.n_bodies, "InitialState")
         combo = action * self.n_bodies + body
         return reparameterize(self.mean[combo], bounded_logvar(self.logvar[combo]), generator)
+
+
+def cell_step(
+    word: Tensor,
+    state: Tensor,
+    eps: Tensor,
+    prior: Callable[[Tensor], tuple[Tensor, Tensor]],
+    posterior: Callable[[Tensor, Tensor], tuple[Tensor, Tensor]],
+    decode: Callable[[Tensor, Tensor], Tensor],
+    transition: Callable[[Tensor, Tensor, Tensor], Tensor],
+) -> tuple[Tensor, Tensor, Tensor]:
+    """One teacher-forced step of a VRNN over motion words (one word of Algorithm 1), written plainly.
+
+    :meth:`MotionCellModel.forward` is this step for every word of a window, with the pieces of
+    :class:`MotionCell`, its control, word dropping and the batching that takes work out of the loop.
+
+    Args:
+        word: the real word ``w_t`` (or its features) ``(B, W)``; state: ``h_{t-1}`` ``(B, H)``; eps: noise
+            ``N(0, I)`` ``(B, Z)`` for the draw from the posterior.
+        prior: ``h -> (mu_p, logvar_p)``, each ``(B, Z)``; posterior: ``(w, h) -> (mu_q, logvar_q)``;
+        decode: ``(z, h) -> w~`` the reconstructed word; transition: ``(w, z, h) -> h_t`` ``(B, H)``.
+
+    Returns:
+        ``(w~_t, kl, h_t)``: the word decoded from ``z_t ~ q(z_t | w_t, h_{t-1})``, the KL from that
+        posterior to the prior ``p(z_t | h_{t-1})`` summed over the latent's dimensions ``(B,)``, and the
+        next state, which reads the real word (teacher forcing).
+    """
+    mu_p, logvar_p = prior(state)
+    mu_q, logvar_q = posterior(word, state)
+    if eps.shape != mu_q.shape:
+        raise ValueError(
+            f"cell_step: eps must have the posterior's shape {tuple(mu_q.shape)}, got {tuple(eps.shape)}"
+        )
+    z = mu_q + torch.exp(0.5 * logvar_q) * eps
+    kl = gaussian_kl(mu_q, logvar_q, mu_p, logvar_p).sum(-1)
+    return decode(z, state), kl, transition(word, z, state)
 
 
 class MotionCell(nn.Module):
