@@ -75,6 +75,7 @@ class ExperimentConfig(config.ProfileConfig):
             length and the seed they are generated from (:func:`~.evaluate.long_clips`).
         n_repeats: sample sets for the evaluation-classifier metrics.
         bench_batch: the large batch of the chapter's generation-speed measurement.
+        small_flow_steps: training steps of the small conditional flow the chapter writes in the notebook.
     """
 
     data: MoGlowDataConfig = instance(MoGlowDataConfig, MoGlowDataConfig(actions=("walk", "jog", "wave")))
@@ -103,6 +104,7 @@ class ExperimentConfig(config.ProfileConfig):
     long_seed: int = integer(1, minimum=0)
     n_repeats: int = integer(3, minimum=1)
     bench_batch: int = integer(256, minimum=1)
+    small_flow_steps: int = integer(300, minimum=1)
 
     @classmethod
     def quick(cls) -> ExperimentConfig:
@@ -122,6 +124,7 @@ class ExperimentConfig(config.ProfileConfig):
             n_long=1,
             n_repeats=2,
             bench_batch=8,
+            small_flow_steps=60,
         )
 
     @classmethod
