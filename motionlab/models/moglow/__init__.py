@@ -45,6 +45,7 @@ from motionlab.models.moglow.evaluate import (
 from motionlab.models.moglow.losses import (
     dropout_objective_nll,
     held_out_nll,
+    held_out_nll_per_clip,
     held_out_nll_per_window,
     nll_per_frame_loss,
 )
@@ -87,6 +88,7 @@ __all__ = [
     "gait_speed",
     "generate_motion",
     "held_out_nll",
+    "held_out_nll_per_clip",
     "held_out_nll_per_window",
     "history_keep_mask",
     "joint_speed",
