@@ -20,9 +20,11 @@ from motionlab.models.moglow import (
     dropout_objective_nll,
     frame_conditioning,
     held_out_nll,
+    held_out_nll_per_clip,
     held_out_nll_per_window,
     history_keep_mask,
     nll_per_frame_loss,
+    sample_loop,
     sample_plain,
 )
 from motionlab.models.moglow.sampling import sample_frames
@@ -343,6 +345,33 @@ def test_autoregressive_loop_feeds_back_its_output():
 
     with pytest.raises(ValueError, match="diverged: non-finite poses from generated frame 2"):
         autoregressive_sample(exploding, control, seed_pose)
+
+
+def test_sample_loop_scales_the_noise_and_carries_the_state():
+    def invert_frame(z, cond, state):  # next pose = last pose + current control + latent; counts its calls
+        calls = 0 if state is None else state
+        return cond[:, 2:4] + cond[:, -2:] + z, calls + 1
+
+    seed_pose, control = torch.zeros(1, 2, 2), torch.ones(1, 2 + 3, 2)
+    noise = torch.ones(1, 3, 2)
+    out = sample_loop(invert_frame, control, seed_pose, noise, temperature=0.5)
+    assert torch.equal(out[0], torch.tensor([[1.5, 1.5], [3.0, 3.0], [4.5, 4.5]]))
+    assert torch.equal(
+        sample_loop(invert_frame, control, seed_pose, noise, 0.0)[0, -1], torch.tensor([3.0, 3.0])
+    )
+    with pytest.raises(ValueError):
+        sample_loop(invert_frame, control, seed_pose, noise[0], 0.5)
+
+
+def test_held_out_nll_per_clip_averages_each_clips_windows():
+    model = _moglow()
+    pose, control = _data(batch=6, frames=8)
+    windows = MoGlowFeatures(pose, control)
+    per_window = held_out_nll_per_window(model, windows)
+    per_clip = held_out_nll_per_clip(model, windows, n_clips=3)  # windows 0, 3 are clip 0; 1, 4 clip 1; ...
+    assert torch.allclose(per_clip, (per_window[:3] + per_window[3:]) / 2)
+    with pytest.raises(ValueError):
+        held_out_nll_per_clip(model, windows, n_clips=4)
 
 
 def test_bad_inputs_raise():

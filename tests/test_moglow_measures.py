@@ -17,6 +17,7 @@ from motionlab.models.moglow import (
     speed_ratio,
     support_foot_slide,
 )
+from motionlab.models.moglow.evaluate import moving_average
 
 
 def _walking_feet(frames: int, speed: float, fps: float = 30.0) -> torch.Tensor:
@@ -72,6 +73,15 @@ def test_joint_speed_and_ratio():
     assert math.isclose(speed_ratio(slowing, window=10), 0.5, rel_tol=1e-4)
     with pytest.raises(ValueError):
         speed_ratio(pose, window=30)
+
+
+def test_moving_average_by_hand():
+    series = torch.arange(5.0)
+    assert torch.allclose(moving_average(series, 3), torch.tensor([1 / 3, 1.0, 2.0, 3.0, 11 / 3]))
+    assert torch.equal(moving_average(series, 1), series)
+    assert moving_average(series, 4).shape == (5,)
+    with pytest.raises(ValueError):
+        moving_average(series[None], 3)
 
 
 def test_fixed_length_helpers():

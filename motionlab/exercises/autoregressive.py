@@ -1,6 +1,6 @@
 """Chapter 06's exercises: MoGlow's history dropout, checked against
 :func:`motionlab.models.moglow.conditioning.history_keep_mask`, and its autoregressive sampling loop, checked
-against the package's generic loop :func:`motionlab.models.moglow.sampling.autoregressive_sample` with a small
+against the package's loop :func:`motionlab.models.moglow.sampling.sample_loop` with a small
 stand-in for the flow's inverse.
 
 The reader's loop receives ``invert_frame(z_t, cond_t, state) -> (pose_t, state)``, the one-frame inverse
@@ -20,7 +20,7 @@ import torch
 
 from motionlab.exercises.checking import CheckResult, Diagnosis, as_result, checker, close
 from motionlab.models.moglow.conditioning import history_keep_mask
-from motionlab.models.moglow.sampling import autoregressive_sample
+from motionlab.models.moglow.sampling import sample_loop
 
 InvertFrame = Callable[[torch.Tensor, torch.Tensor, Any], tuple[torch.Tensor, Any]]
 KeepMask = Callable[[int, int, int, float, torch.Generator, bool], torch.Tensor]
@@ -88,11 +88,7 @@ def _reference(
 ) -> tuple[torch.Tensor, _Frame]:
     """The right loop's poses ``(B, N, P)``, and the stand-in that recorded its calls."""
     frame = _Frame.new(0)
-
-    def step(t: int, cond_t: torch.Tensor, state: Any) -> tuple[torch.Tensor, Any]:
-        return frame(temperature * noise[:, t], cond_t, state)
-
-    return autoregressive_sample(step, control, seed_pose), frame
+    return sample_loop(frame, control, seed_pose, noise, temperature), frame
 
 
 def _history_problem(got: torch.Tensor, want: torch.Tensor, seed_part: torch.Tensor, t: int) -> str:

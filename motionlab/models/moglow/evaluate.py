@@ -36,8 +36,14 @@ import torch
 from torch import Tensor
 
 from motionlab.data.synthetic import load_or_generate
-from motionlab.models.moglow.data import MoGlowDataConfig, MoGlowFeatures, clip_features
-from motionlab.models.moglow.sampling import seed_features, splice_controls
+from motionlab.models.moglow.data import MoGlowDataConfig, MoGlowFeatures, Scalers, clip_features
+from motionlab.models.moglow.sampling import (
+    AutoregressiveModel,
+    GeneratedMotion,
+    generate_motion,
+    seed_features,
+    splice_controls,
+)
 from motionlab.validation import check_scalar, check_tensor
 
 #: Ankle and toe joints of the default skeleton (left ankle, right ankle, left foot, right foot).
@@ -144,6 +150,15 @@ def speed_ratio(pose: Tensor, window: int, fps: float = 30.0) -> float:
     return float(speed[:, -(window - 1) :].mean() / first)
 
 
+def moving_average(series: Tensor, width: int) -> Tensor:
+    """Centred moving average ``(T,)`` of a series ``(T,)`` over ``width`` frames, the end values repeated
+    (the chapter's curves of speed over time use one second, ``width = fps + 1``)."""
+    check_tensor(series, "series", "moving_average", ndim=1)
+    check_scalar(width, "width", "moving_average", kind=numbers.Integral, minimum=1)
+    padded = torch.cat([series[:1].expand((width - 1) // 2), series, series[-1:].expand(width // 2)])
+    return padded.unfold(0, width, 1).mean(dim=-1)
+
+
 class ControlTest(NamedTuple):
     """Spliced command sequences ``control`` ``(N, T, 3)`` (m/frame, rad/frame), the seeds that start them,
     and the frame ranges of the pieces (walk, stand, jog, stand) within ``control``."""
@@ -201,6 +216,30 @@ def control_test(
     step = length - blend
     bounds = tuple((i * step, i * step + step) for i in range(4))
     return ControlTest(torch.stack(commands), seed_features(clips, seeds, history), bounds)
+
+
+class CommandRun(NamedTuple):
+    """A model's run of the control test, seed frames left out: the ``mismatch`` per command ``(N,)`` (m/s),
+    the legs' ``gait`` speed ``(N, T - 1)`` (m/s), and the generated ``motion`` (seed frames included)."""
+
+    mismatch: Tensor
+    gait: Tensor
+    motion: GeneratedMotion
+
+
+def run_control_test(
+    model: AutoregressiveModel, scalers: Scalers, commands: ControlTest, temperature: float, seed: int = 0
+) -> CommandRun:
+    """Generate every command of ``commands`` from its seed frames at ``temperature`` (latents drawn from
+    ``seed``) and measure :func:`control_mismatch` and :func:`gait_speed` on the generated frames.
+
+    Raises ``ValueError`` when the generation diverges (:func:`~.sampling.generate_motion`)."""
+    motion = generate_motion(
+        model, scalers, commands.control, commands.seed, temperature, torch.Generator().manual_seed(seed)
+    )
+    history = commands.seed.pose.shape[1]
+    pose, control = motion.pose[:, history:], motion.control[:, history:]
+    return CommandRun(control_mismatch(pose, control), gait_speed(pose), motion)
 
 
 def long_clips(n_per_mode: int, seconds: float, seed: int) -> MoGlowFeatures:

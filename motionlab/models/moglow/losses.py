@@ -47,6 +47,22 @@ def held_out_nll_per_window(model: nn.Module, data: MoGlowFeatures, batch_size: 
         model.train(was_training)
 
 
+def held_out_nll_per_clip(
+    model: nn.Module, data: MoGlowFeatures, n_clips: int, batch_size: int = 256
+) -> Tensor:
+    """Each clip's mean NLL per frame (nats) ``(n_clips,)`` over its windows, in eval mode: the unit of
+    chapter 06's paired comparisons. ``data`` holds the windows of ``n_clips`` clips ordered start by start,
+    clip by clip (:func:`~.data.prepare_data`), so window ``i`` belongs to clip ``i % n_clips``."""
+    check_scalar(n_clips, "n_clips", "held_out_nll_per_clip", kind=numbers.Integral, minimum=1)
+    per_window = held_out_nll_per_window(model, data, batch_size)
+    if per_window.shape[0] % n_clips:
+        raise ValueError(
+            f"held_out_nll_per_clip: {per_window.shape[0]} windows are not a whole number per clip "
+            f"of {n_clips} clips"
+        )
+    return per_window.view(-1, n_clips).mean(0)
+
+
 def held_out_nll(model: nn.Module, data: MoGlowFeatures, batch_size: int = 256) -> float:
     """Mean NLL per frame (nats) of ``model`` on windows ``data``: its likelihood, in eval mode (see
     :func:`held_out_nll_per_window`)."""

@@ -30,7 +30,8 @@ controls in metres and radians per frame (e.g. from :func:`control_programme` or
 turns the generated poses back into metres and integrates the root path from the control
 (:func:`motionlab.data.representations.from_moglow`): MoGlow never predicts where the root goes, the
 control says it, and the model's job is a body that moves accordingly. :func:`autoregressive_sample` is
-the generic loop of the Gaussian baseline (any one-frame ``step``).
+the generic loop of the Gaussian baseline (any one-frame ``step``); :func:`sample_loop` is the same loop
+in the form chapter 06's exercise asks for, which the chapter's small flow generates with.
 """
 
 import functools
@@ -174,6 +175,28 @@ def autoregressive_sample(
         poses.append(pose_t)
         past = torch.cat([past[:, 1:], pose_t[:, None]], dim=1)
     return check_generated(torch.stack(poses, dim=1), "autoregressive_sample")
+
+
+def sample_loop(
+    invert_frame: Callable[[Tensor, Tensor, Any], tuple[Tensor, Any]],
+    control: Tensor,
+    seed_pose: Tensor,
+    noise: Tensor,
+    temperature: float,
+) -> Tensor:
+    """Chapter 06's exercise loop: poses ``(B, N, P)`` from any one-frame flow inverse.
+
+    Args:
+        invert_frame: ``invert_frame(z_t (B, P), cond_t (B, cond_dim), state) -> (pose_t (B, P), state)``,
+            the inverse of one frame's flow with its carried state (``None`` at the start).
+        control: ``(B, tau + N, C)``; seed_pose: ``(B, tau, P)`` (standard units).
+        noise: standard-normal ``(B, N, P)``, scaled by ``temperature`` to give frame ``t``'s latent.
+    """
+    check_tensor(noise, "noise", "sample_loop", ndim=3)
+    temperature = check_temperature(temperature, "sample_loop")
+    return autoregressive_sample(
+        lambda t, cond_t, state: invert_frame(temperature * noise[:, t], cond_t, state), control, seed_pose
+    )
 
 
 class InverseStep(NamedTuple):
