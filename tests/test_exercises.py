@@ -94,6 +94,7 @@ def test_skeletons_raise_not_implemented_with_a_message_and_the_checker_says_not
         ("06", "my_keep_mask"),
         ("07", "my_dct_matrix"),
         ("07", "my_given_trajectories"),
+        ("07", "my_prior_kl"),
         ("08", "my_contrastive_loss"),
         ("08", "my_covariance_prior"),
     ],
@@ -608,6 +609,11 @@ def _given(tile=torch.repeat_interleave, keep_given=True, frame_axis=True):
     return given
 
 
+def _kl(mu_q, logvar_q, mu_p, logvar_p):
+    """KL(N(mu_q, .) || N(mu_p, .)) summed per sequence (B,), for latents (B, C, L)."""
+    return gaussian_kl(mu_q, logvar_q, mu_p, logvar_p).sum(dim=(1, 2))
+
+
 def _prior(trace=lambda logvar, s2: logvar.exp() / s2, log_det_sign=-1.0, on_mean=0.0, reduce=True):
     def prior(mu, logvar, prior_variance):
         terms = trace(logvar, prior_variance) + log_det_sign * logvar + on_mean * mu**2 / prior_variance
@@ -659,6 +665,13 @@ def _prior(trace=lambda logvar, s2: logvar.exp() / s2, log_det_sign=-1.0, on_mea
             "keep the shape",
         ),
         ("check_given_trajectories", lambda poses, mask: _given()(poses.detach(), mask), "no gradient"),
+        ("check_prior_kl", lambda mq, lq, mp, lp: _kl(mp, lp, mq, lq), "swapped"),
+        ("check_prior_kl", lambda mq, lq, mp, lp: _kl(mq, lq, 0.0, 0.0), "N(0, I)"),
+        ("check_prior_kl", lambda mq, lq, mp, lp: gaussian_kl(mq, lq, mp, lp), "one KL per sequence (B,)"),
+        ("check_prior_kl", lambda mq, lq, mp, lp: _kl(mq, lq, mp, lp).mean(), "not its mean"),
+        ("check_prior_kl", lambda mq, lq, mp, lp: gaussian_kl(mq, lq, mp, lp).mean(dim=(1, 2)), "sum them"),
+        ("check_prior_kl", lambda mq, lq, mp, lp: 2 * _kl(mq, lq, mp, lp), "factor 1/2"),
+        ("check_prior_kl", lambda mq, lq, mp, lp: _kl(mq.detach(), lq, mp, lp), "no gradient"),
         ("check_covariance_prior", _prior(log_det_sign=1.0), "wrong sign of the log-determinant"),
         ("check_covariance_prior", _prior(on_mean=1.0), "no prior on the means"),
         ("check_covariance_prior", _prior(reduce=False), "sum over the D code dimensions"),

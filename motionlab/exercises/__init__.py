@@ -25,7 +25,12 @@ from motionlab.exercises.kinematics import check_chain_positions
 from motionlab.exercises.metrics import check_apd, check_fid
 from motionlab.exercises.mocap import check_bone_length_variation, check_mirror
 from motionlab.exercises.rotations import check_quat_mul, check_slerp
-from motionlab.exercises.sequences import check_contrastive_loss, check_dct_matrix, check_given_trajectories
+from motionlab.exercises.sequences import (
+    check_contrastive_loss,
+    check_dct_matrix,
+    check_given_trajectories,
+    check_prior_kl,
+)
 from motionlab.exercises.skating import check_foot_skating
 from motionlab.exercises.vae import (
     check_covariance_prior,
@@ -54,6 +59,7 @@ __all__ = [
     "check_mirror",
     "check_motion_cell_step",
     "check_negative_elbo",
+    "check_prior_kl",
     "check_quat_mul",
     "check_reparameterize",
     "check_sample_loop",

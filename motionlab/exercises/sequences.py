@@ -1,5 +1,6 @@
-"""Chapters 07 and 08's exercises: the DCT basis of TrajeVAE, its masked-joint input and ODMO's contrastive
-loss, checked against :mod:`motionlab.models.trajevae.dct`, :mod:`motionlab.models.trajevae.masks` and
+"""Chapters 07 and 08's exercises: the DCT basis of TrajeVAE, its masked-joint input, the KL of its posterior
+from its learned prior and ODMO's contrastive loss, checked against :mod:`motionlab.models.trajevae.dct`,
+:mod:`motionlab.models.trajevae.masks`, :mod:`motionlab.models.gaussian` and
 :mod:`motionlab.models.odmo.losses`."""
 
 from __future__ import annotations
@@ -10,6 +11,7 @@ from collections.abc import Callable
 import torch
 
 from motionlab.exercises.checking import CheckResult, Diagnosis, as_result, checker, close, close_each
+from motionlab.models.gaussian import gaussian_kl
 from motionlab.models.odmo.losses import contrastive_loss
 from motionlab.models.trajevae.dct import dct_matrix
 from motionlab.models.trajevae.masks import given_trajectories, hidden_poses
@@ -17,6 +19,7 @@ from motionlab.models.trajevae.masks import given_trajectories, hidden_poses
 DCTMatrix = Callable[[int], torch.Tensor]
 GivenTrajectories = Callable[[torch.Tensor, torch.Tensor], torch.Tensor]
 ContrastiveLoss = Callable[[torch.Tensor, torch.Tensor, torch.Tensor, float], torch.Tensor]
+PriorKL = Callable[[torch.Tensor, torch.Tensor, torch.Tensor, torch.Tensor], torch.Tensor]
 
 
 def _dct_values(fn: DCTMatrix) -> None:
@@ -194,3 +197,67 @@ def _given_per_sequence(fn: GivenTrajectories) -> None:
 def check_given_trajectories(fn: GivenTrajectories) -> CheckResult:
     """Check ``fn(poses (..., T, J * 3), mask (..., J) bool) -> Y (..., T, J * 3)``: ``Y = X ⊙ M``, the given
     joints' trajectories and zeros elsewhere."""
+
+
+def _latents(seed: int) -> tuple[torch.Tensor, torch.Tensor, torch.Tensor, torch.Tensor]:
+    """A posterior's and a learned prior's means and log-variances, each (4, 3, 5): (B, C, L)."""
+    generator = torch.Generator().manual_seed(seed)
+    mu_q, logvar_q, mu_p, logvar_p = torch.randn(4, 4, 3, 5, generator=generator, dtype=torch.float64)
+    return mu_q, logvar_q, mu_p + 1.0, logvar_p - 0.5
+
+
+def _prior_kl_values(fn: PriorKL) -> None:
+    mu_q, logvar_q, mu_p, logvar_p = _latents(6)
+    got = as_result(fn(mu_q, logvar_q, mu_p, logvar_p), "the KL")
+    per_number = gaussian_kl(mu_q, logvar_q, mu_p, logvar_p)
+    want = per_number.sum(dim=(1, 2))
+    if got.shape == per_number.shape and close(got, per_number):
+        raise Diagnosis("return one KL per sequence (B,): sum over the C components and L latent numbers")
+    if got.numel() == 1 and close(got.reshape(()), want.mean()):
+        raise Diagnosis("return one KL per sequence (B,), not its mean over the batch (the loss averages it)")
+    if got.shape != want.shape:
+        raise Diagnosis(
+            f"latents of shape (4, 3, 5) should give one KL per sequence, (4,), got {tuple(got.shape)}"
+        )
+    if close(got, want):
+        return
+    for wrong, text in (
+        (
+            gaussian_kl(mu_p, logvar_p, mu_q, logvar_q).sum(dim=(1, 2)),
+            "the two Gaussians are swapped: the loss is KL(q_pose || p_traj), the posterior's divergence "
+            "from the prior",
+        ),
+        (
+            gaussian_kl(mu_q, logvar_q).sum(dim=(1, 2)),
+            "this is the KL from N(0, I): TrajeVAE's prior is learned, use mu_p and logvar_p",
+        ),
+        (per_number.mean(dim=(1, 2)), "you averaged over the latent numbers: sum them"),
+        (2 * want, "you forgot the factor 1/2"),
+        (want + 0.5 * per_number[0].numel(), "you forgot the -1 inside the bracket (KL(q || q) is 0)"),
+    ):
+        if close(got, wrong):
+            raise Diagnosis(text)
+    raise Diagnosis(
+        f"for the first sequence you gave {got[0].item():.4f}, the KL is {want[0].item():.4f}: "
+        "1/2 sum (log sigma_p^2 - log sigma_q^2 + (sigma_q^2 + (mu_q - mu_p)^2) / sigma_p^2 - 1)"
+    )
+
+
+def _prior_kl_is_zero_when_they_agree(fn: PriorKL) -> None:
+    mu, logvar, _, _ = _latents(7)
+    mu.requires_grad_(True)
+    got = as_result(fn(mu, logvar, mu.detach().clone(), logvar.clone()), "the KL")
+    if got.shape != (4,) or not close(got, torch.zeros_like(got)):
+        raise Diagnosis("when the posterior equals the prior the KL should be 0 for every sequence")
+    again = fn(mu, logvar, mu.detach() + 0.1, logvar)
+    if not again.requires_grad:
+        raise Diagnosis("no gradient reaches the posterior's mean: compute with torch operations only")
+
+
+@checker(
+    [_prior_kl_values, _prior_kl_is_zero_when_they_agree],
+    "matches KL(q_pose || p_traj) (motionlab.models.gaussian.gaussian_kl) summed per sequence, 0 when equal",
+)
+def check_prior_kl(fn: PriorKL) -> CheckResult:
+    """Check ``fn(mu_q, logvar_q, mu_p, logvar_p) -> (B,)``: the KL of the posterior N(mu_q, exp(logvar_q))
+    from the learned prior N(mu_p, exp(logvar_p)), latents ``(B, C, L)``, summed over ``C`` and ``L``."""

@@ -21,3 +21,11 @@ def my_given_trajectories(poses: torch.Tensor, mask: torch.Tensor) -> torch.Tens
     """Y = X ⊙ M (..., T, J * 3): poses (..., T, J * 3) with the joints outside mask (..., J) set to 0."""
     channels = mask.repeat_interleave(3, dim=-1)  # (..., J * 3): x, y, z of each joint in turn
     return poses * channels[..., None, :].to(poses.dtype)  # the same mask in every frame
+
+
+def my_prior_kl(
+    mu_q: torch.Tensor, logvar_q: torch.Tensor, mu_p: torch.Tensor, logvar_p: torch.Tensor
+) -> torch.Tensor:
+    """KL(q_pose || p_traj) per sequence (B,) for latents (B, C, L): the closed form per number, summed."""
+    kl = 0.5 * (logvar_p - logvar_q + (logvar_q.exp() + (mu_q - mu_p) ** 2) / logvar_p.exp() - 1)
+    return kl.sum(dim=(1, 2))
