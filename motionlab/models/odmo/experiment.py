@@ -280,15 +280,20 @@ def train_all(
     reference: Reference,
     processes: int = 2,
     progress: bool | None = None,
+    variants: tuple[str, ...] = tuple(VARIANTS),
 ) -> dict[str, Trained[Measured]]:
-    """Train (or load) every variant on ``processes`` cores and measure each as soon as it is trained.
+    """Train (or load) the ``variants`` (every one by default) on ``processes`` cores and measure each as
+    soon as it is trained.
 
     Returns ``{variant: Trained}`` in the order of :data:`VARIANTS`, every model loaded here from the cache
     and its :class:`Measured` in ``measured``.
     """
+    for name in variants:
+        check_choice(name, "variants", "train_all", VARIANTS)
     measure = partial(measure_variant, data=data, reference=reference, cfg=cfg)
-    trained = train_many(runs(cfg, data), then=measure, processes=processes, progress=progress)
-    return {name: trained[name] for name in VARIANTS}
+    chosen = {name: run for name, run in runs(cfg, data).items() if name in variants}
+    trained = train_many(chosen, then=measure, processes=processes, progress=progress)
+    return {name: trained[name] for name in VARIANTS if name in variants}
 
 
 #: The chapter that trains this family, and its main run (the training command's default).
