@@ -275,8 +275,10 @@ def test_train_all_trains_only_the_chosen_variants(data, tmp_path, monkeypatch):
     reference = evaluate.Reference(
         StandInEvaluator(), StandInEvaluator().features(real), real, np.array([0, 1] * 4)
     )
-    trained = train_all(EXPERIMENT, data, reference, processes=1, variants=("-L_es", "ODMO"))
+    chosen = dataclasses.replace(EXPERIMENT, rows=("ODMO",), conventional=())
+    trained = train_all(chosen, data, reference, processes=1, variants=("-L_es", "ODMO"))
     assert list(trained) == ["ODMO", "-L_es"]  # in the order of VARIANTS
+    assert list(trained["ODMO"].measured.rows) == ["ODMO"] and trained["-L_es"].measured.rows == {}
     assert not runs(EXPERIMENT, data)["standard VAE"].is_cached()  # the others were not trained
     with pytest.raises(ValueError, match="train_all: variants must be one of"):
         train_all(EXPERIMENT, data, reference, variants=("odmo",))
