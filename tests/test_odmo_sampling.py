@@ -269,6 +269,21 @@ def test_train_all_trains_in_workers_and_measures_like_in_process(data, tmp_path
     assert all(run.is_cached() for run in runs(EXPERIMENT, data).values())  # a second call trains nothing
 
 
+def test_train_all_trains_only_the_chosen_variants(data, tmp_path, monkeypatch):
+    monkeypatch.setenv("MOTIONLAB_BUILD", str(tmp_path))
+    real = torch.randn(8, CFG.n_frames * STRIDE, 3, 3)
+    reference = evaluate.Reference(
+        StandInEvaluator(), StandInEvaluator().features(real), real, np.array([0, 1] * 4)
+    )
+    chosen = dataclasses.replace(EXPERIMENT, rows=("ODMO",), conventional=())
+    trained = train_all(chosen, data, reference, processes=1, variants=("-L_es", "ODMO"))
+    assert list(trained) == ["ODMO", "-L_es"]  # in the order of VARIANTS
+    assert list(trained["ODMO"].measured.rows) == ["ODMO"] and trained["-L_es"].measured.rows == {}
+    assert not runs(EXPERIMENT, data)["standard VAE"].is_cached()  # the others were not trained
+    with pytest.raises(ValueError, match="train_all: variants must be one of"):
+        train_all(EXPERIMENT, data, reference, variants=("odmo",))
+
+
 def test_widget_callbacks_and_builders(sampler):
     for fig in (
         odmo_widgets.mode_sample_figure(sampler, PARENTS, 0, 0, seed=1),

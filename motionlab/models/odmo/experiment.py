@@ -101,6 +101,7 @@ class ExperimentConfig(config.ProfileConfig):
             code.
         prior_sampled: variants whose table sampler draws codes from the prior (the standard VAE); the others
             sample their discovered modes.
+        rows: variants that get a row of Tables 1-2 (every one by default).
         conventional: variants that also get a row with the single-Gaussian sampler, named ``<variant>_conv``.
         homogeneity, end_point: the variants of Table 3 (and the style purity) and of Table 4.
     """
@@ -119,6 +120,7 @@ class ExperimentConfig(config.ProfileConfig):
     n_codes: int = integer(40, minimum=1)
     n_end_points: int = integer(10, minimum=1)
     prior_sampled: tuple[str, ...] = tuple_of(("standard VAE",), choices=VARIANTS)
+    rows: tuple[str, ...] = tuple_of(tuple(VARIANTS), choices=VARIANTS)
     conventional: tuple[str, ...] = tuple_of(("ODMO",), choices=VARIANTS)
     homogeneity: tuple[str, ...] = tuple_of(
         ("ODMO", "ODMO + prior on mu (extension)", "standard VAE"), choices=VARIANTS
@@ -232,7 +234,8 @@ class Measured:
     Attributes:
         samplers: ``{"table": ..., "modes": ...}`` (the same sampler for variants that sample their modes),
             plus ``"conventional"`` for the variants in :attr:`ExperimentConfig.conventional`.
-        rows: Tables 1-2 rows ``{row name: {metric: Interval}}`` (the variant, and ``<variant>_conv``).
+        rows: Tables 1-2 rows ``{row name: {metric: Interval}}`` (the variant's if it is in
+            :attr:`ExperimentConfig.rows`, and ``<variant>_conv``).
         homogeneity: Table 3's interval (per cent), or ``None``; purity: our style purity of the modes'
             samples, or ``None``; end_point: Table 4's row, or ``None``.
     """
@@ -257,7 +260,11 @@ def measure_variant(
         else modes,
         "modes": modes,
     }
-    rows = {variant: metric_row(reference, samplers["table"], cfg.n_per_class, cfg.n_sets)}
+    rows = (
+        {variant: metric_row(reference, samplers["table"], cfg.n_per_class, cfg.n_sets)}
+        if variant in cfg.rows
+        else {}
+    )
     if variant in cfg.conventional:
         samplers["conventional"] = ODMOSampler.from_codes(model, codes, data, kind="conventional")
         rows[f"{variant}_conv"] = metric_row(reference, samplers["conventional"], cfg.n_per_class, cfg.n_sets)
@@ -280,15 +287,20 @@ def train_all(
     reference: Reference,
     processes: int = 2,
     progress: bool | None = None,
+    variants: tuple[str, ...] = tuple(VARIANTS),
 ) -> dict[str, Trained[Measured]]:
-    """Train (or load) every variant on ``processes`` cores and measure each as soon as it is trained.
+    """Train (or load) the ``variants`` (every one by default) on ``processes`` cores and measure each as
+    soon as it is trained.
 
     Returns ``{variant: Trained}`` in the order of :data:`VARIANTS`, every model loaded here from the cache
     and its :class:`Measured` in ``measured``.
     """
+    for name in variants:
+        check_choice(name, "variants", "train_all", VARIANTS)
     measure = partial(measure_variant, data=data, reference=reference, cfg=cfg)
-    trained = train_many(runs(cfg, data), then=measure, processes=processes, progress=progress)
-    return {name: trained[name] for name in VARIANTS}
+    chosen = {name: run for name, run in runs(cfg, data).items() if name in variants}
+    trained = train_many(chosen, then=measure, processes=processes, progress=progress)
+    return {name: trained[name] for name in VARIANTS if name in variants}
 
 
 #: The chapter that trains this family, and its main run (the training command's default).
