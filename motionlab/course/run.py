@@ -53,6 +53,10 @@ BUDGETS: dict[str, tuple[float, float]] = {
     "08": (180, 40),
     "09": (180, 40),
     "10": (240, 40),
+    "04a": (240, 60),
+    "06a": (180, 40),
+    "07a": (180, 40),
+    "08a": (240, 60),
 }
 
 #: Budget of an appendix not listed in :data:`BUDGETS`, as (full, quick).
