@@ -48,6 +48,7 @@ BUDGETS: dict[str, tuple[float, float]] = {
     "08": (180, 40),
     "09": (180, 40),
     "10": (240, 40),
+    "11": (180, 40),
 }
 
 #: A cell may take at most this many times its chapter's budget. Some chapters spend most of their time in
