@@ -562,8 +562,9 @@ def test_checker_names_the_mistake(checker, wrong, says) -> None:
 
 
 def _ancestral(mean_x0=None, noise_scale=None, last=None):
-    """Chapter 11's ancestral step with one piece replaced: ``mean_x0(beta, now, before)`` the coefficient of
-    x0_hat, ``noise_scale(beta, variance)`` the noise's factor, ``last(x0_hat, noise, betas)`` the t = 0 step."""
+    """Chapter 11's ancestral step with one piece replaced: ``mean_x0(beta, now, before)`` the coefficient
+    of x0_hat, ``noise_scale(beta, variance)`` the noise's factor, ``last(x0_hat, noise, betas)`` the t = 0
+    step."""
 
     def step(x0_hat, x_t, t, betas, noise):
         alpha_bar = torch.cumprod(1 - betas, dim=0)
