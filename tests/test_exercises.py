@@ -97,6 +97,7 @@ def test_skeletons_raise_not_implemented_with_a_message_and_the_checker_says_not
         ("07", "my_prior_kl"),
         ("08", "my_contrastive_loss"),
         ("08", "my_covariance_prior"),
+        ("11", "my_ancestral_step"),
     ],
 )
 def test_solutions_pass_their_checkers(chapter: str, name: str) -> None:
@@ -687,6 +688,42 @@ def _prior(trace=lambda logvar, s2: logvar.exp() / s2, log_det_sign=-1.0, on_mea
 )
 def test_checker_names_the_mistake(checker, wrong, says) -> None:
     result = getattr(exercises, checker)(wrong)
+    assert result.status == "wrong" and says in result.message, result
+
+
+def _ancestral(mean_x0=None, noise_scale=None, last=None):
+    """Chapter 11's ancestral step with one piece replaced: ``mean_x0(beta, now, before)`` the coefficient
+    of x0_hat, ``noise_scale(beta, variance)`` the noise's factor, ``last(x0_hat, noise, betas)`` the t = 0
+    step."""
+
+    def step(x0_hat, x_t, t, betas, noise):
+        alpha_bar = torch.cumprod(1 - betas, dim=0)
+        if t == 0:
+            return x0_hat if last is None else last(x0_hat, noise, betas)
+        beta, now, before = betas[t], alpha_bar[t], alpha_bar[t - 1]
+        coefficient = beta * before.sqrt() / (1 - now) if mean_x0 is None else mean_x0(beta, now, before)
+        mean = coefficient * x0_hat + (1 - before) * (1 - beta).sqrt() / (1 - now) * x_t
+        variance = beta * (1 - before) / (1 - now)
+        return mean + (variance.sqrt() if noise_scale is None else noise_scale(beta, variance)) * noise
+
+    return step
+
+
+@pytest.mark.parametrize(
+    "wrong, says",
+    [
+        (_ancestral(noise_scale=lambda beta, variance: 0 * beta), "no noise was added"),
+        (_ancestral(noise_scale=lambda beta, variance: variance), "standard deviation"),
+        (_ancestral(noise_scale=lambda beta, variance: beta.sqrt()), "forward step's variance"),
+        (_ancestral(last=lambda x0_hat, noise, betas: x0_hat + betas[0].sqrt() * noise), "at t = 0 noise"),
+        (_ancestral(last=lambda x0_hat, noise, betas: 0.5 * x0_hat), "index t - 1 = -1"),
+        (_ancestral(mean_x0=lambda beta, now, before: beta * now.sqrt() / (1 - now)), "the mean"),
+        (lambda x0_hat, x_t, t, betas, noise: x0_hat, "only the last step"),
+        (lambda x0_hat, x_t, t, betas, noise: x0_hat[:1], "shape"),
+    ],
+)
+def test_ancestral_step_checker_names_the_mistake(wrong, says) -> None:
+    result = exercises.check_ancestral_step(wrong)
     assert result.status == "wrong" and says in result.message, result
 
 

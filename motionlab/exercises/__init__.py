@@ -14,11 +14,13 @@ Modules: :mod:`~motionlab.exercises.rotations` (chapter 01), :mod:`~motionlab.ex
 :mod:`~motionlab.exercises.vrnn` (chapter 04), :mod:`~motionlab.exercises.hierarchy` (its appendix),
 :mod:`~motionlab.exercises.flows` (chapter 05), :mod:`~motionlab.exercises.autoregressive` (chapter 06),
 :mod:`~motionlab.exercises.sequences` (chapters 07 and 08), :mod:`~motionlab.exercises.metrics` (chapter 09),
-:mod:`~motionlab.exercises.mocap` (chapter 10); :mod:`~motionlab.exercises.checking` holds what they share.
+:mod:`~motionlab.exercises.mocap` (chapter 10), :mod:`~motionlab.exercises.diffusion` (chapter 11);
+:mod:`~motionlab.exercises.checking` holds what they share.
 """
 
 from motionlab.exercises.autoregressive import check_keep_mask, check_sample_loop
 from motionlab.exercises.checking import CheckResult
+from motionlab.exercises.diffusion import check_ancestral_step
 from motionlab.exercises.flows import check_coupling_forward, check_coupling_inverse
 from motionlab.exercises.hierarchy import check_impact_weights, check_subtree_reach
 from motionlab.exercises.kinematics import check_chain_positions
@@ -42,6 +44,7 @@ from motionlab.exercises.vrnn import check_motion_cell_step
 
 __all__ = [
     "CheckResult",
+    "check_ancestral_step",
     "check_apd",
     "check_bone_length_variation",
     "check_chain_positions",
