@@ -44,6 +44,7 @@ from motionlab.models.moglow.sampling import (
     seed_features,
     splice_controls,
 )
+from motionlab.models.motion_cell import smoothing
 from motionlab.validation import check_scalar, check_tensor
 
 #: Ankle and toe joints of the default skeleton (left ankle, right ankle, left foot, right foot).
@@ -155,8 +156,7 @@ def moving_average(series: Tensor, width: int) -> Tensor:
     (the chapter's curves of speed over time use one second, ``width = fps + 1``)."""
     check_tensor(series, "series", "moving_average", ndim=1)
     check_scalar(width, "width", "moving_average", kind=numbers.Integral, minimum=1)
-    padded = torch.cat([series[:1].expand((width - 1) // 2), series, series[-1:].expand(width // 2)])
-    return padded.unfold(0, width, 1).mean(dim=-1)
+    return smoothing.moving_average(series.view(1, -1, 1), width).view(-1)
 
 
 class ControlTest(NamedTuple):
