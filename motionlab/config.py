@@ -8,6 +8,10 @@ Everything that differs between a quick test run and the full course goes throug
 
 The profile comes from the environment variable ``MOTIONLAB_PROFILE`` (``quick`` or ``full``,
 default ``full``). Tests and nbval set ``quick``; ``make course`` sets ``full``.
+
+Every trained model's seed starts from one base, ``MOTIONLAB_SEED`` (default 0; :func:`base_seed`), so
+``MOTIONLAB_SEED=1 make course`` builds the whole course on models of another training seed: a verdict that
+holds only for one seed shows itself.
 """
 
 from __future__ import annotations
@@ -24,7 +28,7 @@ import numpy as np
 import torch
 
 from motionlab import paths
-from motionlab.validation import Checked, check_scalar
+from motionlab.validation import Checked, check_scalar, integer
 
 T = TypeVar("T")
 
@@ -46,6 +50,30 @@ def profile() -> str:
     if value not in PROFILES:
         raise ValueError(f"MOTIONLAB_PROFILE must be one of {PROFILES}, got {value!r}")
     return value
+
+
+#: The environment variable holding the base training seed (:func:`base_seed`).
+SEED_VARIABLE = "MOTIONLAB_SEED"
+
+
+def base_seed() -> int:
+    """The seed every training run starts from unless its config names one: ``MOTIONLAB_SEED`` (default 0).
+
+    It seeds the initial weights and the batches of every model the course trains (the training configs'
+    and model configs' ``seed`` fields default to it, :func:`seed_field`); data, evaluation draws and the
+    chapters' small foreground models keep their own fixed seeds. Any other value gives other cache keys, so
+    models of two base seeds never mix.
+    """
+    text = os.environ.get(SEED_VARIABLE, "0").strip() or "0"
+    if not text.isdigit():
+        raise ValueError(f"{SEED_VARIABLE} must be an integer >= 0, got {text!r}")
+    return int(text)
+
+
+def seed_field() -> int:
+    """A config dataclass's ``seed`` field: an integer >= 0 that defaults to :func:`base_seed` (read when
+    the config is built)."""
+    return integer(minimum=0, kind=int, default_factory=base_seed)
 
 
 def is_quick() -> bool:

@@ -499,10 +499,17 @@ def integer(
     kind: type | tuple[type, ...] = numbers.Integral,
     optional: bool = False,
     note: str | None = None,
+    default_factory: Any = dataclasses.MISSING,
 ) -> Any:
     """A field holding an integer within the inclusive bounds ``[minimum, maximum]`` (``None``: no bound).
     ``kind=int`` refuses NumPy integers (for fields that go into a JSON cache key)."""
-    return declared(_number(kind, minimum, maximum, None, None), default, optional=optional, note=note)
+    return declared(
+        _number(kind, minimum, maximum, None, None),
+        default,
+        default_factory=default_factory,
+        optional=optional,
+        note=note,
+    )
 
 
 def real(

@@ -49,7 +49,7 @@ class ClassifierTraining(Checked):
     lr: float = real(2e-3, above=0)
     hidden: int = integer(128, minimum=1)
     feature_dim: int = integer(30, minimum=1)
-    seed: int = integer(0, minimum=0)
+    seed: int = config.seed_field()
 
     def training(self, n_items: int) -> TrainConfig:
         """The classifier's :class:`~motionlab.train.TrainConfig` on ``n_items`` training items (a batch

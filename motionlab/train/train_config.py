@@ -6,6 +6,7 @@ import dataclasses
 from dataclasses import dataclass
 from typing import Any
 
+from motionlab import config
 from motionlab.checkpoints import config_dict
 from motionlab.train.schedules import Schedule
 from motionlab.validation import Checked, instance, integer, real, tuple_of
@@ -63,7 +64,7 @@ class TrainConfig(Checked):
     val_every: int | None = integer(None, minimum=1, kind=int, optional=True)
     log_every: int = integer(50, minimum=1, kind=int)
     checkpoint_every: int | None = integer(500, minimum=1, kind=int, optional=True)
-    seed: int = integer(0, minimum=0, kind=int)
+    seed: int = config.seed_field()
 
     def __post_init__(self) -> None:
         super().__post_init__()

@@ -84,7 +84,7 @@ class ExperimentConfig(config.ProfileConfig):
     steps: int = integer(300, minimum=1)
     batch_size: int = integer(32, minimum=1)
     lr: float = real(5e-4, above=0)
-    seed: int = integer(0, minimum=0)
+    seed: int = config.seed_field()
     sample_steps: int = integer(50, minimum=1)
     guidance: float = real(GUIDANCE_SCALE, minimum=0)
     n_per_action: int = integer(20, minimum=2)

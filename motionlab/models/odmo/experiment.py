@@ -112,7 +112,7 @@ class ExperimentConfig(config.ProfileConfig):
     batch_size: int = integer(60, minimum=1)
     lr: float = real(3e-3, above=0)
     teacher_forcing_end: float = real(0.3, minimum=0, maximum=1)
-    seed: int = integer(0, minimum=0)
+    seed: int = config.seed_field()
     n_sets: int = integer(10, minimum=1)
     n_per_class: int = integer(20, minimum=1)
     homogeneity_share: float = real(0.5, above=0, maximum=1)

@@ -23,6 +23,7 @@ from dataclasses import dataclass
 import torch
 from torch import Tensor, nn
 
+from motionlab import config
 from motionlab.models.gaussian import reparameterize
 from motionlab.models.trajevae.data import check_batch
 from motionlab.models.trajevae.masks import KEEP_PROBABILITY, given_trajectories
@@ -58,7 +59,7 @@ class RecurrentConfig(WindowShape):
     reconstruction: str = choice(RECONSTRUCTIONS, "sum")
     keep_probability: float = real(KEEP_PROBABILITY, minimum=0, maximum=1)
     augment: bool = flag(True)
-    seed: int = integer(0, minimum=0)
+    seed: int = config.seed_field()
 
 
 class TaskContext(nn.Module):

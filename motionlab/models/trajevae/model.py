@@ -42,6 +42,7 @@ from typing import NamedTuple
 import torch
 from torch import Tensor, nn
 
+from motionlab import config
 from motionlab.models.gaussian import reparameterize
 from motionlab.models.trajevae.data import check_batch, check_task
 from motionlab.models.trajevae.dct import dct, idct
@@ -110,7 +111,7 @@ class TrajeVAEConfig(WindowShape):
     learnable_prior: bool = flag(True)
     augment: bool = flag(True)
     mask_future_poses: bool = flag(True)
-    seed: int = integer(0, minimum=0)
+    seed: int = config.seed_field()
 
     def __post_init__(self) -> None:
         super().__post_init__()

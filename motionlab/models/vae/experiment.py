@@ -68,7 +68,7 @@ class ExperimentConfig(config.ProfileConfig):
     batch_size: int = integer(64, minimum=1)
     lr: float = real(2e-3, above=0)
     grad_clip: float = real(1.0, above=0)
-    seed: int = integer(0, minimum=0)
+    seed: int = config.seed_field()
     per_action: int = integer(50, minimum=1)
     n_repeats: int = integer(10, minimum=2)
 
