@@ -158,23 +158,35 @@ def _entry_mismatch(payload: Any, name: str, cfg: Any, model: nn.Module) -> str 
     )
 
 
-def load_checkpoint(name: str, cfg: Any, model: nn.Module) -> dict[str, Any] | None:
+class CheckpointRefused(ValueError):
+    """A checkpoint that must fit and does not: a reference model (``load_checkpoint(refuse=True)``)."""
+
+
+def load_checkpoint(
+    name: str, cfg: Any, model: nn.Module, path: Path | None = None, refuse: bool = False
+) -> dict[str, Any] | None:
     """Load the cached weights for (name, config) into ``model``; return the entry's ``extra`` dict.
 
     Returns ``None`` and leaves ``model`` untouched when there is no entry, and also (with a one-line
     warning saying why) when the entry cannot be read, has another format, name or config, or its
-    tensors do not match the model's (names or shapes): when it was written by other code.
+    tensors do not match the model's (names or shapes): when it was written by other code. ``path`` reads
+    another file than the cache entry (a reference model); with ``refuse=True`` an entry that cannot be read
+    or does not fit raises :class:`CheckpointRefused` instead (the caller must not quietly retrain).
     """
-    path = checkpoint_path(name, cfg)
+    path = checkpoint_path(name, cfg) if path is None else path
     if not path.exists():
         return None
     try:
         payload = torch.load(path, map_location="cpu", weights_only=True)
     except Exception as exc:  # corrupt or foreign file: the caller retrains
+        if refuse:
+            raise CheckpointRefused(f"cannot read {path}: {exc}") from None
         warnings.warn(f"ignoring unreadable checkpoint {path.name}: {exc}", stacklevel=2)
         return None
     problem = _entry_mismatch(payload, name, cfg, model)
     if problem is not None:
+        if refuse:
+            raise CheckpointRefused(f"refusing {path}: {problem}")
         warnings.warn(f"ignoring checkpoint {path.name}: {problem}", stacklevel=2)
         return None
     model.load_state_dict(payload["state_dict"], strict=True)

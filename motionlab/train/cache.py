@@ -19,7 +19,14 @@ from typing import Any, TypeVar
 import torch
 from torch import nn
 
-from motionlab.checkpoints import checkpoint_path, config_dict, load_checkpoint, save_checkpoint
+from motionlab.checkpoints import (
+    CheckpointRefused,
+    checkpoint_path,
+    config_dict,
+    load_checkpoint,
+    save_checkpoint,
+)
+from motionlab.train import reference
 from motionlab.train.batches import BatchSource
 from motionlab.train.history import History
 from motionlab.train.loop import Callback, LossFn, TrainResult, train
@@ -62,16 +69,25 @@ def build_seeded(factory: Callable[[], M], seed: int) -> M:
 def is_cached(
     name: str, model_config: Any, train_config: TrainConfig, data_config: Any | None = None
 ) -> bool:
-    """Whether :func:`train_or_load` with these arguments would find a cache entry (and not train)."""
-    return checkpoint_path(name, run_identity(model_config, train_config, data_config)).exists()
+    """Whether :func:`train_or_load` with these arguments would load a reference model or a cache entry
+    (and not train)."""
+    identity = run_identity(model_config, train_config, data_config)
+    return reference.find(name, identity) is not None or checkpoint_path(name, identity).exists()
 
 
 def _cached_result(name: str, identity: dict[str, Any], model: nn.Module) -> TrainResult | None:
-    """The cached run, loaded into ``model``; ``None`` (model untouched) when absent or unusable."""
+    """The run's reference model (full profile) or cache entry, loaded into ``model``; ``None`` (model
+    untouched) when there is neither or the cache entry is unusable. A reference model that does not fit
+    raises (:class:`~motionlab.train.reference.ReferenceError`), it is never replaced by a retraining."""
     backup = {k: v.detach().clone() for k, v in model.state_dict().items()}
-    extra = load_checkpoint(name, identity, model)
+    shipped = reference.find(name, identity)
+    try:
+        extra = load_checkpoint(name, identity, model, path=shipped, refuse=shipped is not None)
+    except CheckpointRefused as exc:
+        raise reference.ReferenceError(f"{exc} (retrain it with `make reference`)") from None
     if extra is None:
         return None
+    reference.note_use(name, identity)
     try:
         history = History.from_dict(extra["history"])
         metrics = {str(k): float(v) for k, v in extra["metrics"].items()}
@@ -84,7 +100,9 @@ def _cached_result(name: str, identity: dict[str, Any], model: nn.Module) -> Tra
             stacklevel=3,
         )
         return None
-    return TrainResult(history, metrics, loaded_from_cache=True, path=checkpoint_path(name, identity))
+    return TrainResult(
+        history, metrics, loaded_from_cache=True, path=shipped or checkpoint_path(name, identity)
+    )
 
 
 def load_cached(
@@ -148,7 +166,15 @@ def train_or_load(
     if not execution.is_main:  # data-parallel training: the first process writes the cache entry
         return result
     path = save_checkpoint(
-        name, identity, model, extra={"history": result.history.to_dict(), "metrics": result.metrics}
+        name,
+        identity,
+        model,
+        extra={
+            "history": result.history.to_dict(),
+            "metrics": result.metrics,
+            "trained_on": reference.trained_on(),
+        },
     )
+    reference.note_use(name, identity)
     resume.remove()
     return replace(result, path=path)

@@ -1,0 +1,363 @@
+"""The reference models shipped in ``reference/``: what the full profile loads instead of training.
+
+A reference model is a checkpoint-cache entry (:mod:`motionlab.checkpoints`: ``<name>-<hash>.pt``, the
+weights with their config, loss history and final metrics) committed to the repository, with a manifest
+``<name>-<hash>.json`` beside it::
+
+    {"format": 1, "name": "odmo", "file": "odmo-5f55d9e6002e.pt", "sha256": "...", "bytes": 812345,
+     "config": {...the run's identity: model, train and data configs...}, "seed": 0, "steps": 2400,
+     "train_seconds": 61.2, "trained_on": {"machine": ..., "torch": ..., "commit": ..., "date": ...},
+     "metrics": {...}, "levelling": {...}}
+
+In the full profile (:func:`in_use`) a run whose identity has a reference model is loaded from it, not
+trained and not taken from the build's cache: every machine then evaluates the same weights. The file is
+checked against its manifest first (:func:`verify`); a damaged file, a missing manifest or a config that is
+not the run's is refused with a :class:`ReferenceError` that names the file and what differs (never a silent
+retraining). ``MOTIONLAB_RETRAIN=1`` (``make course RETRAIN=1``) ignores the references and trains every
+model on the machine at hand, through the build's cache as before.
+
+``make reference`` rebuilds them: the course in a fresh build folder with ``MOTIONLAB_RETRAIN=1`` (every full
+profile process notes each run it trains or loads in the build's :func:`runs_log`), then
+``python -m motionlab.train.reference export BUILD`` copies those entries here and writes their manifests
+and ``reference/README.md``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import functools
+import hashlib
+import json
+import math
+import os
+import platform
+import shutil
+import subprocess
+import sys
+import time
+from pathlib import Path
+from typing import Any
+
+import torch
+
+from motionlab import config, paths
+from motionlab.checkpoints import config_hash
+
+#: Where the reference models live (the repository's ``reference/``).
+REFERENCE_DIR = paths.REPO_ROOT / "reference"
+
+#: The environment variable that makes the full profile retrain instead of loading references.
+RETRAIN_VARIABLE = "MOTIONLAB_RETRAIN"
+
+#: The manifest format this code writes and reads.
+MANIFEST_FORMAT = 1
+
+#: The most the reference models may weigh in all (bytes), files and manifests together.
+SIZE_LIMIT = 30 * 2**20
+
+#: A run "levelled off" when its training loss fell by less than this share of its whole fall over the
+#: last fifth of its steps (:func:`levelling`).
+LEVELLED_SHARE = 0.05
+
+
+class ReferenceError(RuntimeError):
+    """A reference model that must not be used: damaged, without a manifest, or not the run it claims."""
+
+
+def retraining() -> bool:
+    """Whether ``MOTIONLAB_RETRAIN`` asks to ignore the references and train everything here."""
+    text = os.environ.get(RETRAIN_VARIABLE, "").strip().lower()
+    if text in ("", "0", "false", "no"):
+        return False
+    if text in ("1", "true", "yes"):
+        return True
+    raise ValueError(f"{RETRAIN_VARIABLE} must be 1 or 0, got {text!r}")
+
+
+def in_use() -> bool:
+    """Whether runs load reference models: in the full profile, unless ``MOTIONLAB_RETRAIN=1``."""
+    return not config.is_quick() and not retraining()
+
+
+def reference_path(name: str, identity: dict[str, Any]) -> Path:
+    """``reference/<name>-<hash>.pt``: where the reference model of a run (its :func:`run_identity`) lives."""
+    return REFERENCE_DIR / f"{name}-{config_hash(name, identity)}.pt"
+
+
+def manifest_path(path: Path) -> Path:
+    """The manifest ``<name>-<hash>.json`` beside a reference model."""
+    return path.with_suffix(".json")
+
+
+def sha256(path: Path) -> str:
+    """The SHA-256 of a file, in hex."""
+    digest = hashlib.sha256()
+    with path.open("rb") as handle:
+        for block in iter(lambda: handle.read(1 << 20), b""):
+            digest.update(block)
+    return digest.hexdigest()
+
+
+def read_manifest(path: Path) -> dict[str, Any]:
+    """The manifest of the reference model at ``path``; :class:`ReferenceError` when missing or malformed."""
+    where = manifest_path(path)
+    try:
+        manifest = json.loads(where.read_text())
+    except FileNotFoundError:
+        raise ReferenceError(
+            f"{_shown(path)} has no manifest {where.name}: a reference model is used only with its manifest "
+            f"(restore both with `git checkout -- reference/`, or retrain with `make course RETRAIN=1`)"
+        ) from None
+    except (OSError, ValueError) as exc:
+        raise ReferenceError(f"cannot read the manifest {_shown(where)}: {exc}") from None
+    if not isinstance(manifest, dict) or manifest.get("format") != MANIFEST_FORMAT:
+        raise ReferenceError(
+            f"{_shown(where)} is not a manifest of format {MANIFEST_FORMAT} (it has "
+            f"{manifest.get('format') if isinstance(manifest, dict) else type(manifest).__name__!r})"
+        )
+    return manifest
+
+
+@functools.cache
+def _verified(path: Path, size: int, mtime_ns: int) -> dict[str, Any]:
+    manifest = read_manifest(path)
+    if manifest.get("file") != path.name:
+        raise ReferenceError(
+            f"{_shown(manifest_path(path))} describes {manifest.get('file')!r}, not {path.name}"
+        )
+    actual = sha256(path)
+    if actual != manifest.get("sha256"):
+        raise ReferenceError(
+            f"{_shown(path)} does not match its manifest: SHA-256 {actual[:12]}..., the manifest says "
+            f"{str(manifest.get('sha256'))[:12]}...: the file is damaged or was replaced (restore it with "
+            f"`git checkout -- reference/`, or retrain with `make course RETRAIN=1`)"
+        )
+    return manifest
+
+
+def verify(path: Path, identity: dict[str, Any] | None = None) -> dict[str, Any]:
+    """Check a reference model against its manifest (file name, checksum and, given the run's ``identity``,
+    configuration); return the manifest. Raises :class:`ReferenceError` saying what does not match."""
+    stat = path.stat()
+    manifest = _verified(path, stat.st_size, stat.st_mtime_ns)
+    if identity is not None and manifest.get("config") != json.loads(json.dumps(identity)):
+        raise ReferenceError(
+            f"{_shown(path)}: its manifest's configuration is not the run's (the file name's hash matches, "
+            f"so the manifest was edited by hand): retrain it with `make reference`"
+        )
+    return manifest
+
+
+def find(name: str, identity: dict[str, Any]) -> Path | None:
+    """The verified reference model of a run, or ``None`` when references are not in use (quick profile,
+    ``MOTIONLAB_RETRAIN=1``) or this run has none."""
+    if not in_use():
+        return None
+    path = reference_path(name, identity)
+    if not path.exists():
+        return None
+    verify(path, identity)
+    return path
+
+
+def runs_log() -> Path:
+    """The build's list of the full-profile runs it trained or loaded (one ``<name>-<hash>`` per line)."""
+    return config.checkpoint_dir() / "full-profile-runs.txt"
+
+
+def note_use(name: str, identity: dict[str, Any]) -> None:
+    """Add a full-profile run to :func:`runs_log` (one appended write: worker processes can share it)."""
+    if config.is_quick():
+        return
+    log = runs_log()
+    log.parent.mkdir(parents=True, exist_ok=True)
+    with log.open("a") as handle:
+        handle.write(f"{name}-{config_hash(name, identity)}\n")
+
+
+def trained_on() -> dict[str, Any]:
+    """Where and when a model is being trained: machine, threads, library versions, commit, date."""
+    return {
+        "machine": _cpu_model(),
+        "cores": os.cpu_count(),
+        "torch_threads": torch.get_num_threads(),
+        "python": platform.python_version(),
+        "torch": str(torch.__version__),
+        "commit": _commit(),
+        "date": time.strftime("%Y-%m-%d %H:%M", time.gmtime()),
+        "numerics": {
+            key: os.environ[key] for key in ("ATEN_CPU_CAPABILITY", "MKL_CBWR") if key in os.environ
+        },
+        "base_seed": config.base_seed(),
+    }
+
+
+def levelling(history: dict[str, Any]) -> dict[str, float | bool] | None:
+    """How much a run's training loss still fell at the end: the fall over the last fifth of the steps as a
+    share of the whole fall (first tenth's mean to last tenth's mean), and whether it is below
+    :data:`LEVELLED_SHARE`. ``None`` for a run too short to tell (under 50 steps)."""
+    losses = [float(v) for v in (history.get("terms") or {}).get("loss", [])]
+    n = len(losses)
+    if n < 50:
+        return None
+
+    def mean(part: list[float]) -> float:
+        return sum(part) / len(part)
+
+    tenth, fifth = max(n // 10, 1), max(n // 5, 1)
+    whole = mean(losses[:tenth]) - mean(losses[-tenth:])
+    last = mean(losses[-fifth - tenth : -fifth]) - mean(losses[-tenth:])
+    share = last / whole if whole > 0 else math.inf
+    return {"last_fifth_share": round(share, 4), "levelled": bool(abs(share) < LEVELLED_SHARE)}
+
+
+def export(build: Path, out: Path = REFERENCE_DIR) -> list[dict[str, Any]]:
+    """Copy the full-profile runs a course build used (its :func:`runs_log`) into ``out`` with a manifest
+    each, remove the reference models no longer used, write ``out/README.md``; return the manifests."""
+    log = build / "checkpoints" / runs_log().name
+    if not log.exists():
+        raise ReferenceError(f"{log} does not exist: build the course there first (see `make reference`)")
+    stems = sorted(set(log.read_text().split()))
+    missing = [stem for stem in stems if not (build / "checkpoints" / f"{stem}.pt").exists()]
+    if missing:
+        raise ReferenceError(f"{build / 'checkpoints'} lacks {len(missing)} used runs, e.g. {missing[0]}.pt")
+    out.mkdir(parents=True, exist_ok=True)
+    manifests = [_export_one(build / "checkpoints" / f"{stem}.pt", out) for stem in stems]
+    for old in out.glob("*.pt"):
+        if old.stem not in stems:
+            old.unlink()
+            manifest_path(old).unlink(missing_ok=True)
+    total = sum(m["bytes"] for m in manifests) + sum(
+        manifest_path(out / m["file"]).stat().st_size for m in manifests
+    )
+    if total > SIZE_LIMIT:
+        raise ReferenceError(
+            f"the reference models weigh {total / 2**20:.1f} MB, over {SIZE_LIMIT / 2**20:.0f} MB"
+        )
+    (out / "README.md").write_text(_readme(manifests, total))
+    return manifests
+
+
+def _export_one(source: Path, out: Path) -> dict[str, Any]:
+    payload = torch.load(source, map_location="cpu", weights_only=True)
+    extra = payload.get("extra") or {}
+    metrics = {str(k): float(v) for k, v in (extra.get("metrics") or {}).items()}
+    identity = payload["config"]
+    target = out / source.name
+    shutil.copyfile(source, target)
+    manifest = {
+        "format": MANIFEST_FORMAT,
+        "name": payload["name"],
+        "file": target.name,
+        "sha256": sha256(target),
+        "bytes": target.stat().st_size,
+        "parameters": sum(t.numel() for t in payload["state_dict"].values() if t.is_floating_point()),
+        "config": identity,
+        "seed": (identity.get("train") or {}).get("seed"),
+        "steps": int(metrics.get("steps", 0)),
+        "train_seconds": round(metrics.get("train_seconds", float("nan")), 1),
+        "trained_on": extra.get("trained_on"),
+        "metrics": metrics,
+        "levelling": levelling(extra.get("history") or {}),
+    }
+    manifest_path(target).write_text(json.dumps(manifest, indent=1, sort_keys=True) + "\n")
+    return manifest
+
+
+def _readme(manifests: list[dict[str, Any]], total: int) -> str:
+    machines = sorted({(m.get("trained_on") or {}).get("machine", "unknown") for m in manifests})
+    lines = [
+        "# Reference models",
+        "",
+        "The models whose numbers the course reports, loaded by `make course` (the full profile) instead",
+        "of trained. Each `<name>-<hash>.pt` is a checkpoint-cache entry (weights, config, loss history,",
+        "final metrics; `torch.load(..., weights_only=True)`) and `<name>-<hash>.json` its manifest:",
+        "configuration, seed, steps, training time and machine, commit, SHA-256, metrics, and how much its",
+        "loss still fell over its last fifth of steps (as a share of its whole fall; `levelled` below "
+        f"{LEVELLED_SHARE:.0%}).",
+        "",
+        "Rebuild them all with `make reference` (a course build with `MOTIONLAB_RETRAIN=1` in a fresh",
+        "folder, then `python -m motionlab.train.reference export`); train any one again with the",
+        "training command.",
+        "This file is written by the export.",
+        "",
+        f"{len(manifests)} models, {total / 2**20:.1f} MB in all, trained on: {'; '.join(machines)}.",
+        "",
+        "| model | file | size (kB) | seed | steps | training (s) | loss fall in last fifth | levelled |",
+        "|---|---|---|---|---|---|---|---|",
+    ]
+    for m in sorted(manifests, key=lambda m: m["file"]):
+        lev = m.get("levelling") or {}
+        share = f"{lev['last_fifth_share']:.1%}" if "last_fifth_share" in lev else "-"
+        lines.append(
+            f"| {m['name']} | {m['file']} | {m['bytes'] / 1024:.0f} | {m['seed']} | {m['steps']} | "
+            f"{m['train_seconds']} | {share} | {'yes' if lev.get('levelled') else 'no' if lev else '-'} |"
+        )
+    return "\n".join(lines) + "\n"
+
+
+def _shown(path: Path) -> str:
+    try:
+        return str(path.relative_to(paths.REPO_ROOT))
+    except ValueError:
+        return str(path)
+
+
+def _cpu_model() -> str:
+    try:
+        for line in Path("/proc/cpuinfo").read_text().splitlines():
+            if line.startswith("model name"):
+                return line.split(":", 1)[1].strip()
+    except OSError:
+        pass
+    return platform.processor() or platform.machine()
+
+
+def _commit() -> str | None:
+    try:
+        head = subprocess.run(
+            ["git", "-C", str(paths.REPO_ROOT), "rev-parse", "--short=12", "HEAD"],
+            capture_output=True,
+            text=True,
+            timeout=10,
+            check=True,
+        ).stdout.strip()
+        dirty = subprocess.run(
+            ["git", "-C", str(paths.REPO_ROOT), "status", "--porcelain", "--untracked-files=no"],
+            capture_output=True,
+            text=True,
+            timeout=10,
+            check=True,
+        ).stdout.strip()
+    except (OSError, subprocess.SubprocessError):
+        return None
+    return head + ("+changes" if dirty else "")
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(
+        prog="python -m motionlab.train.reference",
+        description="Export the full-profile runs of a course build as the shipped reference models.",
+    )
+    sub = parser.add_subparsers(dest="command", required=True)
+    exp = sub.add_parser("export", help="copy a build's used runs into reference/ with manifests")
+    exp.add_argument("build", type=Path, help="the build folder of a full-profile course (MOTIONLAB_BUILD)")
+    sub.add_parser("verify", help="check every reference model against its manifest")
+    args = parser.parse_args(argv)
+    try:
+        if args.command == "export":
+            manifests = export(args.build.resolve())
+            print(f"exported {len(manifests)} reference models to {_shown(REFERENCE_DIR)}")
+        else:
+            files = sorted(REFERENCE_DIR.glob("*.pt"))
+            for path in files:
+                verify(path)
+            print(f"{len(files)} reference models match their manifests")
+    except ReferenceError as exc:
+        print(f"error: {exc}", file=sys.stderr)
+        return 1
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,142 @@
+"""The shipped reference models (:mod:`motionlab.train.reference`): exported from a build with manifests,
+loaded in the full profile instead of training, refused when damaged or not the run, ignored on request;
+and the repository's own ``reference/`` is whole and within its size."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import pytest
+import torch
+from torch import nn
+
+from motionlab import config
+from motionlab.train import TensorBatches, TrainConfig, reference, train_or_load
+from motionlab.train.cache import is_cached
+
+FEATURES = 4
+MODEL_CONFIG = {"kind": "reference_test", "features": FEATURES}
+CFG = TrainConfig(steps=60, batch_size=8, lr=1e-2, log_every=10, checkpoint_every=None)
+
+
+def make_model() -> nn.Module:
+    torch.manual_seed(0)
+    return nn.Linear(FEATURES, FEATURES)
+
+
+def loss_fn(model: nn.Module, batch: torch.Tensor, step: int, coeffs: dict[str, float]) -> dict:
+    return {"loss": ((model(batch) - batch) ** 2).mean()}
+
+
+def data() -> TensorBatches:
+    return TensorBatches(torch.randn(32, FEATURES, generator=torch.Generator().manual_seed(1)))
+
+
+def run(calls: list[int] | None = None):
+    def counted(model, batch, step, coeffs):
+        if calls is not None:
+            calls.append(step)
+        return loss_fn(model, batch, step, coeffs)
+
+    model = make_model()
+    return model, train_or_load("tiny_reference", MODEL_CONFIG, model, counted, data(), CFG)
+
+
+@pytest.fixture
+def shipped(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> Path:
+    """A reference folder exported from a first full-profile build; the second build is fresh."""
+    monkeypatch.setenv("MOTIONLAB_PROFILE", "full")
+    monkeypatch.delenv("MOTIONLAB_RETRAIN", raising=False)
+    monkeypatch.setattr(reference, "REFERENCE_DIR", tmp_path / "reference")
+    monkeypatch.setenv("MOTIONLAB_BUILD", str(tmp_path / "first"))
+    config.set_threads(1)
+    trained, _ = run()
+    manifests = reference.export(tmp_path / "first", tmp_path / "reference")
+    assert [m["name"] for m in manifests] == ["tiny_reference"]
+    monkeypatch.setenv("MOTIONLAB_BUILD", str(tmp_path / "second"))
+    return tmp_path / "reference"
+
+
+def test_the_full_profile_loads_the_reference_instead_of_training(shipped: Path) -> None:
+    calls: list[int] = []
+    model, result = run(calls)
+    assert calls == [] and result.loaded_from_cache and result.path.parent == shipped
+    assert not (config.checkpoint_dir() / result.path.name).exists()  # not copied into the build
+    manifest = json.loads(result.path.with_suffix(".json").read_text())
+    assert (
+        manifest["steps"] == 60
+        and manifest["seed"] == 0
+        and manifest["sha256"] == reference.sha256(result.path)
+    )
+    assert manifest["trained_on"]["torch"] == str(torch.__version__)
+    assert set(manifest["levelling"]) == {"last_fifth_share", "levelled"}
+    assert "tiny_reference" in (shipped / "README.md").read_text()
+
+
+def test_retrain_ignores_the_references(shipped: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    monkeypatch.setenv("MOTIONLAB_RETRAIN", "1")
+    calls: list[int] = []
+    _, result = run(calls)
+    assert len(calls) == 60 and not result.loaded_from_cache and result.path.parent == config.checkpoint_dir()
+
+
+def test_the_quick_profile_ignores_the_references(shipped: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    monkeypatch.setenv("MOTIONLAB_PROFILE", "quick")
+    assert not is_cached("tiny_reference", MODEL_CONFIG, CFG)
+
+
+def test_a_damaged_reference_is_refused_with_its_name(shipped: Path) -> None:
+    path = next(shipped.glob("*.pt"))
+    path.write_bytes(path.read_bytes()[:-10] + b"0123456789")
+    with pytest.raises(reference.ReferenceError, match=rf"{path.stem}.*does not match its manifest: SHA-256"):
+        run()
+
+
+def test_a_reference_without_its_manifest_is_refused(shipped: Path) -> None:
+    path = next(shipped.glob("*.pt"))
+    path.with_suffix(".json").unlink()
+    with pytest.raises(reference.ReferenceError, match="has no manifest"):
+        is_cached("tiny_reference", MODEL_CONFIG, CFG)
+
+
+def test_a_reference_for_another_configuration_is_refused(shipped: Path) -> None:
+    """A file whose name is the run's but whose content is another run's (its manifest and checksum made to
+    agree): loading refuses it, naming the config key that differs, and does not retrain."""
+    path = next(shipped.glob("*.pt"))
+    payload = torch.load(path, weights_only=True)
+    payload["config"]["model"]["features"] = 5
+    torch.save(payload, path)
+    manifest = json.loads(path.with_suffix(".json").read_text())
+    manifest["sha256"] = reference.sha256(path)
+    path.with_suffix(".json").write_text(json.dumps(manifest))
+    calls: list[int] = []
+    with pytest.raises(reference.ReferenceError, match="model.features"):
+        run(calls)
+    assert calls == []
+
+
+def test_a_bad_retrain_switch_is_named(monkeypatch: pytest.MonkeyPatch) -> None:
+    monkeypatch.setenv("MOTIONLAB_RETRAIN", "maybe")
+    with pytest.raises(ValueError, match="MOTIONLAB_RETRAIN must be 1 or 0"):
+        reference.retraining()
+
+
+def test_levelling_tells_a_flat_end_from_a_falling_one() -> None:
+    flat = {"terms": {"loss": [1.0 / (1 + i) for i in range(20)] + [0.05] * 80}}
+    falling = {"terms": {"loss": [1.0 - i / 100 for i in range(100)]}}
+    assert reference.levelling(flat)["levelled"] and not reference.levelling(falling)["levelled"]
+    assert reference.levelling({"terms": {"loss": [1.0] * 10}}) is None
+
+
+def test_the_shipped_reference_models_match_their_manifests_and_fit_in_30_mb() -> None:
+    files = sorted(reference.REFERENCE_DIR.glob("*.pt"))
+    assert files, "reference/ holds no models"
+    total = 0
+    for path in files:
+        manifest = reference.verify(path)
+        assert manifest["bytes"] == path.stat().st_size and manifest["name"] == path.stem.rsplit("-", 1)[0]
+        total += path.stat().st_size + path.with_suffix(".json").stat().st_size
+    assert total <= reference.SIZE_LIMIT, f"reference/ weighs {total / 2**20:.1f} MB"
+    manifests = {path.stem for path in reference.REFERENCE_DIR.glob("*.json")}
+    assert manifests == {path.stem for path in files}, "a model without its manifest, or the reverse"
