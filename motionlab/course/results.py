@@ -30,7 +30,8 @@ import operator
 import os
 import platform
 import tempfile
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
+from contextlib import contextmanager
 from dataclasses import asdict, dataclass
 from pathlib import Path
 from typing import Any
@@ -38,6 +39,11 @@ from typing import Any
 import torch
 
 from motionlab import config
+
+try:
+    import fcntl
+except ImportError:  # Windows
+    fcntl = None
 
 _OPS: dict[str, Callable[[float, float], bool]] = {
     "<": operator.lt,
@@ -111,12 +117,30 @@ def save_results(data: dict[str, Any], path: Path | None = None) -> None:
     os.replace(tmp, path)
 
 
+@contextmanager
+def _results_lock() -> Iterator[None]:
+    """Hold ``results.json``'s lock file: the course runs two notebooks at a time
+    (:data:`motionlab.course.run.PARALLEL`), and each read-modify-write of the file must see the other's."""
+    if fcntl is None:  # no POSIX locks: the course runs one notebook at a time there
+        yield
+        return
+    lock = results_path().with_suffix(".lock")
+    lock.parent.mkdir(parents=True, exist_ok=True)
+    with lock.open("a") as handle:
+        fcntl.flock(handle, fcntl.LOCK_EX)
+        try:
+            yield
+        finally:
+            fcntl.flock(handle, fcntl.LOCK_UN)
+
+
 def update_notebook(name: str, update: Callable[[dict[str, Any]], None]) -> None:
-    """Apply ``update`` to the entry of notebook ``name`` and save."""
-    data = load_results()
-    entry = data["notebooks"].setdefault(name, {"metrics": {}, "claims": {}})
-    update(entry)
-    save_results(data)
+    """Apply ``update`` to the entry of notebook ``name`` and save (under the results' lock)."""
+    with _results_lock():
+        data = load_results()
+        entry = data["notebooks"].setdefault(name, {"metrics": {}, "claims": {}})
+        update(entry)
+        save_results(data)
 
 
 class Chapter:

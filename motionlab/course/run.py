@@ -1,8 +1,8 @@
 """``make course``: execute every chapter and build the report in ``build/course/``.
 
-For each ``notebooks/NN_name.ipynb`` in order, each followed by its appendix ``NNa_name.ipynb`` if it has one
-(the chapter's audits, ablations, extra measurements and primers; built exactly like a chapter, with its own
-budget, page, results and card): execute it headless in a fresh kernel (cwd ``notebooks/``,
+For each ``notebooks/NN_name.ipynb``, and its appendix ``NNa_name.ipynb`` if it has one (the chapter's audits,
+ablations, extra measurements and primers; built exactly like a chapter, with its own budget, page, results
+and card), two at a time (:data:`PARALLEL`, the longest first): execute it headless in a fresh kernel (cwd ``notebooks/``,
 widget state stored in the notebook), record its wall time in ``results.json``, and write the executed
 notebook and an HTML rendering. Then write the front page ``index.html`` (:mod:`motionlab.course.report`):
 what the course is, the claims at a glance, chapter 09's comparison of the five generators, one card per
@@ -25,8 +25,10 @@ appendix, ``--only 04a`` the appendix alone.
 from __future__ import annotations
 
 import argparse
+import os
 import re
 import sys
+from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -38,7 +40,7 @@ from motionlab.course.assets import install_assets, localize_page
 from motionlab.course.chapters import NUMBER, is_appendix, notebook_number, numbered_notebooks
 from motionlab.course.kernel import CellLimits, execute_notebook, read_notebook
 from motionlab.course.report import ChapterStatus, write_front_page
-from motionlab.course.results import load_results, results_path, update_notebook
+from motionlab.course.results import fcntl, load_results, results_path, update_notebook
 
 #: Wall-clock budgets per notebook in seconds (design notes), as (full, quick), keyed by the notebook's number
 #: (:func:`notebook_number`: ``"04"`` for a chapter, ``"04a"`` for its appendix).
@@ -78,6 +80,11 @@ ANSWER_SECONDS = 30.0
 
 #: How many times a chapter whose kernel stopped answering is executed again in a fresh kernel.
 HANG_RETRIES = 1
+
+#: Notebooks executed at once, each in its own kernel on one torch thread: on the course's 2-core machine
+#: two side by side take about half the time of one after the other (the chapters are independent: every
+#: model they share comes from the reference models or the checkpoint cache).
+PARALLEL = 2
 
 _ANSI_CODES = re.compile(r"\x1b\[[0-9;]*m")
 
@@ -208,6 +215,29 @@ def select_chapters(notebook_dir: Path, only: list[str] | None = None) -> list[P
     return [path for path, number in zip(chapters, numbers, strict=True) if {number, number[:2]} & set(only)]
 
 
+def parallel() -> int:
+    """How many notebooks run at once: :data:`PARALLEL`, or ``MOTIONLAB_PARALLEL``; one where
+    ``results.json`` cannot be locked (no POSIX file locks)."""
+    if fcntl is None:
+        return 1
+    text = os.environ.get("MOTIONLAB_PARALLEL", str(PARALLEL)).strip()
+    if not text.isdigit() or int(text) < 1:
+        raise ValueError(f"MOTIONLAB_PARALLEL must be an integer >= 1, got {text!r}")
+    return int(text)
+
+
+def longest_first(chapters: list[Path]) -> list[Path]:
+    """The notebooks in the order they start: the longest first (by the last build's seconds in
+    ``results.json``, else by budget), so that the last to finish is a short one."""
+    seconds = load_results().get("notebooks", {})
+
+    def expected(path: Path) -> float:
+        last = seconds.get(path.stem, {}).get("seconds")
+        return float(last) if last is not None else float(budget_seconds(path.stem) or 0.0)
+
+    return sorted(chapters, key=expected, reverse=True)
+
+
 def build(notebook_dir: Path, only: list[str] | None = None) -> list[ChapterRun]:
     """Execute the chapters (all, or those whose number is in ``only``) and write the report."""
     chapters = select_chapters(notebook_dir, only)
@@ -215,8 +245,8 @@ def build(notebook_dir: Path, only: list[str] | None = None) -> list[ChapterRun]
     out_dir.mkdir(parents=True, exist_ok=True)
     config.set_threads()
     assets = install_assets(out_dir)
-    runs = []
-    for path in chapters:
+
+    def execute(path: Path) -> ChapterRun:
         print(f"[course] {path.stem} ...", flush=True)
         run = execute_chapter(path, out_dir, assets)
         budget = budget_seconds(run.name)
@@ -226,7 +256,11 @@ def build(notebook_dir: Path, only: list[str] | None = None) -> list[ChapterRun]
             + (f" FAILED: {run.error}" if run.error else ""),
             flush=True,
         )
-        runs.append(run)
+        return run
+
+    with ThreadPoolExecutor(max_workers=parallel()) as pool:
+        done = {run.name: run for run in pool.map(execute, longest_first(chapters))}
+    runs = [done[path.stem] for path in chapters]
     index = write_index(out_dir, runs)
     print(f"[course] report: {index}\n[course] results: {results_path()}")
     return runs
