@@ -85,13 +85,29 @@ def _finite(name: str, value: Any) -> float:
     return number
 
 
+def build_settings() -> dict[str, Any]:
+    """What else decides a build's numbers: the base training seed, whether the reference models were
+    loaded or every model retrained here, and the numerical path forced through the environment
+    (``ATEN_CPU_CAPABILITY``, ``MKL_CBWR``; empty for the machine's own)."""
+    from motionlab.train.reference import retraining
+
+    return {
+        "base_seed": config.base_seed(),
+        "models": "retrained" if config.is_quick() or retraining() else "reference",
+        "numerics": {
+            key: os.environ[key] for key in ("ATEN_CPU_CAPABILITY", "MKL_CBWR") if key in os.environ
+        },
+    }
+
+
 def load_results(path: Path | None = None) -> dict[str, Any]:
     """Read ``results.json`` (an empty skeleton for the active profile when it does not exist)."""
     path = results_path() if path is None else Path(path)
     fresh = {
         "profile": config.profile(),
         "python": platform.python_version(),
-        "torch": torch.__version__,
+        "torch": str(torch.__version__),
+        **build_settings(),
         "notebooks": {},
     }
     if not path.exists():
@@ -102,7 +118,7 @@ def load_results(path: Path | None = None) -> dict[str, Any]:
         raise ValueError(f"{path} is not valid JSON (line {exc.lineno}): delete it and rebuild") from exc
     if data.get("profile") != config.profile():
         return fresh
-    data.update(python=fresh["python"], torch=fresh["torch"])
+    data.update({key: value for key, value in fresh.items() if key not in ("profile", "notebooks")})
     data.setdefault("notebooks", {})
     return data
 
@@ -140,6 +156,15 @@ def update_notebook(name: str, update: Callable[[dict[str, Any]], None]) -> None
         data = load_results()
         entry = data["notebooks"].setdefault(name, {"metrics": {}, "claims": {}})
         update(entry)
+        save_results(data)
+
+
+def record_wall_time(seconds: float, notebooks: int) -> None:
+    """Record how long the last ``make course`` took from its first notebook's start to its last one's end
+    (notebooks run two at a time, so this is less than the sum of their seconds)."""
+    with _results_lock():
+        data = load_results()
+        data["build"] = {"wall_seconds": round(seconds, 1), "notebooks": notebooks}
         save_results(data)
 
 

@@ -2,11 +2,11 @@
 
 For each ``notebooks/NN_name.ipynb``, and its appendix ``NNa_name.ipynb`` if it has one (the chapter's audits,
 ablations, extra measurements and primers; built exactly like a chapter, with its own budget, page, results
-and card), two at a time (:data:`PARALLEL`, the longest first): execute it headless in a fresh kernel (cwd ``notebooks/``,
-widget state stored in the notebook), record its wall time in ``results.json``, and write the executed
-notebook and an HTML rendering. Then write the front page ``index.html`` (:mod:`motionlab.course.report`):
-what the course is, the claims at a glance, chapter 09's comparison of the five generators, one card per
-chapter (summary, key figure, time against budget, claims) and every metric.
+and card), two at a time (:data:`PARALLEL`, the longest first): execute it headless in a fresh kernel (cwd
+``notebooks/``, widget state stored in the notebook), record its wall time in ``results.json``, and write the
+executed notebook and an HTML rendering. Then write the front page ``index.html``
+(:mod:`motionlab.course.report`): what the course is, the claims at a glance, chapter 09's comparison of the
+five generators, one card per chapter (summary, key figure, time against budget, claims) and every metric.
 
 A chapter that fails (an error, or a claim that stopped holding in the full profile) does not stop the
 build: the remaining chapters still run so the report shows everything, and the command exits non-zero.
@@ -28,6 +28,7 @@ import argparse
 import os
 import re
 import sys
+import time
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
 from pathlib import Path
@@ -40,7 +41,13 @@ from motionlab.course.assets import install_assets, localize_page
 from motionlab.course.chapters import NUMBER, is_appendix, notebook_number, numbered_notebooks
 from motionlab.course.kernel import CellLimits, execute_notebook, read_notebook
 from motionlab.course.report import ChapterStatus, write_front_page
-from motionlab.course.results import fcntl, load_results, results_path, update_notebook
+from motionlab.course.results import (
+    fcntl,
+    load_results,
+    record_wall_time,
+    results_path,
+    update_notebook,
+)
 
 #: Wall-clock budgets per notebook in seconds (design notes), as (full, quick), keyed by the notebook's number
 #: (:func:`notebook_number`: ``"04"`` for a chapter, ``"04a"`` for its appendix).
@@ -258,9 +265,11 @@ def build(notebook_dir: Path, only: list[str] | None = None) -> list[ChapterRun]
         )
         return run
 
+    started = time.perf_counter()
     with ThreadPoolExecutor(max_workers=parallel()) as pool:
         done = {run.name: run for run in pool.map(execute, longest_first(chapters))}
     runs = [done[path.stem] for path in chapters]
+    record_wall_time(time.perf_counter() - started, len(runs))
     index = write_index(out_dir, runs)
     print(f"[course] report: {index}\n[course] results: {results_path()}")
     return runs
