@@ -7,7 +7,7 @@ VENV   := .venv
 BIN    := $(VENV)/bin
 STAMP  := $(VENV)/.motionlab-installed
 
-.PHONY: course test bench clean-build setup
+.PHONY: course test bench clean-build setup reference
 
 setup: $(STAMP)
 
@@ -16,9 +16,22 @@ $(STAMP): pyproject.toml
 	$(BIN)/python -m pip install --quiet -e .
 	@touch $@
 
+# The full profile loads the shipped reference models (reference/); `make course RETRAIN=1` trains every model
+# here instead (the build's checkpoint cache keeps them for the next build).
+RETRAIN ?= 0
+
 course: $(STAMP)
-	MOTIONLAB_PROFILE=full $(BIN)/python -m motionlab.course.logs course -- \
+	MOTIONLAB_PROFILE=full MOTIONLAB_RETRAIN=$(RETRAIN) $(BIN)/python -m motionlab.course.logs course -- \
 		$(BIN)/python -m motionlab.course
+
+# Retrain the reference models: the course with every model trained afresh in build/reference-build, then
+# the runs it used copied to reference/ with their manifests (even when a claim failed: the build's exit
+# status is kept and returned).
+reference: $(STAMP)
+	rm -rf build/reference-build
+	MOTIONLAB_BUILD=build/reference-build MOTIONLAB_PROFILE=full MOTIONLAB_RETRAIN=1 \
+		$(BIN)/python -m motionlab.course.logs reference -- $(BIN)/python -m motionlab.course; \
+		status=$$?; $(BIN)/python -m motionlab.train.reference export build/reference-build && exit $$status
 
 # The formatter and the linter (ruff, settings in pyproject.toml) first, then the tests and notebooks; the
 # log ends with the 25 slowest tests (--durations), so a test that grows slow shows itself.
