@@ -5,6 +5,7 @@ and the repository's own ``reference/`` is whole and within its size."""
 from __future__ import annotations
 
 import json
+from dataclasses import replace
 from pathlib import Path
 
 import pytest
@@ -140,3 +141,10 @@ def test_the_shipped_reference_models_match_their_manifests_and_fit_in_30_mb() -
     assert total <= reference.SIZE_LIMIT, f"reference/ weighs {total / 2**20:.1f} MB"
     manifests = {path.stem for path in reference.REFERENCE_DIR.glob("*.json")}
     assert manifests == {path.stem for path in files}, "a model without its manifest, or the reverse"
+
+
+def test_provenance_names_the_reference_its_steps_and_the_command(shipped: Path) -> None:
+    _, loaded = run()
+    line = reference.provenance(loaded, command="python -m motionlab.apps.training vae")
+    assert line.startswith("tiny_reference: the reference model, 60 steps") and "apps.training vae" in line
+    assert reference.provenance(replace(loaded, path=None, loaded_from_cache=False), 1.5).endswith("in 2 s")

@@ -160,6 +160,41 @@ def find(name: str, identity: dict[str, Any]) -> Path | None:
     return path
 
 
+def provenance(result: Any, seconds: float | None = None, command: str = "make course RETRAIN=1") -> str:
+    """One line saying where a chapter's model comes from, for the cell that loads it.
+
+    Args:
+        result: the run's :class:`~motionlab.train.loop.TrainResult`.
+        seconds: its training seconds when this build trained it (``Trained.seconds``).
+        command: the command that retrains it (e.g. the training command's
+            ``python -m motionlab.apps.training odmo``; default: the whole course's).
+
+    A reference model reads e.g. ``odmo: the reference model, 1,200 steps (3.1 min on one core of an Intel
+    Xeon, commit 0b1b186); its loss fell 2.1 % more of its whole fall over the last fifth. Retrain it: ...``.
+    """
+    path = result.path
+    name = path.stem.rsplit("-", 1)[0] if path is not None else "model"
+    steps = int(result.metrics.get("steps", 0))
+    if path is None or path.parent != REFERENCE_DIR:
+        if seconds is not None or not result.loaded_from_cache:
+            took = seconds if seconds is not None else result.metrics.get("train_seconds", float("nan"))
+            return f"{name}: trained by this build, {steps:,} steps in {took:.0f} s"
+        return f"{name}: {steps:,} steps, loaded from this build's cache"
+    manifest = read_manifest(path)
+    where = manifest.get("trained_on") or {}
+    lev = manifest.get("levelling") or {}
+    tail = (
+        f"; over its last fifth of steps its loss fell a further {lev['last_fifth_share']:.1%} of its fall"
+        if "last_fifth_share" in lev
+        else ""
+    )
+    return (
+        f"{name}: the reference model, {steps:,} steps ({manifest['train_seconds'] / 60:.1f} min on "
+        f"{where.get('machine', 'an unrecorded machine')}, commit {where.get('commit', '?')}){tail}. "
+        f"Retrain it here: `{command}`"
+    )
+
+
 def runs_log() -> Path:
     """The build's list of the full-profile runs it trained or loaded (one ``<name>-<hash>`` per line)."""
     return config.checkpoint_dir() / "full-profile-runs.txt"
