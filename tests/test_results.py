@@ -3,7 +3,7 @@ import math
 
 import pytest
 
-from motionlab.course.results import Chapter, ClaimFailed, load_results, results_path
+from motionlab.course.results import Chapter, ClaimFailed, failing_claims, load_results, results_path
 
 
 @pytest.fixture
@@ -35,6 +35,21 @@ def test_failing_claim_raises_in_full_profile_and_is_still_recorded(build, monke
         chapter.claim("03.cvae_action_accuracy", 0.5, 0.9, ">=", "CVAE samples are recognised")
     claim = load_results()["notebooks"]["03_variational_autoencoders"]["claims"]["03.cvae_action_accuracy"]
     assert claim["holds"] is False
+
+
+def test_record_mode_checks_every_claim_and_names_the_failing_ones(build, monkeypatch):
+    """``MOTIONLAB_CLAIMS=record`` (a claim × seed table needs every claim): no raise, the chapter goes on,
+    and :func:`failing_claims` names what the course build then fails on; a known gap is not named."""
+    monkeypatch.setenv("MOTIONLAB_PROFILE", "full")
+    monkeypatch.setenv("MOTIONLAB_CLAIMS", "record")
+    chapter = Chapter("08_contrastive_mode_discovery")
+    assert not chapter.claim("08.a", 0.5, 0.9, ">=", "fails").holds
+    assert chapter.claim("08.b", 1.0, 0.9, ">=", "holds").holds
+    chapter.claim("08.c", 0.1, 0.9, ">=", "a known gap", expected=False, why="measured")
+    assert failing_claims("08_contrastive_mode_discovery") == ["08.a"]
+    monkeypatch.setenv("MOTIONLAB_CLAIMS", "sometimes")
+    with pytest.raises(ValueError, match="MOTIONLAB_CLAIMS must be 'assert' or 'record'"):
+        chapter.claim("08.d", 0.5, 0.9, ">=", "fails")
 
 
 def test_failing_claim_is_only_recorded_in_quick_profile(build, monkeypatch):
