@@ -31,7 +31,7 @@ reference: $(STAMP)
 	rm -rf build/reference-build
 	MOTIONLAB_BUILD=build/reference-build MOTIONLAB_PROFILE=full MOTIONLAB_RETRAIN=1 \
 		$(BIN)/python -m motionlab.course.logs reference -- $(BIN)/python -m motionlab.course; \
-		status=$$?; $(BIN)/python -m motionlab.train.reference export build/reference-build && exit $$status
+		status=$$?; $(BIN)/python -m motionlab.apps.reference export build/reference-build && exit $$status
 
 # The formatter and the linter (ruff, settings in pyproject.toml) first, then the tests and notebooks; the
 # log ends with the 25 slowest tests (--durations), so a test that grows slow shows itself.

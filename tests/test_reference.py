@@ -130,7 +130,7 @@ def test_levelling_tells_a_flat_end_from_a_falling_one() -> None:
     assert reference.levelling({"terms": {"loss": [1.0] * 10}}) is None
 
 
-def test_the_shipped_reference_models_match_their_manifests_and_fit_in_30_mb() -> None:
+def test_the_shipped_reference_models_match_their_manifests_and_fit_in_30_mib() -> None:
     files = sorted(reference.REFERENCE_DIR.glob("*.pt"))
     assert files, "reference/ holds no models"
     total = 0
@@ -138,7 +138,7 @@ def test_the_shipped_reference_models_match_their_manifests_and_fit_in_30_mb() -
         manifest = reference.verify(path)
         assert manifest["bytes"] == path.stat().st_size and manifest["name"] == path.stem.rsplit("-", 1)[0]
         total += path.stat().st_size + path.with_suffix(".json").stat().st_size
-    assert total <= reference.SIZE_LIMIT, f"reference/ weighs {total / 2**20:.1f} MB"
+    assert total <= reference.SIZE_LIMIT, f"reference/ weighs {total / 2**20:.1f} MiB"
     manifests = {path.stem for path in reference.REFERENCE_DIR.glob("*.json")}
     assert manifests == {path.stem for path in files}, "a model without its manifest, or the reverse"
 
@@ -148,3 +148,17 @@ def test_provenance_names_the_reference_its_steps_and_the_command(shipped: Path)
     line = reference.provenance(loaded, command="python -m motionlab.apps.training vae")
     assert line.startswith("tiny_reference: the reference model, 60 steps") and "apps.training vae" in line
     assert reference.provenance(replace(loaded, path=None, loaded_from_cache=False), 1.5).endswith("in 2 s")
+
+
+def test_weight_matrices_ship_as_float16_and_load_back_into_float32() -> None:
+    big = nn.Sequential(nn.Linear(64, 128), nn.Linear(128, 3))
+    shipped, stored = reference.half_precision(big.state_dict())
+    assert shipped["0.weight"].dtype == torch.float16 and shipped["0.bias"].dtype == torch.float32
+    assert stored["float16_tensors"] == 1 and stored["float16_numbers"] == 64 * 128
+    assert 0 < stored["largest_relative_rounding"] <= 2**-11
+    again = nn.Sequential(nn.Linear(64, 128), nn.Linear(128, 3))
+    again.load_state_dict(shipped)
+    assert again[0].weight.dtype == torch.float32
+    assert torch.equal(again[0].weight, big[0].weight.half().float()) and torch.equal(
+        again[1].bias, big[1].bias
+    )

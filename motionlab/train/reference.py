@@ -1,8 +1,8 @@
 """The reference models shipped in ``reference/``: what the full profile loads instead of training.
 
 A reference model is a checkpoint-cache entry (:mod:`motionlab.checkpoints`: ``<name>-<hash>.pt``, the
-weights with their config, loss history and final metrics) committed to the repository, with a manifest
-``<name>-<hash>.json`` beside it::
+weights with their config, loss history and final metrics; its weight matrices stored as float16,
+:func:`half_precision`) committed to the repository, with a manifest ``<name>-<hash>.json`` beside it::
 
     {"format": 1, "name": "odmo", "file": "odmo-5f55d9e6002e.pt", "sha256": "...", "bytes": 812345,
      "config": {...the run's identity: model, train and data configs...}, "seed": 0, "steps": 2400,
@@ -18,22 +18,19 @@ model on the machine at hand, through the build's cache as before.
 
 ``make reference`` rebuilds them: the course in a fresh build folder with ``MOTIONLAB_RETRAIN=1`` (every full
 profile process notes each run it trains or loads in the build's :func:`runs_log`), then
-``python -m motionlab.train.reference export BUILD`` copies those entries here and writes their manifests
+``python -m motionlab.apps.reference export BUILD`` copies those entries here and writes their manifests
 and ``reference/README.md``.
 """
 
 from __future__ import annotations
 
-import argparse
 import functools
 import hashlib
 import json
 import math
 import os
 import platform
-import shutil
 import subprocess
-import sys
 import time
 from pathlib import Path
 from typing import Any
@@ -52,8 +49,15 @@ RETRAIN_VARIABLE = "MOTIONLAB_RETRAIN"
 #: The manifest format this code writes and reads.
 MANIFEST_FORMAT = 1
 
-#: The most the reference models may weigh in all (bytes), files and manifests together.
+#: The most the reference models may weigh in all, files and manifests together: 30 MiB (31.5 million bytes).
 SIZE_LIMIT = 30 * 2**20
+
+#: Float32 tensors with at least this many numbers are shipped as float16 (:func:`half_precision`): it
+#: halves the models' size (the 30 MiB limit) and rounds each weight by at most 1/2048 of its magnitude.
+HALF_MIN_ELEMENTS = 512
+
+#: The shipped loss history keeps this many evenly spaced steps (:func:`thinned`): enough for its curve.
+HISTORY_POINTS = 120
 
 #: A run "levelled off" when its training loss fell by less than this share of its whole fall over the
 #: last fifth of its steps (:func:`levelling`).
@@ -267,10 +271,51 @@ def export(build: Path, out: Path = REFERENCE_DIR) -> list[dict[str, Any]]:
     )
     if total > SIZE_LIMIT:
         raise ReferenceError(
-            f"the reference models weigh {total / 2**20:.1f} MB, over {SIZE_LIMIT / 2**20:.0f} MB"
+            f"the reference models weigh {total / 2**20:.1f} MiB, over {SIZE_LIMIT / 2**20:.0f} MiB"
         )
     (out / "README.md").write_text(_readme(manifests, total))
     return manifests
+
+
+def half_precision(state_dict: dict[str, torch.Tensor]) -> tuple[dict[str, torch.Tensor], dict[str, Any]]:
+    """The state dict as shipped: float32 tensors of at least :data:`HALF_MIN_ELEMENTS` numbers (the weight
+    matrices, nearly all the bytes) stored as float16, the rest (biases, norms, data statistics, noise
+    schedules) as they are; and what that did (tensors halved, numbers, the largest rounding relative to
+    its tensor's largest magnitude). Loading casts them back to the model's float32."""
+    shipped, halved, numbers, worst = {}, 0, 0, 0.0
+    for key, tensor in state_dict.items():
+        if tensor.dtype == torch.float32 and tensor.numel() >= HALF_MIN_ELEMENTS:
+            half = tensor.half()
+            scale = float(tensor.abs().max()) or 1.0
+            worst = max(worst, float((half.float() - tensor).abs().max()) / scale)
+            shipped[key], halved, numbers = half, halved + 1, numbers + tensor.numel()
+        else:
+            shipped[key] = tensor
+    return shipped, {
+        "float16_tensors": halved,
+        "float16_numbers": numbers,
+        "largest_relative_rounding": worst,
+    }
+
+
+def thinned(history: dict[str, Any], points: int) -> dict[str, Any]:
+    """A :meth:`History.to_dict <motionlab.train.history.History.to_dict>` with its per-step records kept at
+    ``points`` evenly spaced steps (the first and the last among them); validation records stay whole."""
+    n = len(history.get("step", []))
+    if n <= points:
+        return history
+    keep = sorted({round(i * (n - 1) / (points - 1)) for i in range(points)})
+
+    def pick(values: list[Any]) -> list[Any]:
+        return [values[i] for i in keep]
+
+    per_step = ("step", "epoch", "lr", "grad_norm")
+    return {
+        **history,
+        **{key: pick(history[key]) for key in per_step},
+        "terms": {key: pick(values) for key, values in history["terms"].items()},
+        "coeffs": {key: pick(values) for key, values in history["coeffs"].items()},
+    }
 
 
 def _export_one(source: Path, out: Path) -> dict[str, Any]:
@@ -279,7 +324,10 @@ def _export_one(source: Path, out: Path) -> dict[str, Any]:
     metrics = {str(k): float(v) for k, v in (extra.get("metrics") or {}).items()}
     identity = payload["config"]
     target = out / source.name
-    shutil.copyfile(source, target)
+    payload["state_dict"], stored = half_precision(payload["state_dict"])
+    history = extra.get("history") or {}
+    extra["history"] = thinned(history, HISTORY_POINTS)
+    torch.save(payload, target)
     manifest = {
         "format": MANIFEST_FORMAT,
         "name": payload["name"],
@@ -287,13 +335,14 @@ def _export_one(source: Path, out: Path) -> dict[str, Any]:
         "sha256": sha256(target),
         "bytes": target.stat().st_size,
         "parameters": sum(t.numel() for t in payload["state_dict"].values() if t.is_floating_point()),
+        "stored": stored,
         "config": identity,
         "seed": (identity.get("train") or {}).get("seed"),
         "steps": int(metrics.get("steps", 0)),
         "train_seconds": round(metrics.get("train_seconds", float("nan")), 1),
         "trained_on": extra.get("trained_on"),
         "metrics": metrics,
-        "levelling": levelling(extra.get("history") or {}),
+        "levelling": levelling(history),
     }
     manifest_path(target).write_text(json.dumps(manifest, indent=1, sort_keys=True) + "\n")
     return manifest
@@ -306,19 +355,21 @@ def _readme(manifests: list[dict[str, Any]], total: int) -> str:
         "",
         "The models whose numbers the course reports, loaded by `make course` (the full profile) instead",
         "of trained. Each `<name>-<hash>.pt` is a checkpoint-cache entry (weights, config, loss history,",
-        "final metrics; `torch.load(..., weights_only=True)`) and `<name>-<hash>.json` its manifest:",
+        "final metrics; `torch.load(..., weights_only=True)`; weight matrices of 512 numbers or more",
+        f"stored as float16, loaded back into float32; the loss history at {HISTORY_POINTS} evenly spaced",
+        "steps) and `<name>-<hash>.json` its manifest:",
         "configuration, seed, steps, training time and machine, commit, SHA-256, metrics, and how much its",
         "loss still fell over its last fifth of steps (as a share of its whole fall; `levelled` below "
         f"{LEVELLED_SHARE:.0%}).",
         "",
         "Rebuild them all with `make reference` (a course build with `MOTIONLAB_RETRAIN=1` in a fresh",
-        "folder, then `python -m motionlab.train.reference export`); train any one again with the",
+        "folder, then `python -m motionlab.apps.reference export`); train any one again with the",
         "training command.",
         "This file is written by the export.",
         "",
-        f"{len(manifests)} models, {total / 2**20:.1f} MB in all, trained on: {'; '.join(machines)}.",
+        f"{len(manifests)} models, {total / 2**20:.1f} MiB in all, trained on: {'; '.join(machines)}.",
         "",
-        "| model | file | size (kB) | seed | steps | training (s) | loss fall in last fifth | levelled |",
+        "| model | file | size (KiB) | seed | steps | training (s) | loss fall in last fifth | levelled |",
         "|---|---|---|---|---|---|---|---|",
     ]
     for m in sorted(manifests, key=lambda m: m["file"]):
@@ -367,32 +418,3 @@ def _commit() -> str | None:
     except (OSError, subprocess.SubprocessError):
         return None
     return head + ("+changes" if dirty else "")
-
-
-def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(
-        prog="python -m motionlab.train.reference",
-        description="Export the full-profile runs of a course build as the shipped reference models.",
-    )
-    sub = parser.add_subparsers(dest="command", required=True)
-    exp = sub.add_parser("export", help="copy a build's used runs into reference/ with manifests")
-    exp.add_argument("build", type=Path, help="the build folder of a full-profile course (MOTIONLAB_BUILD)")
-    sub.add_parser("verify", help="check every reference model against its manifest")
-    args = parser.parse_args(argv)
-    try:
-        if args.command == "export":
-            manifests = export(args.build.resolve())
-            print(f"exported {len(manifests)} reference models to {_shown(REFERENCE_DIR)}")
-        else:
-            files = sorted(REFERENCE_DIR.glob("*.pt"))
-            for path in files:
-                verify(path)
-            print(f"{len(files)} reference models match their manifests")
-    except ReferenceError as exc:
-        print(f"error: {exc}", file=sys.stderr)
-        return 1
-    return 0
-
-
-if __name__ == "__main__":
-    sys.exit(main())
