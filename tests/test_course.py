@@ -114,3 +114,32 @@ def test_appendices_without_a_chapter_are_no_course(tmp_path):
     _notebook(tmp_path, "04a_orphan_appendix", "pass")
     with pytest.raises(FileNotFoundError, match="no chapters"):
         course.chapter_notebooks(tmp_path / "notebooks")
+
+
+def test_two_at_a_time_the_longest_first_and_an_appendix_after_its_chapter(tmp_path, monkeypatch) -> None:
+    """:func:`execute_all` with two workers: every notebook runs once, never more than two at once, and an
+    appendix starts only after its chapter has finished."""
+    import threading
+    import time as clock
+
+    from motionlab.course.run import ChapterRun, execute_all
+
+    names = ["01_a", "01a_a_appendix", "02_b", "03_c", "03a_c_appendix"]
+    paths = [tmp_path / f"{name}.ipynb" for name in names]
+    started, finished, active, most = {}, {}, [0], [0]
+    lock = threading.Lock()
+
+    def execute(path):
+        with lock:
+            started[path.stem] = clock.perf_counter()
+            active[0] += 1
+            most[0] = max(most[0], active[0])
+        clock.sleep(0.05)
+        with lock:
+            active[0] -= 1
+            finished[path.stem] = clock.perf_counter()
+        return ChapterRun(path.stem, 0.05, None, ())
+
+    done = execute_all(paths, execute, workers=2)
+    assert sorted(done) == sorted(names) and most[0] == 2
+    assert started["01a_a_appendix"] >= finished["01_a"] and started["03a_c_appendix"] >= finished["03_c"]

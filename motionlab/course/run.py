@@ -29,7 +29,8 @@ import os
 import re
 import sys
 import time
-from concurrent.futures import ThreadPoolExecutor
+from collections.abc import Callable
+from concurrent.futures import FIRST_COMPLETED, ThreadPoolExecutor, wait
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -49,6 +50,7 @@ from motionlab.course.results import (
     results_path,
     update_notebook,
 )
+from motionlab.train import reference
 
 #: Wall-clock budgets per notebook in seconds (design notes), as (full, quick), keyed by the notebook's number
 #: (:func:`notebook_number`: ``"04"`` for a chapter, ``"04a"`` for its appendix).
@@ -89,9 +91,9 @@ ANSWER_SECONDS = 30.0
 #: How many times a chapter whose kernel stopped answering is executed again in a fresh kernel.
 HANG_RETRIES = 1
 
-#: Notebooks executed at once, each in its own kernel on one torch thread: on the course's 2-core machine
-#: two side by side take about half the time of one after the other (the chapters are independent: every
-#: model they share comes from the reference models or the checkpoint cache).
+#: Notebooks executed at once when the reference models are loaded (:func:`parallel`), each in its own kernel
+#: on one torch thread: on the course's 2-core machine two side by side take about half the time of one after
+#: the other (the chapters are independent: every model they share comes from the reference models).
 PARALLEL = 2
 
 _ANSI_CODES = re.compile(r"\x1b\[[0-9;]*m")
@@ -227,11 +229,16 @@ def select_chapters(notebook_dir: Path, only: list[str] | None = None) -> list[P
 
 
 def parallel() -> int:
-    """How many notebooks run at once: :data:`PARALLEL`, or ``MOTIONLAB_PARALLEL``; one where
-    ``results.json`` cannot be locked (no POSIX file locks)."""
+    """How many notebooks run at once: ``MOTIONLAB_PARALLEL`` if set, else :data:`PARALLEL` when the full
+    profile loads the reference models (base seed 0, no ``RETRAIN``), else one: a build that trains would
+    run two notebooks' trainings, each on both cores, side by side (and train a model two chapters share
+    twice). One, too, where ``results.json`` cannot be locked (no POSIX file locks)."""
     if fcntl is None:
         return 1
-    text = os.environ.get("MOTIONLAB_PARALLEL", str(PARALLEL)).strip()
+    text = os.environ.get("MOTIONLAB_PARALLEL", "").strip()
+    if not text:
+        loads = not config.is_quick() and reference.in_use() and config.base_seed() == 0
+        return PARALLEL if loads else 1
     if not text.isdigit() or int(text) < 1:
         raise ValueError(f"MOTIONLAB_PARALLEL must be an integer >= 1, got {text!r}")
     return int(text)
@@ -239,14 +246,44 @@ def parallel() -> int:
 
 def longest_first(chapters: list[Path]) -> list[Path]:
     """The notebooks in the order they start: the longest first (by the last build's seconds in
-    ``results.json``, else by budget), so that the last to finish is a short one."""
+    ``results.json``, else by budget), so that the last to finish is a short one; an appendix never before
+    its chapter (:func:`execute_all` also waits for the chapter to finish)."""
     seconds = load_results().get("notebooks", {})
 
     def expected(path: Path) -> float:
         last = seconds.get(path.stem, {}).get("seconds")
         return float(last) if last is not None else float(budget_seconds(path.stem) or 0.0)
 
-    return sorted(chapters, key=expected, reverse=True)
+    return sorted(chapters, key=lambda path: (is_appendix(path.stem), -expected(path)))
+
+
+def execute_all(
+    chapters: list[Path], execute: Callable[[Path], ChapterRun], workers: int
+) -> dict[str, ChapterRun]:
+    """Run ``execute`` on every notebook, ``workers`` at a time, in :func:`longest_first` order; an appendix
+    starts only once its chapter (when it is among ``chapters``) has finished: it loads what the chapter
+    trained. Returns ``{name: run}``."""
+    numbers = {notebook_number(path.stem): path.stem for path in chapters}
+    waiting, done, running = longest_first(chapters), {}, {}
+    with ThreadPoolExecutor(max_workers=workers) as pool:
+        while waiting or running:
+            ready = [
+                path
+                for path in waiting
+                if not is_appendix(path.stem)
+                or numbers.get(notebook_number(path.stem)[:2]) in done
+                or notebook_number(path.stem)[:2] not in numbers
+            ]
+            while ready and len(running) < workers:
+                path = ready.pop(0)
+                waiting.remove(path)
+                running[pool.submit(execute, path)] = path
+            finished, _ = wait(running, return_when=FIRST_COMPLETED)
+            for future in finished:
+                run = future.result()
+                done[run.name] = run
+                del running[future]
+    return done
 
 
 def build(notebook_dir: Path, only: list[str] | None = None) -> list[ChapterRun]:
@@ -270,8 +307,7 @@ def build(notebook_dir: Path, only: list[str] | None = None) -> list[ChapterRun]
         return run
 
     started = time.perf_counter()
-    with ThreadPoolExecutor(max_workers=parallel()) as pool:
-        done = {run.name: run for run in pool.map(execute, longest_first(chapters))}
+    done = execute_all(chapters, execute, parallel())
     runs = [done[path.stem] for path in chapters]
     record_wall_time(time.perf_counter() - started, len(runs))
     index = write_index(out_dir, runs)
