@@ -162,3 +162,26 @@ def test_weight_matrices_ship_as_float16_and_load_back_into_float32() -> None:
     assert torch.equal(again[0].weight, big[0].weight.half().float()) and torch.equal(
         again[1].bias, big[1].bias
     )
+
+
+def test_a_reference_is_found_by_its_data_shape_not_its_data_bits(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """Another CPU rounds the training data differently, so its fingerprints differ: the reference model is
+    still the run's; data of another shape is another run."""
+    monkeypatch.setenv("MOTIONLAB_PROFILE", "full")
+    monkeypatch.delenv("MOTIONLAB_RETRAIN", raising=False)
+    monkeypatch.setattr(reference, "REFERENCE_DIR", tmp_path / "reference")
+    monkeypatch.setenv("MOTIONLAB_BUILD", str(tmp_path / "first"))
+    here = {"x": "0123456789abcdef-(32, 4)", "window": 8}
+    train_or_load("tiny_reference", MODEL_CONFIG, make_model(), loss_fn, data(), CFG, data_config=here)
+    reference.export(tmp_path / "first", tmp_path / "reference")
+    monkeypatch.setenv("MOTIONLAB_BUILD", str(tmp_path / "second"))
+    elsewhere = {"x": "fedcba9876543210-(32, 4)", "window": 8}
+    assert is_cached("tiny_reference", MODEL_CONFIG, CFG, elsewhere)
+    result = train_or_load(
+        "tiny_reference", MODEL_CONFIG, make_model(), loss_fn, data(), CFG, data_config=elsewhere
+    )
+    assert result.loaded_from_cache and result.path.parent == tmp_path / "reference"
+    assert not is_cached("tiny_reference", MODEL_CONFIG, CFG, {"x": "fedcba9876543210-(33, 4)", "window": 8})
+    assert not is_cached("tiny_reference", MODEL_CONFIG, CFG, {**here, "window": 9})

@@ -81,8 +81,10 @@ def _cached_result(name: str, identity: dict[str, Any], model: nn.Module) -> Tra
     raises (:class:`~motionlab.train.reference.ReferenceError`), it is never replaced by a retraining."""
     backup = {k: v.detach().clone() for k, v in model.state_dict().items()}
     shipped = reference.find(name, identity)
+    # a reference model is checked against its manifest's identity (the run's, but for its data's last bits)
+    expected = identity if shipped is None else reference.read_manifest(shipped)["config"]
     try:
-        extra = load_checkpoint(name, identity, model, path=shipped, refuse=shipped is not None)
+        extra = load_checkpoint(name, expected, model, path=shipped, refuse=shipped is not None)
     except CheckpointRefused as exc:
         raise reference.ReferenceError(f"{exc} (retrain it with `make reference`)") from None
     if extra is None:

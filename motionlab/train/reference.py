@@ -30,6 +30,7 @@ import json
 import math
 import os
 import platform
+import re
 import subprocess
 import time
 from pathlib import Path
@@ -83,9 +84,31 @@ def in_use() -> bool:
     return not config.is_quick() and not retraining()
 
 
+#: A data fingerprint in a run's identity: 16 hex digits of the array's bytes, then its shape.
+_FINGERPRINT = re.compile(r"^[0-9a-f]{16}-(\(.*\))$")
+
+
+def portable(identity: Any) -> Any:
+    """A run's identity with every data fingerprint reduced to its array's shape.
+
+    The training data's last bits differ between CPUs (forward kinematics, a denoiser's output, a resampling:
+    all rounded by the machine's kernels), and so would the fingerprints of :func:`run_identity`, so a
+    reference model is found by what defines its data (generator version, seeds, sizes, windows, shapes), not
+    by those bits.
+    """
+    if isinstance(identity, dict):
+        return {key: portable(value) for key, value in identity.items()}
+    if isinstance(identity, list):
+        return [portable(value) for value in identity]
+    if isinstance(identity, str) and (match := _FINGERPRINT.match(identity)):
+        return f"data of shape {match.group(1)}"
+    return identity
+
+
 def reference_path(name: str, identity: dict[str, Any]) -> Path:
-    """``reference/<name>-<hash>.pt``: where the reference model of a run (its :func:`run_identity`) lives."""
-    return REFERENCE_DIR / f"{name}-{config_hash(name, identity)}.pt"
+    """``reference/<name>-<hash>.pt``: where the reference model of a run (its :func:`run_identity`) lives;
+    the hash is of its :func:`portable` identity."""
+    return REFERENCE_DIR / f"{name}-{config_hash(name, portable(json.loads(json.dumps(identity))))}.pt"
 
 
 def manifest_path(path: Path) -> Path:
@@ -144,7 +167,9 @@ def verify(path: Path, identity: dict[str, Any] | None = None) -> dict[str, Any]
     configuration); return the manifest. Raises :class:`ReferenceError` saying what does not match."""
     stat = path.stat()
     manifest = _verified(path, stat.st_size, stat.st_mtime_ns)
-    if identity is not None and manifest.get("config") != json.loads(json.dumps(identity)):
+    if identity is not None and portable(manifest.get("config")) != portable(
+        json.loads(json.dumps(identity))
+    ):
         raise ReferenceError(
             f"{_shown(path)}: its manifest's configuration is not the run's (the file name's hash matches, "
             f"so the manifest was edited by hand): retrain it with `make reference`"
@@ -262,8 +287,11 @@ def export(build: Path, out: Path = REFERENCE_DIR) -> list[dict[str, Any]]:
         raise ReferenceError(f"{build / 'checkpoints'} lacks {len(missing)} used runs, e.g. {missing[0]}.pt")
     out.mkdir(parents=True, exist_ok=True)
     manifests = [_export_one(build / "checkpoints" / f"{stem}.pt", out) for stem in stems]
+    shipped = {Path(m["file"]).stem for m in manifests}
+    if len(shipped) < len(manifests):
+        raise ReferenceError("two used runs differ only in their data's bits: they cannot share reference/")
     for old in out.glob("*.pt"):
-        if old.stem not in stems:
+        if old.stem not in shipped:
             old.unlink()
             manifest_path(old).unlink(missing_ok=True)
     total = sum(m["bytes"] for m in manifests) + sum(
@@ -323,7 +351,7 @@ def _export_one(source: Path, out: Path) -> dict[str, Any]:
     extra = payload.get("extra") or {}
     metrics = {str(k): float(v) for k, v in (extra.get("metrics") or {}).items()}
     identity = payload["config"]
-    target = out / source.name
+    target = out / reference_path(payload["name"], identity).name
     payload["state_dict"], stored = half_precision(payload["state_dict"])
     history = extra.get("history") or {}
     extra["history"] = thinned(history, HISTORY_POINTS)
