@@ -442,22 +442,18 @@ def _cpu_model() -> str:
     return platform.processor() or platform.machine()
 
 
+def _git(*args: str) -> str:
+    """The output of ``git -C <repository> ARGS`` (raises ``OSError`` or ``SubprocessError`` on failure)."""
+    command = ["git", "-C", str(paths.REPO_ROOT), *args]
+    return subprocess.run(command, capture_output=True, text=True, timeout=10, check=True).stdout.strip()
+
+
 def _commit() -> str | None:
+    """The repository's commit (12 digits), ``+changes`` when tracked files differ from it; ``None`` without
+    git."""
     try:
-        head = subprocess.run(
-            ["git", "-C", str(paths.REPO_ROOT), "rev-parse", "--short=12", "HEAD"],
-            capture_output=True,
-            text=True,
-            timeout=10,
-            check=True,
-        ).stdout.strip()
-        dirty = subprocess.run(
-            ["git", "-C", str(paths.REPO_ROOT), "status", "--porcelain", "--untracked-files=no"],
-            capture_output=True,
-            text=True,
-            timeout=10,
-            check=True,
-        ).stdout.strip()
+        head = _git("rev-parse", "--short=12", "HEAD")
+        dirty = _git("status", "--porcelain", "--untracked-files=no")
     except (OSError, subprocess.SubprocessError):
         return None
     return head + ("+changes" if dirty else "")
