@@ -76,6 +76,16 @@ def seed_field() -> int:
     return integer(minimum=0, kind=int, default_factory=base_seed)
 
 
+#: The environment variables that put torch and MKL on another CPU's numerical path.
+NUMERICS_VARIABLES = ("ATEN_CPU_CAPABILITY", "MKL_CBWR")
+
+
+def numerical_path() -> dict[str, str]:
+    """The numerical path forced through the environment (:data:`NUMERICS_VARIABLES` that are set); empty for
+    the machine's own."""
+    return {key: os.environ[key] for key in NUMERICS_VARIABLES if key in os.environ}
+
+
 def is_quick() -> bool:
     """True in the quick (test) profile."""
     return profile() == "quick"

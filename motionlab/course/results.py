@@ -39,6 +39,7 @@ from typing import Any
 import torch
 
 from motionlab import config
+from motionlab.train import reference
 
 try:
     import fcntl
@@ -109,15 +110,11 @@ def failing_claims(name: str) -> list[str]:
 def build_settings() -> dict[str, Any]:
     """What else decides a build's numbers: the base training seed, whether the reference models were
     loaded or every model retrained here, and the numerical path forced through the environment
-    (``ATEN_CPU_CAPABILITY``, ``MKL_CBWR``; empty for the machine's own)."""
-    from motionlab.train.reference import retraining
-
+    (:func:`motionlab.config.numerical_path`)."""
     return {
         "base_seed": config.base_seed(),
-        "models": "retrained" if config.is_quick() or retraining() else "reference",
-        "numerics": {
-            key: os.environ[key] for key in ("ATEN_CPU_CAPABILITY", "MKL_CBWR") if key in os.environ
-        },
+        "models": "reference" if reference.in_use() else "retrained",
+        "numerics": config.numerical_path(),
     }
 
 

@@ -237,8 +237,7 @@ def parallel() -> int:
         return 1
     text = os.environ.get("MOTIONLAB_PARALLEL", "").strip()
     if not text:
-        loads = not config.is_quick() and reference.in_use() and config.base_seed() == 0
-        return PARALLEL if loads else 1
+        return PARALLEL if reference.in_use() and config.base_seed() == 0 else 1
     if not text.isdigit() or int(text) < 1:
         raise ValueError(f"MOTIONLAB_PARALLEL must be an integer >= 1, got {text!r}")
     return int(text)
@@ -263,17 +262,16 @@ def execute_all(
     """Run ``execute`` on every notebook, ``workers`` at a time, in :func:`longest_first` order; an appendix
     starts only once its chapter (when it is among ``chapters``) has finished: it loads what the chapter
     trained. Returns ``{name: run}``."""
-    numbers = {notebook_number(path.stem): path.stem for path in chapters}
+    stems = {notebook_number(path.stem): path.stem for path in chapters}
     waiting, done, running = longest_first(chapters), {}, {}
+
+    def is_ready(path: Path) -> bool:  # a chapter, or an appendix whose chapter is done or not run
+        chapter = stems.get(notebook_number(path.stem)[:2]) if is_appendix(path.stem) else None
+        return chapter is None or chapter in done
+
     with ThreadPoolExecutor(max_workers=workers) as pool:
         while waiting or running:
-            ready = [
-                path
-                for path in waiting
-                if not is_appendix(path.stem)
-                or numbers.get(notebook_number(path.stem)[:2]) in done
-                or notebook_number(path.stem)[:2] not in numbers
-            ]
+            ready = [path for path in waiting if is_ready(path)]
             while ready and len(running) < workers:
                 path = ready.pop(0)
                 waiting.remove(path)

@@ -39,7 +39,7 @@ from typing import Any
 import torch
 
 from motionlab import config, paths
-from motionlab.checkpoints import config_hash
+from motionlab.checkpoints import config_dict, config_hash
 
 #: Where the reference models live (the repository's ``reference/``).
 REFERENCE_DIR = paths.REPO_ROOT / "reference"
@@ -117,7 +117,7 @@ def portable(identity: Any) -> Any:
 def reference_path(name: str, identity: dict[str, Any]) -> Path:
     """``reference/<name>-<hash>.pt``: where the reference model of a run (its :func:`run_identity`) lives;
     the hash is of its :func:`portable` identity."""
-    return REFERENCE_DIR / f"{name}-{config_hash(name, portable(json.loads(json.dumps(identity))))}.pt"
+    return REFERENCE_DIR / f"{name}-{config_hash(name, portable(config_dict(identity)))}.pt"
 
 
 def manifest_path(path: Path) -> Path:
@@ -176,9 +176,7 @@ def verify(path: Path, identity: dict[str, Any] | None = None) -> dict[str, Any]
     configuration); return the manifest. Raises :class:`ReferenceError` saying what does not match."""
     stat = path.stat()
     manifest = _verified(path, stat.st_size, stat.st_mtime_ns)
-    if identity is not None and portable(manifest.get("config")) != portable(
-        json.loads(json.dumps(identity))
-    ):
+    if identity is not None and portable(manifest.get("config")) != portable(config_dict(identity)):
         raise ReferenceError(
             f"{_shown(path)}: its manifest's configuration is not the run's (the file name's hash matches, "
             f"so the manifest was edited by hand): retrain it with `make reference`"
@@ -258,9 +256,7 @@ def trained_on() -> dict[str, Any]:
         "torch": str(torch.__version__),
         "commit": _commit(),
         "date": time.strftime("%Y-%m-%d %H:%M", time.gmtime()),
-        "numerics": {
-            key: os.environ[key] for key in ("ATEN_CPU_CAPABILITY", "MKL_CBWR") if key in os.environ
-        },
+        "numerics": config.numerical_path(),
         "base_seed": config.base_seed(),
     }
 
