@@ -1,16 +1,11 @@
-"""Shared test settings: quick profile, one torch thread, property tests that do not depend on the machine's
-speed, and each notebook cell's time limit under nbval."""
-
-import os
-from pathlib import Path
+"""Settings of the unit tests: one torch thread, property tests that do not depend on the
+machine's speed, and the shared fixtures (the notebooks' settings: ``conftest.py`` at the top)."""
 
 import pytest
 import torch
 from hypothesis import HealthCheck, settings
 
-os.environ.setdefault("MOTIONLAB_PROFILE", "quick")
-
-from motionlab import config  # noqa: E402
+from motionlab import config
 
 config.set_threads()
 
@@ -19,17 +14,6 @@ config.set_threads()
 # from this profile.
 settings.register_profile("motionlab", deadline=None, suppress_health_check=[HealthCheck.too_slow])
 settings.load_profile("motionlab")
-
-
-def pytest_runtest_setup(item) -> None:
-    """A notebook cell under nbval may run as long as the course build would let it (three times its
-    chapter's quick budget, 60-120 s), not nbval's default of 2,000 s: a kernel that stops answering fails
-    the cell within two minutes, naming it (nbval then stops the kernel, and the chapter's later cells fail
-    at once)."""
-    if type(item).__name__ == "IPyNbCell":
-        from motionlab.course.run import cell_limits
-
-        item.config.option.nbval_cell_timeout = cell_limits(Path(str(item.fspath)).stem).cell_seconds
 
 
 @pytest.fixture

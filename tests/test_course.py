@@ -116,6 +116,18 @@ def test_appendices_without_a_chapter_are_no_course(tmp_path):
         course.chapter_notebooks(tmp_path / "notebooks")
 
 
+def test_the_longest_chain_starts_first(tmp_path, monkeypatch) -> None:
+    """A chapter ranks by its time plus its appendices' (they run after it), an appendix by its own: the
+    chapter that ends the longest chain starts first, and its appendix before shorter notebooks."""
+    seconds = {"04_mc": 60, "04a_mc_appendix": 80, "10_real": 95, "11_mdm": 90, "11a_mdm_appendix": 85}
+    monkeypatch.setattr(
+        course, "load_results", lambda: {"notebooks": {name: {"seconds": s} for name, s in seconds.items()}}
+    )
+    paths = [tmp_path / f"{name}.ipynb" for name in seconds]
+    order = [path.stem for path in course.longest_first(paths)]
+    assert order == ["11_mdm", "04_mc", "10_real", "11a_mdm_appendix", "04a_mc_appendix"]
+
+
 def test_two_at_a_time_the_longest_first_and_an_appendix_after_its_chapter(tmp_path, monkeypatch) -> None:
     """:func:`execute_all` with two workers: every notebook runs once, never more than two at once, and an
     appendix starts only after its chapter has finished."""

@@ -244,16 +244,24 @@ def parallel() -> int:
 
 
 def longest_first(chapters: list[Path]) -> list[Path]:
-    """The notebooks in the order they start: the longest first (by the last build's seconds in
-    ``results.json``, else by budget), so that the last to finish is a short one; an appendix never before
-    its chapter (:func:`execute_all` also waits for the chapter to finish)."""
+    """The notebooks in the order they start, the longest chain first: a chapter with the seconds it and
+    its appendices take one after the other (an appendix waits for its chapter, see :func:`execute_all`),
+    an appendix with its own. Seconds are the last build's in ``results.json``, else the budget's. So the
+    chapter that ends the longest chain starts first, its appendix as soon as it is done, and the last
+    notebook to finish is a short one."""
     seconds = load_results().get("notebooks", {})
 
     def expected(path: Path) -> float:
         last = seconds.get(path.stem, {}).get("seconds")
         return float(last) if last is not None else float(budget_seconds(path.stem) or 0.0)
 
-    return sorted(chapters, key=lambda path: (is_appendix(path.stem), -expected(path)))
+    def chain(path: Path) -> float:
+        if is_appendix(path.stem):
+            return expected(path)
+        number = notebook_number(path.stem)
+        return sum(expected(other) for other in chapters if notebook_number(other.stem)[:2] == number)
+
+    return sorted(chapters, key=lambda path: -chain(path))
 
 
 def execute_all(

@@ -19,6 +19,7 @@ from typing import Any, Generic, TypeVar
 from torch import nn
 
 from motionlab.train.loop import TrainResult
+from motionlab.train.measurements import measure_once
 from motionlab.train.parallel import outcome, run_chains, shared_pool, submit
 from motionlab.train.run import Run
 
@@ -50,9 +51,10 @@ def _train_run(run: Run) -> float:
 
 
 def _measure_run(run: Run, name: str, then: Callable[[str, nn.Module], Any]) -> Any:
-    """Body of a worker call: load ``run``'s model from the cache (trained before) and measure it."""
+    """Body of a worker call: load ``run``'s model from the cache (trained before) and measure it, or read
+    the measurement this build made of it before (:func:`~motionlab.train.measurements.measure_once`)."""
     model, _ = run.train(progress=False)
-    return then(name, model)
+    return measure_once(then, name, model)
 
 
 def _load_all(
@@ -104,7 +106,8 @@ def train_many(
         then: ``then(name, model)`` measures a trained model in a worker as soon as its run is done, filling
             the cores that the last trainings leave idle. It must be picklable (a module-level function or
             a ``functools.partial`` of one) and seeded by its arguments alone, so its result does not depend
-            on where or when it ran. Its result is :attr:`Trained.measured`.
+            on where or when it ran. Its result is :attr:`Trained.measured`, kept for the rest of the build
+            (:mod:`motionlab.train.measurements`): the same call again reads it.
         processes: worker processes (one thread each); with 1 everything runs here, in order.
         progress: progress bars while loading the models here (the workers show none).
         alongside: more runs to train into the cache on the same workers after ``runs`` (e.g. the

@@ -1,0 +1,87 @@
+"""Measurements kept for the rest of the build: an appendix that measures a chapter's models as the chapter
+did (the same sample sets, the same metrics) reads the chapter's numbers instead of drawing them again.
+
+A measurement is the ``then(name, model)`` of :func:`~motionlab.train.many.train_many`: seeded by its
+arguments alone, so the same function with the same arguments, on the same weights, under the same code,
+torch, thread count and numerical path, gives the same value. :func:`measure_once` keys its entry
+``<build>/measurements/<name>-<hash>.pkl`` by all of these (the function and its bound arguments pickled,
+the weights' bytes, a digest of the package's source), so an entry is only ever read where measuring again
+would give it bit for bit; anything else is measured afresh. An entry that cannot be read is measured again
+and replaced; entries are written whole (a temporary file renamed), so two notebooks measuring at once
+cannot leave half of one.
+"""
+
+from __future__ import annotations
+
+import functools
+import hashlib
+import os
+import pickle
+import tempfile
+from collections.abc import Callable
+from pathlib import Path
+from typing import Any, TypeVar
+
+import torch
+from torch import nn
+
+from motionlab import config
+
+M = TypeVar("M")
+
+#: The package whose source is part of every key.
+PACKAGE_DIR = Path(__file__).resolve().parents[1]
+
+
+@functools.cache
+def source_digest() -> str:
+    """SHA-256 of the package's Python source (paths and contents): a measurement's code, whichever module
+    it lives in."""
+    digest = hashlib.sha256()
+    for path in sorted(PACKAGE_DIR.rglob("*.py")):
+        digest.update(path.relative_to(PACKAGE_DIR).as_posix().encode())
+        digest.update(path.read_bytes())
+    return digest.hexdigest()
+
+
+def measurement_key(then: Callable[[str, nn.Module], Any], name: str, model: nn.Module) -> str:
+    """The hash that names ``then(name, model)``'s entry: the function and its bound arguments, the model's
+    class and weights, the package's source, torch's version, the thread count and the numerical path."""
+    digest = hashlib.sha256()
+    setting = (
+        source_digest(),
+        torch.__version__,
+        torch.get_num_threads(),
+        sorted(config.numerical_path().items()),
+    )
+    digest.update(repr(setting).encode())
+    digest.update(pickle.dumps((then, name, type(model).__qualname__), protocol=pickle.HIGHEST_PROTOCOL))
+    for key, tensor in model.state_dict().items():
+        digest.update(key.encode())
+        digest.update(tensor.detach().reshape(-1).contiguous().view(torch.uint8).numpy().tobytes())
+    return digest.hexdigest()[:20]
+
+
+def measurement_path(then: Callable[[str, nn.Module], Any], name: str, model: nn.Module) -> Path:
+    """``<build>/measurements/<name>-<hash>.pkl`` (:func:`measurement_key`)."""
+    return config.build_dir() / "measurements" / f"{name}-{measurement_key(then, name, model)}.pkl"
+
+
+def measure_once(then: Callable[[str, nn.Module], M], name: str, model: nn.Module) -> M:
+    """``then(name, model)``, read from its entry when this build has measured it before, else measured and
+    kept."""
+    path = measurement_path(then, name, model)
+    if path.is_file():
+        try:
+            with path.open("rb") as file:
+                return pickle.load(file)
+        except Exception:  # noqa: BLE001 - truncated or unreadable: measured again below and replaced
+            pass
+    value = then(name, model)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    with tempfile.NamedTemporaryFile(
+        dir=path.parent, prefix=f".{name}-", suffix=".tmp", delete=False
+    ) as file:
+        pickle.dump(value, file, protocol=pickle.HIGHEST_PROTOCOL)
+    os.replace(file.name, path)
+    return value

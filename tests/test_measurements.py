@@ -1,0 +1,66 @@
+"""The build's measurement store (:mod:`motionlab.train.measurements`): the same measurement of the same
+weights is read back; another argument, other weights or a damaged entry mean measuring again."""
+
+from __future__ import annotations
+
+from functools import partial
+from pathlib import Path
+
+import pytest
+import torch
+from torch import nn
+
+from motionlab.train.measurements import measure_once, measurement_path
+
+
+def _count(log: Path, scale: float, name: str, model: nn.Module) -> dict[str, float]:
+    """A measurement that leaves a line in ``log`` each time it really runs."""
+    with log.open("a") as file:
+        file.write(f"{name}\n")
+    return {"weight_sum": scale * float(model.weight.detach().sum())}
+
+
+@pytest.fixture
+def build(monkeypatch, tmp_path: Path) -> Path:
+    monkeypatch.setenv("MOTIONLAB_BUILD", str(tmp_path / "build"))
+    return tmp_path / "build"
+
+
+def _model(seed: int) -> nn.Module:
+    torch.manual_seed(seed)
+    return nn.Linear(3, 2)
+
+
+def test_a_measurement_is_made_once_and_read_back(build: Path, tmp_path: Path) -> None:
+    log = tmp_path / "log.txt"
+    model = _model(0)
+    first = measure_once(partial(_count, log, 2.0), "mcell", model)
+    again = measure_once(partial(_count, log, 2.0), "mcell", _model(0))  # the same weights, another object
+    assert first == again == {"weight_sum": 2.0 * float(model.weight.detach().sum())}
+    assert log.read_text().splitlines() == ["mcell"]
+    assert measurement_path(partial(_count, log, 2.0), "mcell", model).parent == build / "measurements"
+
+
+def test_another_argument_other_weights_or_another_name_are_measured_afresh(
+    build: Path, tmp_path: Path
+) -> None:
+    log = tmp_path / "log.txt"
+    measure_once(partial(_count, log, 2.0), "mcell", _model(0))
+    assert measure_once(partial(_count, log, 3.0), "mcell", _model(0))["weight_sum"] == pytest.approx(
+        3.0 * float(_model(0).weight.detach().sum())
+    )
+    measure_once(partial(_count, log, 2.0), "mcell", _model(1))
+    measure_once(partial(_count, log, 2.0), "erd", _model(0))
+    assert log.read_text().splitlines() == ["mcell", "mcell", "mcell", "erd"]
+
+
+def test_a_damaged_entry_is_measured_again_and_replaced(build: Path, tmp_path: Path) -> None:
+    log = tmp_path / "log.txt"
+    then, model = partial(_count, log, 2.0), _model(0)
+    expected = measure_once(then, "mcell", model)
+    path = measurement_path(then, "mcell", model)
+    path.write_bytes(path.read_bytes()[:5])  # truncated, as a killed write would leave it without the rename
+    assert measure_once(then, "mcell", model) == expected
+    assert measure_once(then, "mcell", model) == expected
+    assert len(log.read_text().splitlines()) == 2  # measured again once, then read
+    assert not list(path.parent.glob(".*.tmp"))  # no temporary file left behind
