@@ -45,7 +45,7 @@ reference: $(STAMP)
 test: $(STAMP)
 	MOTIONLAB_PROFILE=quick $(BIN)/python -m motionlab.course.logs test -- sh -c '\
 		$(BIN)/ruff format --check . && $(BIN)/ruff check . && $(BIN)/lint-imports && \
-		$(BIN)/python -m pytest -n 2 --dist loadgroup --durations=25 \
+		$(BIN)/python -m pytest -n 2 --dist loadscope --durations=25 \
 			--nbval-sanitize-with tests/nbval_sanitize.cfg'
 
 bench: $(STAMP)

@@ -1,9 +1,10 @@
 """Settings of every pytest run, the unit tests' (``tests/``) and the notebooks' under nbval (``notebooks/``):
-the quick profile, each notebook cell's time limit, and how ``pytest -n 2 --dist loadgroup`` shares the
+the quick profile, each notebook cell's time limit, and how ``pytest -n 2 --dist loadscope`` shares the
 work between its workers."""
 
 import os
 from pathlib import Path
+from typing import Any
 
 import pytest
 
@@ -14,14 +15,21 @@ def _is_notebook_cell(item: pytest.Item) -> bool:
     return type(item).__name__ == "IPyNbCell"
 
 
-def pytest_collection_modifyitems(items: list[pytest.Item]) -> None:
-    """One xdist group per test module, and one per chapter for a chapter and its appendices: the appendix
-    runs after its chapter on the same worker and reads the models and measurements the chapter left in the
-    build (run apart, both would train and measure the same models)."""
-    for item in items:
-        path = Path(str(item.fspath))
-        group = f"chapter-{path.stem[:2]}" if _is_notebook_cell(item) else str(path)
-        item.add_marker(pytest.mark.xdist_group(group))
+@pytest.hookimpl(optionalhook=True)
+def pytest_xdist_make_scheduler(config: pytest.Config, log: Any) -> Any:
+    """``--dist loadscope`` with a chapter and its appendices as one scope: the appendix runs after its
+    chapter on the same worker and reads the models and measurements the chapter left in the build (run
+    apart, both would train and measure the same models). A test module stays one scope."""
+    from xdist.scheduler import LoadScopeScheduling
+
+    class ChapterScopeScheduling(LoadScopeScheduling):
+        def _split_scope(self, nodeid: str) -> str:
+            path = nodeid.split("::", 1)[0]
+            if path.startswith("notebooks/") and path.endswith(".ipynb"):
+                return f"chapter {Path(path).name[:2]}"
+            return super()._split_scope(nodeid)
+
+    return ChapterScopeScheduling(config, log) if config.getvalue("dist") == "loadscope" else None
 
 
 def pytest_runtest_setup(item: pytest.Item) -> None:
