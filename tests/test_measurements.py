@@ -64,3 +64,21 @@ def test_a_damaged_entry_is_measured_again_and_replaced(build: Path, tmp_path: P
     assert measure_once(then, "mcell", model) == expected
     assert len(log.read_text().splitlines()) == 2  # measured again once, then read
     assert not list(path.parent.glob(".*.tmp"))  # no temporary file left behind
+
+
+def test_the_key_is_the_same_in_another_process(tmp_path: Path) -> None:
+    """Tensors enter the key by their bytes: torch's own pickles differ from process to process."""
+    import subprocess
+    import sys
+
+    program = (
+        "import torch\nfrom functools import partial\nfrom torch import nn\n"
+        "from motionlab.train.measurements import measurement_key\n"
+        "torch.manual_seed(0)\ndata = {'clips': torch.randn(4, 3), 'judge': nn.Linear(3, 2)}\n"
+        "print(measurement_key(partial(print, data), 'run', nn.Linear(3, 2)))"
+    )
+    keys = {
+        subprocess.run([sys.executable, "-c", program], capture_output=True, text=True, check=True).stdout
+        for _ in range(2)
+    }
+    assert len(keys) == 1 and len(keys.pop().strip()) == 20

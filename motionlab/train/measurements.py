@@ -5,10 +5,10 @@ A measurement is the ``then(name, model)`` of :func:`~motionlab.train.many.train
 arguments alone, so the same function with the same arguments, on the same weights, under the same code,
 torch, thread count and numerical path, gives the same value. :func:`measure_once` keys its entry
 ``<build>/measurements/<name>-<hash>.pkl`` by all of these (the function and its bound arguments pickled,
-the weights' bytes, a digest of the package's source), so an entry is only ever read where measuring again
-would give it bit for bit; anything else is measured afresh. An entry that cannot be read is measured again
-and replaced; entries are written whole (a temporary file renamed), so two notebooks measuring at once
-cannot leave half of one.
+every tensor among them and the weights by their bytes, a digest of the package's source), so an entry is
+only ever read where measuring again would give it bit for bit; anything else is measured afresh. An entry
+that cannot be read is measured again and replaced; entries are written whole (a temporary file renamed),
+so two notebooks measuring at once cannot leave half of one.
 """
 
 from __future__ import annotations
@@ -44,22 +44,42 @@ def source_digest() -> str:
     return digest.hexdigest()
 
 
+class _DigestWriter:
+    """A file that feeds what is written to it into a SHA-256 digest."""
+
+    def __init__(self) -> None:
+        self.digest = hashlib.sha256()
+
+    def write(self, data: Any) -> int:  # bytes, or a buffer (pickle protocol 5)
+        self.digest.update(data)
+        return memoryview(data).nbytes
+
+
+class _DigestPickler(pickle.Pickler):
+    """A pickler whose output depends on values only: a tensor stands as its dtype, shape and the digest of
+    its bytes (torch's own pickling of tensors writes a fresh serialization id each time)."""
+
+    def persistent_id(self, obj: Any) -> Any:
+        if isinstance(obj, torch.Tensor):
+            data = obj.detach().reshape(-1).contiguous()
+            content = hashlib.sha256(data.view(torch.uint8).numpy().tobytes()).hexdigest()
+            return ("tensor", str(data.dtype), tuple(obj.shape), content)
+        return None
+
+
 def measurement_key(then: Callable[[str, nn.Module], Any], name: str, model: nn.Module) -> str:
     """The hash that names ``then(name, model)``'s entry: the function and its bound arguments, the model's
     class and weights, the package's source, torch's version, the thread count and the numerical path."""
-    digest = hashlib.sha256()
     setting = (
         source_digest(),
         torch.__version__,
         torch.get_num_threads(),
         sorted(config.numerical_path().items()),
     )
-    digest.update(repr(setting).encode())
-    digest.update(pickle.dumps((then, name, type(model).__qualname__), protocol=pickle.HIGHEST_PROTOCOL))
-    for key, tensor in model.state_dict().items():
-        digest.update(key.encode())
-        digest.update(tensor.detach().reshape(-1).contiguous().view(torch.uint8).numpy().tobytes())
-    return digest.hexdigest()[:20]
+    writer = _DigestWriter()
+    what = (setting, then, name, type(model).__qualname__, model.state_dict())
+    _DigestPickler(writer, protocol=pickle.HIGHEST_PROTOCOL).dump(what)
+    return writer.digest.hexdigest()[:20]
 
 
 def measurement_path(then: Callable[[str, nn.Module], Any], name: str, model: nn.Module) -> Path:
