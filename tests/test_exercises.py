@@ -515,7 +515,7 @@ def test_subtree_reach_checker_names_the_mistake(wrong, says) -> None:
 
 
 def _loop(
-    window=lambda control, t, tau: control[:, t : t + tau + 1],
+    window=lambda control, t, history: control[:, t : t + history + 1],
     scale=True,
     update=True,
     carry=True,
@@ -523,11 +523,11 @@ def _loop(
     newest_first=False,
 ):
     def loop(invert_frame, control, seed_pose, noise, temperature):
-        tau = seed_pose.shape[1]
+        history = seed_pose.shape[1]
         past, state, poses = seed_pose, None, []
-        for t in range(control.shape[1] - tau):
+        for t in range(control.shape[1] - history):
             visible = keep(past.flip(1) if newest_first else past)
-            cond = torch.cat([visible.flatten(1), window(control, t, tau).flatten(1)], dim=1)
+            cond = torch.cat([visible.flatten(1), window(control, t, history).flatten(1)], dim=1)
             pose, new_state = invert_frame((temperature if scale else 1.0) * noise[:, t], cond, state)
             state = new_state if carry else None
             poses.append(pose)
@@ -541,8 +541,14 @@ def _loop(
 @pytest.mark.parametrize(
     "wrong, says",
     [
-        (_loop(window=lambda control, t, tau: control[:, t + 1 : t + tau + 2]), "window is control[:, t"),
-        (_loop(window=lambda control, t, tau: control[:, t : t + tau + 1].flip(1)), "current control last"),
+        (
+            _loop(window=lambda control, t, history: control[:, t + 1 : t + history + 2]),
+            "window is control[:, t",
+        ),
+        (
+            _loop(window=lambda control, t, history: control[:, t : t + history + 1].flip(1)),
+            "current control last",
+        ),
         (_loop(newest_first=True), "oldest first"),
         (_loop(scale=False), "not scaled"),
         (_loop(update=False), "update the history"),

@@ -185,7 +185,7 @@ def test_scripted_generation_loop_matches_plain_python_and_reports_divergence():
     )  # the flags are used
     with pytest.raises(ValueError, match=r"shapes disagree: control \(2, 12, 2\)"):
         sample_frames(plan, control, seed_pose, keep, noise[:, :8])
-    with pytest.raises(ValueError, match=r"plan's tau \* P = 18"):
+    with pytest.raises(ValueError, match=r"plan's H \* P = 18"):
         sample_frames(plan, control, seed_pose[:, :, :5], keep, noise[:, :, :5])
     with pytest.raises(TypeError, match="share one dtype"):
         sample_frames(plan, control.double(), seed_pose.double(), keep, noise.double())
@@ -385,7 +385,7 @@ def test_bad_inputs_raise():
         model(pose[..., :5], control)
     with pytest.raises(ValueError, match="at least 3 frames"):
         model.sample(control, pose[:, :2])
-    with pytest.raises(ValueError, match="tau=3"):
+    with pytest.raises(ValueError, match="H=3"):
         model.sample(control, pose[:, :4])
     with pytest.raises(ValueError, match="temperature"):
         model.sample(control, pose[:, :3], temperature=-0.1)

@@ -65,7 +65,7 @@ class _Frame:
         z_t, cond_t = as_result(z_t, "z_t"), as_result(cond_t, "cond_t")
         if cond_t.dim() != 2 or cond_t.shape[1] != self.cond_weight.shape[0]:
             raise _Stop(
-                f"frame {len(self.calls) - 1}: cond_t should be (B, tau * P + (tau + 1) * C) = "
+                f"frame {len(self.calls) - 1}: cond_t should be (B, H * P + (H + 1) * C) = "
                 f"({BATCH}, {self.cond_weight.shape[0]}), got {tuple(cond_t.shape)}"
             )
         hidden = state.hidden if isinstance(state, _State) else torch.zeros(z_t.shape[0], POSE).to(z_t)
@@ -92,7 +92,7 @@ def _reference(
 
 
 def _history_problem(got: torch.Tensor, want: torch.Tensor, seed_part: torch.Tensor, t: int) -> str:
-    """What is wrong with the past-pose part ``(B, tau * P)`` of ``c_t``."""
+    """What is wrong with the past-pose part ``(B, H * P)`` of ``c_t``."""
     as_frames = want.view(BATCH, HISTORY, POSE)
     if t > 0 and close(got, seed_part):
         return (
@@ -102,27 +102,27 @@ def _history_problem(got: torch.Tensor, want: torch.Tensor, seed_part: torch.Ten
     if close(got, as_frames.flip(1).flatten(1)):
         return "the history is in the wrong order: oldest first, past[:, -1] is the pose of frame t - 1"
     if close(got, as_frames.transpose(1, 2).flatten(1)):
-        return "flatten the history frame by frame: past (B, tau, P).flatten(1), not its transpose"
+        return "flatten the history frame by frame: past (B, H, P).flatten(1), not its transpose"
     if bool(((got == 0) & (want != 0)).any()):
         return (
             "some previous poses are zeroed: the history dropout is for training only; generation sees "
-            "all tau previous poses"
+            "all H previous poses"
         )
-    return f"the previous-pose part of c_t is wrong at frame {t}: the last tau generated (or seed) poses"
+    return f"the previous-pose part of c_t is wrong at frame {t}: the last H generated (or seed) poses"
 
 
 def _control_problem(got: torch.Tensor, control: torch.Tensor, t: int) -> str:
-    """What is wrong with the control part ``(B, (tau + 1) * C)`` of ``c_t``."""
+    """What is wrong with the control part ``(B, (H + 1) * C)`` of ``c_t``."""
     right = control[:, t : t + HISTORY + 1]
     if close(got, right.flip(1).flatten(1)):
         return "the control window is in the wrong order: oldest first, the current control last"
     for start in range(control.shape[1] - HISTORY):
         if start != t and close(got, control[:, start : start + HISTORY + 1].flatten(1)):
             return (
-                f"frame {t} read the controls from frame {start} on: generated frame t has index tau + t, so "
-                "its window is control[:, t : t + tau + 1] (the tau previous controls and the current one)"
+                f"frame {t} read the controls from frame {start} on: generated frame t has index H + t, so "
+                "its window is control[:, t : t + history + 1] (the H previous controls and the current one)"
             )
-    return f"the control part of c_t is wrong at frame {t}: control[:, t : t + tau + 1], flattened"
+    return f"the control part of c_t is wrong at frame {t}: control[:, t : t + history + 1], flattened"
 
 
 def _latent_problem(got: torch.Tensor, noise: torch.Tensor, temperature: float, t: int) -> str | None:
@@ -150,7 +150,7 @@ def _follow_the_calls(fn: SampleLoop) -> None:
     if stopped is None and len(frame.calls) != FRAMES:
         raise Diagnosis(
             f"invert_frame should be called once per generated frame, {FRAMES} times for control "
-            f"(B, tau + {FRAMES}, C), got {len(frame.calls)} calls"
+            f"(B, H + {FRAMES}, C), got {len(frame.calls)} calls"
         )
     seed_part = seed_pose.flatten(1)
     for t, ((z_t, cond_t, state), (_, want_cond, _)) in enumerate(zip(frame.calls, reference.calls)):
@@ -195,19 +195,19 @@ def _other_sizes(fn: SampleLoop) -> None:
     got = as_result(fn(_Frame.new(0), control, seed_pose, noise, 0.0), "the loop")
     if not close(got, want):
         raise Diagnosis(
-            "wrong for one generated frame at temperature 0: take N = control.shape[1] - tau and the "
-            "temperature from the arguments"
+            "wrong for one generated frame at temperature 0: take N = control.shape[1] - history, with "
+            "history = seed_pose.shape[1], and the temperature from the arguments"
         )
 
 
 @checker(
     [_follow_the_calls, _other_sizes],
-    "conditions each frame on the last tau poses and the current control window, scales the latent by "
+    "conditions each frame on the last H poses and the current control window, scales the latent by "
     "the temperature, carries the state and appends each pose to the history",
 )
 def check_sample_loop(fn: SampleLoop) -> CheckResult:
     """Check ``fn(invert_frame, control, seed_pose, noise, temperature) -> (B, N, P)``: MoGlow's frame-by-
-    frame generation with ``control (B, tau + N, C)``, ``seed_pose (B, tau, P)``, ``noise (B, N, P)``."""
+    frame generation with ``control (B, H + N, C)``, ``seed_pose (B, H, P)``, ``noise (B, N, P)``."""
 
 
 def _keep_mask_reference(batch: int, frames: int, history: int, dropout: float, seed: int) -> torch.Tensor:

@@ -27,7 +27,7 @@ def show_toy_temperature(
         s=3,
         color="tab:orange",
         alpha=0.6,
-        label=f"samples, T = {temperature:.2f}",
+        label=rf"samples, $\tau$ = {temperature:.2f}",
     )
     inside = np.abs(samples).max(axis=1) <= max(abs(grid.x[0]), abs(grid.x[-1]))
     ax.set_xlim(extent[0], extent[1])

@@ -8,8 +8,8 @@ import torch
 
 
 def my_dct_matrix(n_frames: int) -> torch.Tensor:
-    """The orthonormal DCT-II matrix (n_frames, n_frames): D[k, t] = s_k cos(pi (2t + 1) k / (2N)),
-    s_0 = sqrt(1/N), s_k = sqrt(2/N) for k > 0."""
+    """The orthonormal DCT-II matrix (n_frames, n_frames): U[k, t] = s_k cos(pi (2t + 1) k / (2T)),
+    s_0 = sqrt(1/T), s_k = sqrt(2/T) for k > 0, with T = n_frames."""
     k = torch.arange(n_frames, dtype=torch.float64)[:, None]
     t = torch.arange(n_frames, dtype=torch.float64)[None, :]
     scale = torch.full((n_frames, 1), math.sqrt(2.0 / n_frames), dtype=torch.float64)

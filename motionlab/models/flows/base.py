@@ -8,7 +8,7 @@ A flow layer is an invertible map of sequences ``x`` of shape ``(batch, channels
 
 ``cond`` is an optional conditioning sequence ``(batch, cond_channels, time)`` (for example the control
 signal); layers that do not use it ignore it. By the change of variables, a flow ``f`` with a base density
-``p_Z`` gives ``log p_X(x) = log p_Z(f(x)) + log |det J_f(x)|``, which is why every layer reports its
+``p_Z`` gives ``log p_X(x) = log p_Z(f(x)) + log |det df/dx|``, which is why every layer reports its
 log-determinant next to its output.
 """
 

@@ -69,7 +69,7 @@ class GaussianAR(AutoregressiveModel):
         return self.linear.fit(pose, control, self.cfg.history, self.cfg.dropout, seed, rescale=True)
 
     def forward(self, pose: Tensor, control: Tensor, generator: torch.Generator | None = None) -> Tensor:
-        """Log-likelihood ``(B,)`` (nats) of frames ``tau .. T-1``, as :meth:`MoGlow.forward` (history dropout
+        """Log-likelihood ``(B,)`` (nats) of frames ``H .. T-1``, as :meth:`MoGlow.forward` (history dropout
         flags drawn from ``generator`` in training mode only)."""
         cfg = self.cfg
         check_pose_control(

@@ -2,10 +2,11 @@
 
 The pose of frame ``t`` is generated given the conditioning vector
 
-    c_t = [x_{t-tau}, ..., x_{t-1},  u_{t-tau}, ..., u_{t-1}, u_t]
+    c_t = [x_{t-H}, ..., x_{t-1},  u_{t-H}, ..., u_{t-1}, u_t]
 
-of the ``tau`` previous poses ``x`` and the ``tau + 1`` latest controls ``u`` (the current one included,
-so a change of control acts at once: zero latency). No future control is used: the model is causal.
+of the ``H`` previous poses ``x`` (the paper's τ, eqs. 16-18) and the ``H + 1`` latest controls ``u`` (the
+current one included, so a change of control acts at once: zero latency). No future control is used: the
+model is causal.
 
 **History dropout.** Each previous pose in ``c_t`` is replaced by zeros (the mean pose, in standard units)
 with probability ``p``, independently per frame and lag. Without it the easiest way to predict ``x_t`` is
@@ -17,7 +18,7 @@ harmless, the kept poses are scaled by ``1 / (1 - p)`` in training (standard "in
 default, ``MoGlowConfig.dropout_rescale``), so that a linear map of the history (our least-squares first
 layer, the conditioning projection) sees in expectation the input it gets at generation. Without the
 rescaling (the authors' released code zeroes the poses and does not rescale), a linear map fitted to
-inputs where one previous pose in twenty is visible adds up all ``tau`` of them at generation.
+inputs where one previous pose in twenty is visible adds up all ``H`` of them at generation.
 """
 
 from __future__ import annotations
@@ -40,7 +41,7 @@ class HistoryConfig(Checked):
     Attributes:
         pose_dim: pose features per frame (64: root height and 21 joints' xyz).
         control_dim: control features per frame (3: forward, sideways, yaw velocity).
-        history: ``tau``, the previous poses in the conditioning (with ``tau + 1`` control frames, the
+        history: ``H``, the previous poses in the conditioning (with ``H + 1`` control frames, the
             current one included: zero-latency control).
     """
 
@@ -50,7 +51,7 @@ class HistoryConfig(Checked):
 
     @property
     def cond_dim(self) -> int:
-        """Conditioning features per frame: ``tau`` poses and ``tau + 1`` controls."""
+        """Conditioning features per frame: ``H`` poses and ``H + 1`` controls."""
         return self.history * self.pose_dim + (self.history + 1) * self.control_dim
 
 
@@ -108,16 +109,16 @@ def history_keep_mask(
 def autoregressive_conditioning(
     pose: Tensor, control: Tensor, history: int, keep: Tensor | None = None
 ) -> Tensor:
-    """Conditioning ``(B, T - tau, cond_dim)`` for predicting frames ``tau .. T-1`` of a sequence.
+    """Conditioning ``(B, T - H, cond_dim)`` for predicting frames ``H .. T-1`` of a sequence.
 
     Args:
         pose: poses ``(B, T, P)`` (standard units).
         control: controls ``(B, T, C)`` of the same frames.
-        history: ``tau``.
-        keep: optional keep flags ``(B, T - tau, tau)`` from :func:`history_keep_mask`.
+        history: ``H``.
+        keep: optional keep flags ``(B, T - H, H)`` from :func:`history_keep_mask`.
 
-    Row ``i`` holds, for frame ``t = tau + i``, poses ``t - tau .. t - 1`` (oldest first, flattened), then
-    controls ``t - tau .. t``: the layout of :func:`frame_conditioning`.
+    Row ``i`` holds, for frame ``t = H + i``, poses ``t - H .. t - 1`` (oldest first, flattened), then
+    controls ``t - H .. t``: the layout of :func:`frame_conditioning`.
     """
     where = "autoregressive_conditioning"
     check_tensor(pose, "pose", where, ndim=3, finite=False)
@@ -130,26 +131,26 @@ def autoregressive_conditioning(
             f"got {tuple(control.shape)}"
         )
     if frames <= history:
-        raise ValueError(f"{where}: needs more than tau={history} frames, got {frames}")
-    past = pose.unfold(1, history, 1)[:, : frames - history].transpose(2, 3)  # (B, T - tau, tau, P)
+        raise ValueError(f"{where}: needs more than H={history} frames, got {frames}")
+    past = pose.unfold(1, history, 1)[:, : frames - history].transpose(2, 3)  # (B, T - H, H, P)
     if keep is not None:
         if keep.shape != (batch, frames - history, history):
             raise ValueError(
                 f"{where}: keep must be {(batch, frames - history, history)}, got {tuple(keep.shape)}"
             )
         past = past * keep[..., None].to(past)
-    controls = control.unfold(1, history + 1, 1).transpose(2, 3)  # (B, T - tau, tau + 1, C)
+    controls = control.unfold(1, history + 1, 1).transpose(2, 3)  # (B, T - H, H + 1, C)
     return torch.cat([past.flatten(2), controls.flatten(2)], dim=2)
 
 
 def frame_conditioning(past: Tensor, controls: Tensor) -> Tensor:
-    """Conditioning ``(B, cond_dim)`` of one frame from ``past`` poses ``(B, tau, P)`` and ``controls``
-    ``(B, tau + 1, C)``."""
+    """Conditioning ``(B, cond_dim)`` of one frame from ``past`` poses ``(B, H, P)`` and ``controls``
+    ``(B, H + 1, C)``."""
     check_tensor(past, "past", "frame_conditioning", ndim=3, finite=False)
     check_tensor(controls, "controls", "frame_conditioning", ndim=3, finite=False)
     if controls.shape[0] != past.shape[0] or controls.shape[1] != past.shape[1] + 1:
         raise ValueError(
-            f"frame_conditioning: controls must be (B, tau + 1, C) for past (B, tau, P) = "
+            f"frame_conditioning: controls must be (B, H + 1, C) for past (B, H, P) = "
             f"{tuple(past.shape)}, got {tuple(controls.shape)}"
         )
     return torch.cat([past.flatten(1), controls.flatten(1)], dim=1)

@@ -28,7 +28,7 @@ LSTMState = tuple[Tensor, Tensor]
 
 
 class FrameCoupling(NamedTuple):
-    """An :class:`LSTMAffineCoupling`'s weights split by what they read (``H`` LSTM units, ``C_a`` untouched
+    """An :class:`LSTMAffineCoupling`'s weights split by what they read (``U`` LSTM units, ``C_a`` untouched
     and ``C_b`` transformed channels, ``C_c`` conditioning features).
 
     For one frame, the LSTM's gates are ``x_a @ lstm_input_a.T + cond @ lstm_input_cond.T + h @ lstm_hidden.T
@@ -38,11 +38,11 @@ class FrameCoupling(NamedTuple):
     of all couplings at once. The tensors are copies (a snapshot of the weights), contiguous.
     """
 
-    lstm_input_a: Tensor  # (4H, C_a)
-    lstm_input_cond: Tensor  # (4H, C_c)
-    lstm_hidden: Tensor  # (4H, H)
-    lstm_bias: Tensor  # (4H,)
-    out_hidden: Tensor  # (H, 2 C_b)
+    lstm_input_a: Tensor  # (4U, C_a)
+    lstm_input_cond: Tensor  # (4U, C_c)
+    lstm_hidden: Tensor  # (4U, U)
+    lstm_bias: Tensor  # (4U,)
+    out_hidden: Tensor  # (U, 2 C_b)
     out_input_a: Tensor  # (C_a, 2 C_b)
     out_input_cond: Tensor  # (C_c, 2 C_b)
     out_bias: Tensor  # (2 C_b,)

@@ -52,7 +52,7 @@ class ExperimentConfig(config.ProfileConfig):
     Attributes:
         data: which clips and which augmentation. Walk and jog as in the paper, plus wave: the only action
             of our data set that stands in place, so that "stand still" is a command the models have seen.
-        window, stride: frames per training window (``tau`` history frames, then the frames whose
+        window, stride: frames per training window (``H`` history frames, then the frames whose
             likelihood is trained) and the step between windows.
         dropout_rates: MoGlow's history dropout rates compared (the paper used 0.95), with the kept poses
             rescaled by ``1 / (1 - p)`` in training (standard inverted dropout).
@@ -298,7 +298,7 @@ class RealLocomotionConfig(config.ProfileConfig):
         data: the actions (names of the CMU classes) and the augmentation (mirroring and time reversal, as
             in the paper).
         window, stride: frames per training window and the step between windows.
-        history: ``tau`` previous poses (5 frames: 0.4 s at 12 fps, close to the paper's 10 frames at 20 fps).
+        history: ``H`` previous poses (5 frames: 0.4 s at 12 fps, close to the paper's 10 frames at 20 fps).
         moglow_steps, moglow_hidden, cond_features, dropout: MoGlow's size and history dropout.
         baseline_hidden: the Gaussian baseline's LSTM units.
         moglow_train_steps, baseline_train_steps, lr, batch_size: AdamW training of both.

@@ -1,7 +1,7 @@
 """The objective of the autoregressive models (MoGlow and the Gaussian baseline): NLL per frame.
 
 Both models map ``(pose (B, T, P), control (B, T, C))`` windows to per-sequence log-likelihoods of frames
-``tau .. T-1``; the objective is their negative mean **per frame** (nats), the unit of the held-out
+``H .. T-1``; the objective is their negative mean **per frame** (nats), the unit of the held-out
 comparison of chapter 06.
 """
 
@@ -31,7 +31,7 @@ def held_out_nll_per_window(model: nn.Module, data: MoGlowFeatures, batch_size: 
     """NLL per frame (nats) ``(M,)`` of each of the windows ``data``: the model's likelihood, in eval mode.
 
     The history dropout is a training device (the paper's Fig. 3): in eval mode the model conditions on
-    the full history, so each number is ``-log p(x_t | x_{t-tau..t-1}, u_{t-tau..t}, h_t)`` averaged over
+    the full history, so each number is ``-log p(x_t | x_{t-H..t-1}, u_{t-H..t}, h_t)`` averaged over
     the window's frames. In training mode the same forward pass would draw random masks instead
     (:func:`dropout_objective_nll`). The model's mode is restored afterwards.
     """

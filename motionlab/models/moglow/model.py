@@ -109,11 +109,11 @@ class MoGlow(AutoregressiveModel):
     def latents(
         self, pose: Tensor, control: Tensor, generator: torch.Generator | None = None
     ) -> tuple[Tensor, Tensor]:
-        """The flow's latents ``z`` ``(B, T - tau, P)`` of frames ``tau .. T-1`` and the log-determinant
+        """The flow's latents ``z`` ``(B, T - H, P)`` of frames ``H .. T-1`` and the log-determinant
         ``(B,)``.
 
         Args:
-            pose: ``(B, T, P)``; frames ``0 .. tau-1`` only serve as history.
+            pose: ``(B, T, P)``; frames ``0 .. H-1`` only serve as history.
             control: ``(B, T, C)``.
             generator: draws the history dropout flags in training mode (probability ``cfg.dropout`` per
                 frame and lag); ``None`` uses torch's global generator, which the training loop seeds. In
@@ -129,7 +129,7 @@ class MoGlow(AutoregressiveModel):
         return z.transpose(1, 2), logdet + linear_logdet
 
     def keep_mask(self, batch: int, frames: int, generator: torch.Generator | None = None) -> Tensor | None:
-        """The training-time history dropout: keep flags ``(batch, frames, tau)`` (:func:`history_keep_mask`
+        """The training-time history dropout: keep flags ``(batch, frames, H)`` (:func:`history_keep_mask`
         with ``cfg.dropout`` and ``cfg.dropout_rescale``), or ``None`` when nothing is dropped.
 
         A subclass may override it to drop the history differently (e.g. whole windows at once); it is never
@@ -142,7 +142,7 @@ class MoGlow(AutoregressiveModel):
         )
 
     def forward(self, pose: Tensor, control: Tensor, generator: torch.Generator | None = None) -> Tensor:
-        """Log-likelihood ``(B,)`` (nats) of frames ``tau .. T-1`` of ``pose`` ``(B, T, P)`` given ``control``
+        """Log-likelihood ``(B,)`` (nats) of frames ``H .. T-1`` of ``pose`` ``(B, T, P)`` given ``control``
         ``(B, T, C)`` (see :meth:`latents`)."""
         z, logdet = self.latents(pose, control, generator)
         return self.prior.log_prob(z) + logdet

@@ -77,7 +77,7 @@ def sampling_setup(
     check_pose_control(seed_pose, control, cfg.pose_dim, cfg.control_dim, history, where)
     if seed_pose.shape[1] != history or control.shape[1] <= history:
         raise ValueError(
-            f"{where}: seed_pose must have tau={history} frames and control more than that, "
+            f"{where}: seed_pose must have H={history} frames and control more than that, "
             f"got {tuple(seed_pose.shape)} and {tuple(control.shape)}"
         )
     batch, frames = control.shape[0], control.shape[1] - history
@@ -96,8 +96,8 @@ def sample_plain(
 
     Args:
         model: a :class:`~motionlab.models.moglow.model.MoGlow`.
-        control: ``(B, tau + N, C)``: the seed frames' controls, then those of the frames to generate.
-        seed_pose: ``(B, tau, P)``, the poses that start the history.
+        control: ``(B, H + N, C)``: the seed frames' controls, then those of the frames to generate.
+        seed_pose: ``(B, H, P)``, the poses that start the history.
         temperature, generator: as for :meth:`MoGlow.sample <motionlab.models.moglow.model.MoGlow.sample>`,
             which draws the same latents and gives the same frames up to float rounding, faster
             (:func:`sample_frames`).
@@ -109,7 +109,7 @@ def sample_plain(
     states = [None] * cfg.steps  # each coupling's LSTM state, carried from frame to frame
     past, poses = seed_pose, []
     for t in range(z.shape[1]):
-        # condition on the last tau poses (all of them: the history dropout is for training only) and the
+        # condition on the last H poses (all of them: the history dropout is for training only) and the
         # controls up to frame t
         cond = frame_conditioning(past, control[:, t : t + cfg.history + 1])  # c_t (B, cond_dim)
         features = model.cond_encoder(cond)
@@ -140,15 +140,15 @@ def check_generated(generated: Tensor, where: str) -> Tensor:
 def autoregressive_sample(
     step: FrameStep, control: Tensor, seed_pose: Tensor, state: Any = None, keep: Tensor | None = None
 ) -> Tensor:
-    """Generate frame by frame: ``(B, N, P)`` poses for controls ``(B, tau + N, C)`` after ``tau`` seed poses.
+    """Generate frame by frame: ``(B, N, P)`` poses for controls ``(B, H + N, C)`` after ``H`` seed poses.
 
     Args:
         step: one frame of the model, ``step(t, cond_t, state) -> (pose_t, state)``; its state (the LSTM
             memory) is carried from frame to frame.
         control: controls of the seed frames then of the ``N`` frames to generate (standard units).
-        seed_pose: the ``tau`` poses ``(B, tau, P)`` that start the history (standard units).
+        seed_pose: the ``H`` poses ``(B, H, P)`` that start the history (standard units).
         state: the initial state handed to ``step`` (``None``: the model's zero state).
-        keep: optional keep flags ``(B, N, tau)`` that zero previous poses in the conditioning (``None``,
+        keep: optional keep flags ``(B, N, H)`` that zero previous poses in the conditioning (``None``,
             the default and what the models' ``sample`` uses: the full history, as in the paper).
 
     Raises ``ValueError`` naming the first frame when the generated poses stop being finite (a model can
@@ -160,7 +160,7 @@ def autoregressive_sample(
     frames = control.shape[1] - history
     if control.shape[0] != seed_pose.shape[0] or frames < 1:
         raise ValueError(
-            f"autoregressive_sample: control must be (B, tau + N, C) with N >= 1 for seed_pose (B, tau, P) = "
+            f"autoregressive_sample: control must be (B, H + N, C) with N >= 1 for seed_pose (B, H, P) = "
             f"{tuple(seed_pose.shape)}, got {tuple(control.shape)}"
         )
     if keep is not None and keep.shape != (seed_pose.shape[0], frames, history):
@@ -189,7 +189,7 @@ def sample_loop(
     Args:
         invert_frame: ``invert_frame(z_t (B, P), cond_t (B, cond_dim), state) -> (pose_t (B, P), state)``,
             the inverse of one frame's flow with its carried state (``None`` at the start).
-        control: ``(B, tau + N, C)``; seed_pose: ``(B, tau, P)`` (standard units).
+        control: ``(B, H + N, C)``; seed_pose: ``(B, H, P)`` (standard units).
         noise: standard-normal ``(B, N, P)``, scaled by ``temperature`` to give frame ``t``'s latent.
     """
     check_tensor(noise, "noise", "sample_loop", ndim=3)
@@ -215,20 +215,20 @@ class InverseStep(NamedTuple):
 
 class GenerationPlan(NamedTuple):
     """A MoGlow's weights arranged for :func:`generate_frames` (``F`` conditioning features, ``P`` pose
-    channels, ``tau`` history frames, ``C`` control channels, ``K`` steps); a snapshot, built again after
-    training.
+    channels, ``H`` history frames, ``C`` control channels, ``K`` steps, ``U`` LSTM units); a snapshot,
+    built again after training.
 
     The conditioning encoder and the linear predictor read the same vector ``c_t``, so their weights are
     side by side: ``[features | mean] = past @ past_weight + controls @ control_weight + bias`` ``(B, F +
-    P)``. ``feature_weight`` ``(F, K * (4H + 2 C_b))`` maps the features to every step's LSTM-gate part
-    (``4H``) and output part (``2 C_b``), step after step in inverse order, as in ``steps``. The generated
+    P)``. ``feature_weight`` ``(F, K * (4U + 2 C_b))`` maps the features to every step's LSTM-gate part
+    (``4U``) and output part (``2 C_b``), step after step in inverse order, as in ``steps``. The generated
     pose is ``mean + x * residual_scale``.
     """
 
-    past_weight: Tensor  # (tau * P, F + P)
-    control_weight: Tensor  # ((tau + 1) * C, F + P)
+    past_weight: Tensor  # (H * P, F + P)
+    control_weight: Tensor  # ((H + 1) * C, F + P)
     bias: Tensor  # (F + P,)
-    feature_weight: Tensor  # (F, K * (4H + 2 C_b))
+    feature_weight: Tensor  # (F, K * (4U + 2 C_b))
     residual_scale: Tensor  # (P,)
     steps: list[InverseStep]
 
@@ -241,8 +241,8 @@ def generate_frames(
     Args:
         plan: the model's weights (:meth:`motionlab.models.moglow.model.MoGlow.generation_plan`).
         control_part: ``(B, N, F + P)``, the controls' part of ``[features | mean]`` of every frame, bias
-        included. past: ``(B, tau * P)``, the seed poses, oldest first, flattened.
-        keep: ``(B, N, tau * P)``, keep flags of every frame's previous poses (all ones when generating from
+        included. past: ``(B, H * P)``, the seed poses, oldest first, flattened.
+        keep: ``(B, N, H * P)``, keep flags of every frame's previous poses (all ones when generating from
         the full history), repeated over each pose's channels.
         noise: ``(B, N, P)``, the latents ``z_t`` (temperature applied).
     """
@@ -318,10 +318,10 @@ def _check_inputs(
     share one dtype."""
     if not _shapes_fit(plan, control, seed_pose, keep, noise):
         raise ValueError(
-            f"sample_frames: shapes disagree: control {tuple(control.shape)} must be (B, tau + N, C), "
-            f"seed_pose {tuple(seed_pose.shape)} (B, tau, P), noise {tuple(noise.shape)} (B, N, P), keep "
-            f"{None if keep is None else tuple(keep.shape)} (B, N, tau), with the plan's tau * P = "
-            f"{plan.past_weight.shape[0]}, P = {plan.residual_scale.shape[0]}, (tau + 1) * C = "
+            f"sample_frames: shapes disagree: control {tuple(control.shape)} must be (B, H + N, C), "
+            f"seed_pose {tuple(seed_pose.shape)} (B, H, P), noise {tuple(noise.shape)} (B, N, P), keep "
+            f"{None if keep is None else tuple(keep.shape)} (B, N, H), with the plan's H * P = "
+            f"{plan.past_weight.shape[0]}, P = {plan.residual_scale.shape[0]}, (H + 1) * C = "
             f"{plan.control_weight.shape[0]}"
         )
     if len({x.dtype for x in (control, seed_pose, noise, plan.bias)}) != 1:
@@ -343,9 +343,9 @@ def sample_frames(
 
     Args:
         plan: the model's weights (:meth:`motionlab.models.moglow.model.MoGlow.generation_plan`).
-        control: ``(B, tau + N, C)``, the seed frames' controls then those of the frames to generate.
-        seed_pose: ``(B, tau, P)``.
-        keep: optional keep flags ``(B, N, tau)`` (1 keep, 0 zero the previous pose), or ``None``: the full
+        control: ``(B, H + N, C)``, the seed frames' controls then those of the frames to generate.
+        seed_pose: ``(B, H, P)``.
+        keep: optional keep flags ``(B, N, H)`` (1 keep, 0 zero the previous pose), or ``None``: the full
             history, as the models' ``sample`` generates (the paper's history dropout is for training only).
         noise: the latents ``(B, N, P)``.
         scripted: run the TorchScript-compiled loop (``False``: the same function as plain Python).
@@ -356,9 +356,7 @@ def sample_frames(
     _check_inputs(plan, control, seed_pose, keep, noise)
     batch, history, pose_dim = seed_pose.shape
     frames = noise.shape[1]
-    windows = (
-        control.unfold(1, history + 1, 1).transpose(2, 3).reshape(batch * frames, -1)
-    )  # (B N, (tau+1) C)
+    windows = control.unfold(1, history + 1, 1).transpose(2, 3).reshape(batch * frames, -1)  # (B N, (H+1) C)
     control_part = torch.addmm(plan.bias, windows, plan.control_weight).view(batch, frames, -1)
     if keep is None:
         keep = noise.new_ones(batch, frames, history)
@@ -390,8 +388,8 @@ class AutoregressiveModel(nn.Module):
         """Generate poses ``(B, N, P)`` frame by frame.
 
         Args:
-            control: ``(B, tau + N, C)``: the seed frames' controls, then those of the frames to generate.
-            seed_pose: ``(B, tau, P)``, the poses that start the history.
+            control: ``(B, H + N, C)``: the seed frames' controls, then those of the frames to generate.
+            seed_pose: ``(B, H, P)``, the poses that start the history.
             temperature: the prior's temperature (MoGlow: 0 gives the zero-latent path, each frame the image
                 of the latent mode ``z_t = 0``, which is not the mode of ``p(x_t | past)``; 1 the model's
                 distribution).
@@ -518,7 +516,7 @@ def generate_motion(
         model: a trained MoGlow or Gaussian baseline.
         scalers: the standardisers the model was trained with.
         control: ``(B, N, 3)`` in m/frame and rad/frame (for example rows of :func:`control_programme`).
-        seed: raw features ``(B, tau, ·)`` of the frames that start the history (:func:`seed_features`).
+        seed: raw features ``(B, H, ·)`` of the frames that start the history (:func:`seed_features`).
         temperature, generator: as for the model's ``sample``.
     """
     check_tensor(control, "control", "generate_motion", trailing=(CONTROL_DIM,), ndim=3)

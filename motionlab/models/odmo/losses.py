@@ -5,17 +5,16 @@ the joint objective on standardised clips is
 
 .. math::
     L = \underbrace{E(\hat x, x)}_{L_{motion}}
-        + \underbrace{E(\hat\tau, \tau)}_{L_{traj}}
-        + \underbrace{E(\hat x_{traj}, \hat\tau)}_{L_{cons}}
+        + \underbrace{E(\hat r, r)}_{L_{traj}}
+        + \underbrace{E(\hat x_{traj}, \hat r)}_{L_{cons}}
         + \lambda_c \underbrace{L_c}_{\text{eq. 1}} + \lambda_p\, L_{prior}
 
-where ``τ`` is the real trajectory, ``τ̂`` the trajectory generator's and ``x̂_traj`` the trajectory
-channels of the generated motion; ``L_c + L_prior`` is the embedding loss ``L_es``. ``L_traj`` compares
-trajectories, positions accumulated from the origin, as the reference implementation does; the paper's eq. 2
-compares the per-frame velocities ``r̂_t - r̂_{t-1}`` with ``r_t - r_{t-1}``. Like the reference, every term
-averages over channels where eqs. 2-4 sum. The ablations switch
-terms off through the config (:data:`~motionlab.models.odmo.experiment.VARIANTS`); every term is still
-logged.
+where ``r`` is the real root trajectory (the paper's τ), ``r̂`` the trajectory generator's and ``x̂_traj``
+the trajectory channels of the generated motion; ``L_c + L_prior`` is the embedding loss ``L_es``. ``L_traj``
+compares trajectories, positions accumulated from the origin, as the reference implementation does; the
+paper's eq. 2 compares the per-frame velocities ``r̂_t - r̂_{t-1}`` with ``r_t - r_{t-1}``. Like the
+reference, every term averages over channels where eqs. 2-4 sum. The ablations switch terms off through the
+config (:data:`~motionlab.models.odmo.experiment.VARIANTS`); every term is still logged.
 
 **Contrastive term** (eq. 1's first two lines, halved: see *Weights*). For a pair of clips with code means
 :math:`\mu_i, \mu_j` at distance :math:`d = \lVert\mu_i - \mu_j\rVert_2` and :math:`y = 1` when both clips

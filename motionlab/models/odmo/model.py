@@ -2,7 +2,7 @@ r"""ODMO: the LMP encoder, the trajectory generator and the motion generator, an
 
 A clip ``x`` (local movement profile and root trajectory, see :mod:`.data`, standardised per channel) of
 action ``c`` is encoded to ``q(z | x) = N(μ, s²)``; a code ``z = μ + s ε``, the class and the end point
-``r_e`` of ``x`` give the trajectory ``τ̂``, and ``τ̂``, ``z`` and ``c`` give the motion ``x̂``. The joint
+``r_e`` of ``x`` give the trajectory ``r̂``, and ``r̂``, ``z`` and ``c`` give the motion ``x̂``. The joint
 objective that trains the three networks together is in :mod:`.losses`.
 
 **The condition.** Every ODMO generator is conditioned on the outer product of the class one-hot and the

@@ -1,14 +1,15 @@
 r"""The orthonormal DCT-II over time, written as a matrix, and its inverse.
 
-For a signal :math:`x_0, \dots, x_{N-1}` the orthonormal DCT-II is
+For a signal :math:`h_0, \dots, h_{T-1}` over ``T`` frames the orthonormal DCT-II is (chapter 07's notation)
 
 .. math::
-    X_k = s_k \sum_{n=0}^{N-1} x_n \cos\Big(\frac{\pi (2n + 1) k}{2N}\Big), \qquad
-    s_0 = \sqrt{1/N},\; s_{k>0} = \sqrt{2/N},
+    a_k = s_k \sum_{t=0}^{T-1} h_t \cos\Big(\frac{\pi (2t + 1) k}{2T}\Big), \qquad
+    s_0 = \sqrt{1/T},\; s_{k>0} = \sqrt{2/T},
 
-the same numbers as ``scipy.fft.dct(x, type=2, norm="ortho")``. The matrix :math:`D_{kn}` is orthogonal
-(:math:`D D^\top = I`), so the inverse is its transpose. Keeping only the first ``C`` rows gives the ``C``
-lowest frequencies; the inverse from them is the least-squares smooth approximation of the signal.
+the same numbers as ``scipy.fft.dct(h, type=2, norm="ortho")``: :math:`a = U h` with the matrix
+:math:`U_{kt}`, which is orthogonal (:math:`U U^\top = I`), so the inverse is its transpose. Keeping only
+the first ``C`` rows gives the ``C`` lowest frequencies; the inverse from them is the least-squares smooth
+approximation of the signal.
 
 TrajeVAE takes the DCT of a sequence of frame embeddings over the time axis, so each latent variable
 belongs to one frequency instead of one frame.
