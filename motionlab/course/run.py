@@ -75,6 +75,15 @@ BUDGETS: dict[str, tuple[float, float]] = {
 #: Budget of an appendix not listed in :data:`BUDGETS`, as (full, quick).
 APPENDIX_BUDGET: tuple[float, float] = (120, 40)
 
+#: Seconds each notebook took in a clean full-profile build on the course machine (reference models, two
+#: notebooks at a time): how a build that has no ``results.json`` yet orders its notebooks
+#: (:func:`longest_first`). Budgets are ceilings, not estimates: ordered by them, chapter 11 and its
+#: appendix would start last and finish alone.
+TYPICAL_SECONDS: dict[str, float] = {
+    "01": 10, "01a": 6, "02": 20, "02a": 11, "03": 47, "03a": 16, "04": 75, "04a": 30, "05": 55, "05a": 7,
+    "06": 40, "06a": 42, "07": 65, "07a": 24, "08": 50, "08a": 75, "09": 65, "10": 120, "11": 100, "11a": 50,
+}  # fmt: skip
+
 #: A cell may take at most this many times its chapter's budget. Some chapters spend most of their time in
 #: one training cell (chapter 07: 232 of 262 s on a machine twice as slow as the reference one), so the limit
 #: leaves room for a slow machine; a kernel that stops answering is caught much sooner, by
@@ -246,14 +255,18 @@ def parallel() -> int:
 def longest_first(chapters: list[Path]) -> list[Path]:
     """The notebooks in the order they start, the longest chain first: a chapter with the seconds it and
     its appendices take one after the other (an appendix waits for its chapter, see :func:`execute_all`),
-    an appendix with its own. Seconds are the last build's in ``results.json``, else the budget's. So the
-    chapter that ends the longest chain starts first, its appendix as soon as it is done, and the last
-    notebook to finish is a short one."""
+    an appendix with its own. Seconds are the last build's in ``results.json``, else
+    :data:`TYPICAL_SECONDS` (the full profile's, a fair guide to the quick profile's order too), else the
+    budget. So the chapter that ends the longest chain starts first, its appendix as soon as it is done, and
+    the last notebook to finish is a short one."""
     seconds = load_results().get("notebooks", {})
 
     def expected(path: Path) -> float:
         last = seconds.get(path.stem, {}).get("seconds")
-        return float(last) if last is not None else float(budget_seconds(path.stem) or 0.0)
+        if last is not None:
+            return float(last)
+        typical = TYPICAL_SECONDS.get(notebook_number(path.stem))
+        return float(typical if typical is not None else budget_seconds(path.stem) or 0.0)
 
     def chain(path: Path) -> float:
         if is_appendix(path.stem):
