@@ -80,8 +80,8 @@ APPENDIX_BUDGET: tuple[float, float] = (120, 40)
 #: (:func:`longest_first`). Budgets are ceilings, not estimates: ordered by them, chapter 11 and its
 #: appendix would start last and finish alone.
 TYPICAL_SECONDS: dict[str, float] = {
-    "01": 10, "01a": 6, "02": 20, "02a": 11, "03": 47, "03a": 16, "04": 75, "04a": 30, "05": 55, "05a": 7,
-    "06": 40, "06a": 42, "07": 65, "07a": 24, "08": 50, "08a": 75, "09": 65, "10": 120, "11": 100, "11a": 50,
+    "01": 11, "01a": 5, "02": 18, "02a": 9, "03": 28, "03a": 17, "04": 58, "04a": 38, "05": 40, "05a": 7,
+    "06": 30, "06a": 32, "07": 47, "07a": 23, "08": 44, "08a": 54, "09": 57, "10": 94, "11": 80, "11a": 41,
 }  # fmt: skip
 
 #: A cell may take at most this many times its chapter's budget. Some chapters spend most of their time in
