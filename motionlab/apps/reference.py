@@ -1,9 +1,11 @@
-"""``python -m motionlab.apps.reference export BUILD | verify``: the shipped reference models' command.
+"""``python -m motionlab.apps.reference export BUILD | verify | seeds 0=BUILD 1=BUILD 2=BUILD``: the shipped
+reference models' command.
 
 ``export`` copies the full-profile runs a course build used into ``reference/`` with their manifests (what
 ``make reference`` runs after its retraining build); ``verify`` checks every reference model against its
-manifest. Errors end the command with one line on stderr and exit code 1. The store itself is
-:mod:`motionlab.train.reference`.
+manifest; ``seeds`` records the claims of course builds trained with other base seeds
+(:mod:`motionlab.course.seeds`). Errors end the command with one line on stderr and exit code 1. The store
+itself is :mod:`motionlab.train.reference`.
 """
 
 from __future__ import annotations
@@ -12,7 +14,16 @@ import argparse
 import sys
 from pathlib import Path
 
+from motionlab.course import seeds as seed_claims
 from motionlab.train import reference
+
+
+def _seed_build(text: str) -> tuple[int, Path]:
+    """``SEED=BUILD`` as ``(seed, build folder)``."""
+    seed, sep, folder = text.partition("=")
+    if not sep or not seed.isdigit() or not folder:
+        raise argparse.ArgumentTypeError(f"expected SEED=BUILD (e.g. 1=/tmp/seed1/build), got {text!r}")
+    return int(seed), Path(folder)
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -24,17 +35,23 @@ def main(argv: list[str] | None = None) -> int:
     exp = sub.add_parser("export", help="copy a build's used runs into reference/ with manifests")
     exp.add_argument("build", type=Path, help="the build folder of a full-profile course (MOTIONLAB_BUILD)")
     sub.add_parser("verify", help="check every reference model against its manifest")
+    seeds = sub.add_parser("seeds", help="record the claims of builds trained with base seeds 0, 1, 2, ...")
+    seeds.add_argument("builds", nargs="+", type=_seed_build, help="SEED=BUILD, e.g. 1=/tmp/seed1/build")
     args = parser.parse_args(argv)
     try:
         if args.command == "export":
             manifests = reference.export(args.build.resolve())
             print(f"exported {len(manifests)} reference models to {reference.REFERENCE_DIR}")
+        elif args.command == "seeds":
+            record = seed_claims.collect(dict(args.builds))
+            path = seed_claims.save(record)
+            print(f"{len(record['claims'])} claims over seeds {', '.join(record['seeds'])} written to {path}")
         else:
             files = sorted(reference.REFERENCE_DIR.glob("*.pt"))
             for path in files:
                 reference.verify(path)
             print(f"{len(files)} reference models match their manifests")
-    except reference.ReferenceError as exc:
+    except (reference.ReferenceError, FileNotFoundError, ValueError) as exc:
         print(f"error: {exc}", file=sys.stderr)
         return 1
     return 0
