@@ -288,8 +288,8 @@ def odmo_methods(benchmark: Benchmark, test: CommonTest) -> dict[str, Method]:
     return {"ODMO": method}
 
 
-#: DDIM steps of MDM's samples here, fewer than chapter 11's 25: this comparison draws five sample sets of every
-#: test clip for every generator.
+#: DDIM steps of MDM's samples here, fewer than chapter 11's 25: this comparison draws five sample sets of
+#: every test clip for every generator.
 MDM_SAMPLE_STEPS = 10
 
 
