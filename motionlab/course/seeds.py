@@ -1,5 +1,5 @@
 """Claims over training seeds: every claim's value in full-profile course builds whose models were trained
-with base seeds 0, 1 and 2 (``MOTIONLAB_SEED``), kept in ``reference/claims-over-seeds.json`` and shown in
+with base seeds 0, 1 and 2 (``MOTIONLAB_SEED``), kept in ``reference/seeds/claims.json`` and shown in
 each chapter's "Paper vs. us" section (:func:`chapter_table`).
 
 A verdict that holds for one training seed only is a fact about that run, not about the method; the table
@@ -18,7 +18,7 @@ from typing import Any
 from motionlab.paths import REPO_ROOT
 
 #: Where the table is kept.
-SEED_CLAIMS_PATH = REPO_ROOT / "reference" / "claims-over-seeds.json"
+SEED_CLAIMS_PATH = REPO_ROOT / "reference" / "seeds" / "claims.json"
 
 
 def collect(builds: dict[int, Path]) -> dict[str, Any]:
