@@ -76,6 +76,24 @@ def seed_field() -> int:
     return integer(minimum=0, kind=int, default_factory=base_seed)
 
 
+#: The environment variable holding the default number of worker processes (:func:`processes`).
+PROCESSES_VARIABLE = "MOTIONLAB_PROCESSES"
+
+
+def processes() -> int:
+    """Worker processes for training and measuring several runs at once (``train_many``, ``train_meanwhile``)
+    when a caller names none: ``MOTIONLAB_PROCESSES`` (default 2, one per core of the course machine).
+
+    ``make test`` sets 1: its two pytest workers already keep both cores busy, and each worker process a
+    notebook starts costs 3-4 s of a core (a new interpreter importing torch). Results do not depend on it:
+    every run and measurement is seeded by its own arguments.
+    """
+    text = os.environ.get(PROCESSES_VARIABLE, "2").strip() or "2"
+    if not text.isdigit() or int(text) < 1:
+        raise ValueError(f"{PROCESSES_VARIABLE} must be an integer >= 1, got {text!r}")
+    return int(text)
+
+
 #: The environment variables that put torch and MKL on another CPU's numerical path.
 NUMERICS_VARIABLES = ("ATEN_CPU_CAPABILITY", "MKL_CBWR")
 

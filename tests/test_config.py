@@ -78,3 +78,27 @@ def test_a_relative_build_directory_is_taken_from_the_repository_root(monkeypatc
     assert config.build_dir() == config.REPO_ROOT / "build-elsewhere"
     monkeypatch.setenv("MOTIONLAB_BUILD", str(tmp_path / "abs"))
     assert config.build_dir() == tmp_path / "abs"
+
+
+def test_worker_processes_default_to_two_and_follow_the_environment(monkeypatch):
+    monkeypatch.delenv("MOTIONLAB_PROCESSES", raising=False)
+    assert config.processes() == 2
+    monkeypatch.setenv("MOTIONLAB_PROCESSES", " 1 ")
+    assert config.processes() == 1
+    for bad in ("0", "two", "-1"):
+        monkeypatch.setenv("MOTIONLAB_PROCESSES", bad)
+        with pytest.raises(ValueError, match=f"MOTIONLAB_PROCESSES must be an integer >= 1, got '{bad}'"):
+            config.processes()
+
+
+def test_train_many_takes_its_processes_from_the_environment(monkeypatch):
+    """A call that names no process count runs everything here when MOTIONLAB_PROCESSES is 1."""
+    from motionlab.train import many
+
+    seen = []
+    monkeypatch.setattr(many, "run_chains", lambda chains, processes: seen.append(processes) or [])
+    monkeypatch.setattr(many, "_load_all", lambda *args: {})
+    monkeypatch.setenv("MOTIONLAB_PROCESSES", "1")
+    many.train_many({})
+    many.train_many({}, processes=2)  # a caller's own choice stands
+    assert seen == [1, 2]

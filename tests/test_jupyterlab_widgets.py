@@ -1,7 +1,8 @@
 """The widgets in a live JupyterLab, driven by headless Chromium: each chapter of :data:`CHAPTERS` runs in
 the quick profile, then one slider of each of its listed widgets is moved with the keyboard, and each
 widget's figure must change, with no error output anywhere. Skipped, with how to enable it, when Chromium
-is not installed. The server is stopped at the end, whatever happens.
+is not installed. One server and one browser serve every chapter; the server is stopped at the end, whatever
+happens.
 
 Nothing here follows the focus: the notebook is found among the main area's widgets by its path (not as
 JupyterLab's current widget, which is whatever had the focus last) and run through its own id. Each wait has
@@ -18,7 +19,11 @@ import socket
 import subprocess
 import sys
 import urllib.request
+from collections.abc import Iterator
+from contextlib import contextmanager
+from dataclasses import dataclass
 from pathlib import Path
+from typing import Any
 
 import pytest
 
@@ -107,11 +112,12 @@ def _wait_for_notebook(driver, chapter: str, log: Path, done, seconds: float, wh
     return state
 
 
-def _widget_output(driver, source_snippet: str):
-    """The rendered output element of the code cell whose source contains ``source_snippet``."""
+def _widget_output(driver, panel_id: str, source_snippet: str):
+    """The rendered output element of the code cell whose source contains ``source_snippet``, in the notebook
+    panel ``panel_id`` (the other chapters stay open in their own tabs)."""
     from selenium.webdriver.common.by import By
 
-    for cell in driver.find_elements(By.CSS_SELECTOR, ".jp-CodeCell"):
+    for cell in driver.find_element(By.ID, panel_id).find_elements(By.CSS_SELECTOR, ".jp-CodeCell"):
         if source_snippet in cell.find_element(By.CSS_SELECTOR, ".jp-InputArea").text:
             return cell.find_element(By.CSS_SELECTOR, ".jp-OutputArea")
     raise AssertionError(f"no cell with {source_snippet!r}")
@@ -154,24 +160,42 @@ def _seen(before: dict, now: dict | None) -> str:
     return f"the readout {now['readout']}, the figure {figure}"
 
 
+@dataclass
+class Lab:
+    """A running JupyterLab server on the repository and a headless Chromium: what every chapter's test
+    drives."""
+
+    base: str
+    token: str
+    driver: Any
+    log: Path
+
+
+@pytest.fixture(scope="module")
+def lab(tmp_path_factory: pytest.TempPathFactory) -> Iterator[Lab]:
+    """One JupyterLab server and one Chromium for the module's chapters (each starts in seconds, but
+    JupyterLab's page takes as long again to load); stopped at the end, whatever happens."""
+    with serve(tmp_path_factory.mktemp("jupyterlab"), REPO_ROOT) as (base, token, log), chromium() as driver:
+        yield Lab(base, token, driver, log)
+
+
 @pytest.mark.parametrize("chapter", list(CHAPTERS))
-def test_widgets_respond_in_a_live_jupyterlab(tmp_path: Path, chapter: str) -> None:
-    drive_chapter(tmp_path, REPO_ROOT, chapter, CHAPTERS[chapter])
+def test_widgets_respond_in_a_live_jupyterlab(lab: Lab, chapter: str) -> None:
+    original = (REPO_ROOT / chapter).read_bytes()
+    drive_chapter(lab, chapter, CHAPTERS[chapter])
+    assert (REPO_ROOT / chapter).read_bytes() == original, f"{chapter} was changed by the test"
 
 
-def drive_chapter(tmp_path: Path, root: Path, chapter: str, sliders: tuple[tuple[str, str], ...]) -> None:
-    """Serve ``root`` with JupyterLab, run the notebook ``chapter`` (a path under ``root``) in the quick
-    profile and move each slider of ``sliders`` (cell snippet, slider label); the notebook's file must be
-    left unchanged."""
-    from selenium.webdriver.common.keys import Keys
-
+@contextmanager
+def serve(tmp_path: Path, root: Path) -> Iterator[tuple[str, str, Path]]:
+    """JupyterLab serving ``root`` in the quick profile, without autosave (the chapters run in the
+    repository's own files: JupyterLab must not save outputs into them); yields its address, token and log
+    once it answers, and stops it at the end."""
     port, token = _free_port(), secrets.token_hex(16)
     config = tmp_path / "config"
     settings = config / "lab" / "user-settings" / "@jupyterlab" / "docmanager-extension"
     settings.mkdir(parents=True)
-    # The chapter runs in the repository's own file: JupyterLab must not save its outputs into it.
     (settings / "plugin.jupyterlab-settings").write_text(json.dumps({"autosave": False}))
-    original = (root / chapter).read_bytes()
     environment = {**os.environ, "MOTIONLAB_PROFILE": "quick", "JUPYTER_CONFIG_DIR": str(config)}
     log = tmp_path / "jupyterlab.log"
     server = subprocess.Popen(
@@ -202,57 +226,7 @@ def drive_chapter(tmp_path: Path, root: Path, chapter: str, sliders: tuple[tuple
         assert answer == "answers", (
             f"waited {WAIT_SECONDS} s for JupyterLab to answer: {answer}; its log:\n{_log_tail(log)}"
         )
-        with chromium() as driver:
-            driver.get(f"{base}/lab/tree/{chapter}?token={token}")
-            state = _wait_for_notebook(
-                driver,
-                chapter,
-                log,
-                lambda s: s["found"] and s["loaded"] and s["cells"] > 0 and s["kernel"] == "idle",
-                WAIT_SECONDS,
-                f"{chapter} to open, its cells loaded and its kernel idle",
-            )
-            driver.execute_script(
-                "window.jupyterapp.commands.execute('notebook:run-all-cells', {widgetId: arguments[0]});",
-                state["id"],
-            )
-            state = _wait_for_notebook(
-                driver,
-                chapter,
-                log,
-                lambda s: (
-                    s["found"]
-                    and bool(
-                        s["errors"]
-                        or (s["executed"] == s["cells"] and s["kernel"] == "idle" and not s["running"])
-                    )
-                ),
-                RUN_SECONDS,
-                "the chapter to run",
-            )
-            assert state["errors"] == [], state["errors"]
-            for snippet, description in sliders:
-                output = _widget_output(driver, snippet)
-                driver.execute_script("arguments[0].scrollIntoView({block: 'center'});", output)
-                before = poll(lambda o=output, d=description: _slider(o, d), bool, WAIT_SECONDS)
-                assert before, (
-                    f"waited {WAIT_SECONDS} s for the {description} slider and its figure; the cell's output "
-                    f"shows {output.text[:300]!r}; console errors: {console_errors(driver)}"
-                )
-                before["handle"].click()
-                before["handle"].send_keys(Keys.ARROW_RIGHT)
-                now = poll(
-                    lambda o=output, d=description: _slider(o, d),
-                    lambda n, b=before: _moved(b, n),
-                    WAIT_SECONDS,
-                )
-                assert _moved(before, now), (
-                    f"waited {WAIT_SECONDS} s for the {description} slider to move from {before['readout']} "
-                    f"and its figure to change; last saw {_seen(before, now)}; "
-                    f"console errors: {console_errors(driver)}"
-                )
-            state = driver.execute_script(_NOTEBOOK_STATE, chapter)
-            assert state["errors"] == [], state["errors"]
+        yield base, token, log
     finally:
         server.terminate()
         try:
@@ -260,4 +234,60 @@ def drive_chapter(tmp_path: Path, root: Path, chapter: str, sliders: tuple[tuple
         except subprocess.TimeoutExpired:
             server.kill()
             server.wait()
-    assert (root / chapter).read_bytes() == original, f"{chapter} was changed by the test"
+
+
+def drive_chapter(lab: Lab, chapter: str, sliders: tuple[tuple[str, str], ...]) -> None:
+    """Open the notebook ``chapter`` (a path under the server's root) in ``lab``, run it and move each slider
+    of ``sliders`` (cell snippet, slider label)."""
+    from selenium.webdriver.common.keys import Keys
+
+    driver, log = lab.driver, lab.log
+    driver.get(f"{lab.base}/lab/tree/{chapter}?token={lab.token}")
+    state = _wait_for_notebook(
+        driver,
+        chapter,
+        log,
+        lambda s: s["found"] and s["loaded"] and s["cells"] > 0 and s["kernel"] == "idle",
+        WAIT_SECONDS,
+        f"{chapter} to open, its cells loaded and its kernel idle",
+    )
+    driver.execute_script(
+        "window.jupyterapp.commands.execute('notebook:run-all-cells', {widgetId: arguments[0]});",
+        state["id"],
+    )
+    state = _wait_for_notebook(
+        driver,
+        chapter,
+        log,
+        lambda s: (
+            s["found"]
+            and bool(
+                s["errors"] or (s["executed"] == s["cells"] and s["kernel"] == "idle" and not s["running"])
+            )
+        ),
+        RUN_SECONDS,
+        "the chapter to run",
+    )
+    assert state["errors"] == [], state["errors"]
+    for snippet, description in sliders:
+        output = _widget_output(driver, state["id"], snippet)
+        driver.execute_script("arguments[0].scrollIntoView({block: 'center'});", output)
+        before = poll(lambda o=output, d=description: _slider(o, d), bool, WAIT_SECONDS)
+        assert before, (
+            f"waited {WAIT_SECONDS} s for the {description} slider and its figure; the cell's output "
+            f"shows {output.text[:300]!r}; console errors: {console_errors(driver)}"
+        )
+        before["handle"].click()
+        before["handle"].send_keys(Keys.ARROW_RIGHT)
+        now = poll(
+            lambda o=output, d=description: _slider(o, d),
+            lambda n, b=before: _moved(b, n),
+            WAIT_SECONDS,
+        )
+        assert _moved(before, now), (
+            f"waited {WAIT_SECONDS} s for the {description} slider to move from {before['readout']} "
+            f"and its figure to change; last saw {_seen(before, now)}; "
+            f"console errors: {console_errors(driver)}"
+        )
+    state = driver.execute_script(_NOTEBOOK_STATE, chapter)
+    assert state["errors"] == [], state["errors"]

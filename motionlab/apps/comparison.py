@@ -337,7 +337,7 @@ METHODS: tuple[Callable[[Benchmark, CommonTest], dict[str, Method]], ...] = (
 )
 
 
-def load_methods(benchmark: Benchmark, test: CommonTest, processes: int = 2) -> dict[str, Method]:
+def load_methods(benchmark: Benchmark, test: CommonTest, processes: int | None = None) -> dict[str, Method]:
     """Every method of the comparison by name, in :data:`METHODS`' order (the models from the checkpoint
     cache). MDM's chapter (11) comes after this one, so a first run of the course trains MDM here: its run
     trains in a worker while the other families load (:func:`~motionlab.train.many.train_meanwhile`)."""

@@ -18,6 +18,7 @@ from typing import Any, Generic, TypeVar
 
 from torch import nn
 
+from motionlab import config
 from motionlab.train.loop import TrainResult
 from motionlab.train.measurements import measure_once
 from motionlab.train.parallel import outcome, run_chains, shared_pool, submit
@@ -69,7 +70,7 @@ def _load_all(
     return trained
 
 
-def train_meanwhile(runs: Mapping[str, Run], work: Callable[[], T], processes: int = 2) -> T:
+def train_meanwhile(runs: Mapping[str, Run], work: Callable[[], T], processes: int | None = None) -> T:
     """Train the runs that are not cached in ``processes`` workers while ``work()`` runs here; wait for both
     and return what ``work`` returned (the runs are in the cache then; load them with their ``train``).
 
@@ -77,6 +78,7 @@ def train_meanwhile(runs: Mapping[str, Run], work: Callable[[], T], processes: i
     process, ``work()`` runs first and the runs train here afterwards; when every run is cached, no worker
     starts.
     """
+    processes = config.processes() if processes is None else processes
     pending = [run for run in runs.values() if not run.is_cached()]
     if processes == 1 or not pending:
         done = work()
@@ -94,7 +96,7 @@ def train_meanwhile(runs: Mapping[str, Run], work: Callable[[], T], processes: i
 def train_many(
     runs: Mapping[str, Run],
     then: Callable[[str, nn.Module], M] | None = None,
-    processes: int = 2,
+    processes: int | None = None,
     progress: bool | None = None,
     alongside: Mapping[str, Run] | None = None,
 ) -> dict[str, Trained[M]]:
@@ -108,7 +110,8 @@ def train_many(
             a ``functools.partial`` of one) and seeded by its arguments alone, so its result does not depend
             on where or when it ran. Its result is :attr:`Trained.measured`, kept for the rest of the build
             (:mod:`motionlab.train.measurements`): the same call again reads it.
-        processes: worker processes (one thread each); with 1 everything runs here, in order.
+        processes: worker processes (one thread each; default :func:`motionlab.config.processes`); with 1
+            everything runs here, in order.
         progress: progress bars while loading the models here (the workers show none).
         alongside: more runs to train into the cache on the same workers after ``runs`` (e.g. the
             benchmark's evaluators that a later section loads), neither measured nor loaded here.
@@ -116,6 +119,7 @@ def train_many(
     Returns:
         ``{name: Trained}`` in the order of ``runs``, every model loaded here from the cache.
     """
+    processes = config.processes() if processes is None else processes
     names = list(runs)
     pending = {name for name in names if not runs[name].is_cached()}
     chains = [

@@ -288,7 +288,7 @@ def with_steps(cfg: ExperimentConfig, name: str, steps: int) -> ExperimentConfig
 
 
 def train_all(
-    cfg: ExperimentConfig, data: ChapterData, processes: int = 2, progress: bool | None = None
+    cfg: ExperimentConfig, data: ChapterData, processes: int | None = None, progress: bool | None = None
 ) -> dict[str, Trained[dict[str, Any]]]:
     """Train (or load) both runs on ``processes`` cores and :func:`measure` each as soon as it is trained.
 

@@ -256,7 +256,7 @@ def with_steps(cfg: ExperimentConfig, name: str, steps: int) -> ExperimentConfig
 def train_all(
     cfg: ExperimentConfig,
     data: ChapterData,
-    processes: int = 2,
+    processes: int | None = None,
     progress: bool | None = None,
     alongside: dict[str, Run] | None = None,
 ) -> dict[str, Trained[dict[str, Any]]]:

@@ -244,7 +244,7 @@ def runs(cfg: ExperimentConfig, data: PreparedData) -> dict[str, Run]:
 
 
 def train_all(
-    cfg: ExperimentConfig, data: PreparedData, processes: int = 2, progress: bool | None = None
+    cfg: ExperimentConfig, data: PreparedData, processes: int | None = None, progress: bool | None = None
 ) -> dict[str, Trained]:
     """Train (or load) every run of :func:`runs`, ``processes`` at a time, and return them by name."""
     return train_many(runs(cfg, data), processes=processes, progress=progress)
@@ -357,7 +357,7 @@ def train_real(
     cfg: RealLocomotionConfig,
     data: PreparedData,
     clips_identity: dict[str, Any],
-    processes: int = 2,
+    processes: int | None = None,
     progress: bool | None = None,
 ) -> dict[str, Trained]:
     """Train (or load) the runs of :func:`real_runs`, ``processes`` at a time, and return them by name."""

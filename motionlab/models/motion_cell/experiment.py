@@ -380,7 +380,9 @@ class ChapterData:
     reference: Tensor
 
 
-def load_data(cfg: ExperimentConfig, progress: bool | None = None, processes: int = 2) -> ChapterData:
+def load_data(
+    cfg: ExperimentConfig, progress: bool | None = None, processes: int | None = None
+) -> ChapterData:
     """The chapter's data: the benchmark's training split captured with noise and denoised
     (:func:`prepare_training_data`, here), while ``processes`` workers train the benchmark's two evaluators
     (the conv one for eq. 24's loss, the GRU one to measure); then the GRU evaluator and its reference."""
@@ -423,7 +425,7 @@ def with_steps(cfg: ExperimentConfig, name: str, steps: int) -> ExperimentConfig
 
 
 def train_all(
-    cfg: ExperimentConfig, data: ChapterData, processes: int = 2, progress: bool | None = None
+    cfg: ExperimentConfig, data: ChapterData, processes: int | None = None, progress: bool | None = None
 ) -> dict[str, Trained[ModelEvaluation | None]]:
     """Train (or load) every run of :func:`runs`, ``processes`` at a time in worker processes, and measure
     every Table 2 model in a worker as soon as it is trained: :attr:`Trained.measured` is its

@@ -285,7 +285,7 @@ def train_all(
     cfg: ExperimentConfig,
     data: ODMOData,
     reference: Reference,
-    processes: int = 2,
+    processes: int | None = None,
     progress: bool | None = None,
     variants: tuple[str, ...] = tuple(VARIANTS),
 ) -> dict[str, Trained[Measured]]:
@@ -471,7 +471,7 @@ def train_real(
     data: ODMOData,
     evaluator: Evaluator,
     protocol: Protocol,
-    processes: int = 2,
+    processes: int | None = None,
     progress: bool | None = None,
     alongside: Mapping[str, Run] | None = None,
 ) -> dict[str, Trained[RealMeasured]]:

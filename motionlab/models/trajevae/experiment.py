@@ -274,7 +274,9 @@ def sweep(name: str, model: nn.Module, windows: Tensor, multimodal: Sequence[np.
     return sweep_given_joints(model, windows, ks, N_SAMPLES, 0, multimodal)
 
 
-def train_all(cfg: ExperimentConfig, data: CompletionData, processes: int = 2) -> dict[str, Trained[Sweep]]:
+def train_all(
+    cfg: ExperimentConfig, data: CompletionData, processes: int | None = None
+) -> dict[str, Trained[Sweep]]:
     """Train (or load) every run of :func:`runs` and :func:`sweep` each model, ``processes`` calls at a time.
 
     Returns:

@@ -197,7 +197,7 @@ def runs(cfg: ExperimentConfig, n_actions: int) -> dict[str, Run]:
 
 
 def train_all(
-    cfg: ExperimentConfig, n_actions: int, processes: int = 2, progress: bool | None = None
+    cfg: ExperimentConfig, n_actions: int, processes: int | None = None, progress: bool | None = None
 ) -> dict[str, Trained]:
     """Train (or load from the cache) every run of :func:`runs` on ``processes`` worker processes, the
     benchmark's two evaluators after them on the same workers (this is the first chapter that needs them;
