@@ -48,6 +48,9 @@ def test_claims_are_collected_per_seed_and_shown_per_chapter(tmp_path: Path) -> 
     assert "| `04.gap` | < 1 | 2 ✗ | 3 ✗ | 0.5 | known gap |" in table
     assert "| `04a.audit` | < 1 | 0.1 | 0.2 | 0.3 | holds |" in table  # the appendix's claims too
     assert seeds.chapter_table("05", path) == "No claim of chapter 05 is recorded over training seeds."
+    del record["claims"]["04a.audit"]["values"]["2"]  # a build that did not run the appendix
+    table = seeds.chapter_table("04", seeds.save(record, path))
+    assert "| `04a.audit` | < 1 | 0.1 | 0.2 | – | holds on the 2 seeds measured |" in table
 
 
 def test_a_build_that_is_not_the_seed_given_is_refused(tmp_path: Path) -> None:

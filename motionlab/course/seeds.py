@@ -75,9 +75,10 @@ def _number(value: float) -> str:
 
 def chapter_table(number: str, path: Path | None = None) -> str:
     """A Markdown table of the claims of chapter ``number`` (``"04"``: ``04.*`` and its appendices'
-    ``04a.*``) over the recorded seeds: the rule, each seed's value (✗ where it does not hold) and the
-    verdict, "holds" on every seed or a known gap; read from ``path`` (default :data:`SEED_CLAIMS_PATH`).
-    Raises ``FileNotFoundError`` when the table is missing."""
+    ``04a.*``) over the recorded seeds: the rule, each seed's value (✗ where it does not hold, – where that
+    build did not run the chapter) and the verdict: holds on every seed measured, fails, or a known gap.
+    Read from ``path`` (default :data:`SEED_CLAIMS_PATH`); raises ``FileNotFoundError`` when it is
+    missing."""
     path = SEED_CLAIMS_PATH if path is None else path
     if not path.is_file():
         raise FileNotFoundError(f"{path} is missing: python -m motionlab.apps.reference seeds records it")
@@ -87,18 +88,21 @@ def chapter_table(number: str, path: Path | None = None) -> str:
     for name, claim in record["claims"].items():
         if name.split(".", 1)[0].rstrip("abcdefghijklmnopqrstuvwxyz") != number:
             continue
-        cells, held = [], 0
+        cells, held, measured = [], 0, 0
         for seed in seeds:
             value = claim["values"].get(seed)
             if value is None:
                 cells.append("–")
                 continue
             holds = _holds(value, claim["op"], claim["threshold"])
-            held += holds
+            held, measured = held + holds, measured + 1
             cells.append(_number(value) + ("" if holds else " ✗"))
-        verdict = (
-            "known gap" if claim["expected"] is False else "holds" if held == len(seeds) else "**fails**"
-        )
+        if claim["expected"] is False:
+            verdict = "known gap"
+        elif held < measured:
+            verdict = "**fails**"
+        else:
+            verdict = "holds" if measured == len(seeds) else f"holds on the {measured} seeds measured"
         rule = f"{claim['op']} {_number(claim['threshold'])}"
         rows.append(f"| `{name}` | {rule} | " + " | ".join(cells) + f" | {verdict} |")
     if not rows:
