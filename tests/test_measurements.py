@@ -38,7 +38,7 @@ def test_a_measurement_is_made_once_and_read_back(build: Path, tmp_path: Path) -
     again = measure_once(partial(_count, log, 2.0), "mcell", _model(0))  # the same weights, another object
     assert first == again == {"weight_sum": 2.0 * float(model.weight.detach().sum())}
     assert log.read_text().splitlines() == ["mcell"]
-    assert measurement_path(partial(_count, log, 2.0), "mcell", model).parent == build / "measurements"
+    assert measurement_path(partial(_count, log, 2.0), "mcell", model).parent.parent == build / "measurements"
 
 
 def test_another_argument_other_weights_or_another_name_are_measured_afresh(
@@ -82,3 +82,20 @@ def test_the_key_is_the_same_in_another_process(tmp_path: Path) -> None:
         for _ in range(2)
     }
     assert len(keys) == 1 and len(keys.pop().strip()) == 20
+
+
+def test_another_version_of_the_code_starts_afresh_and_drops_the_old_entries(
+    build: Path, tmp_path: Path, monkeypatch
+) -> None:
+    from motionlab.train import measurements
+
+    log = tmp_path / "log.txt"
+    then, model = partial(_count, log, 2.0), _model(0)
+    old = measurement_path(then, "mcell", model)
+    measure_once(then, "mcell", model)
+    monkeypatch.setattr(measurements, "source_digest", lambda: "f" * 64)  # the package's source edited
+    new = measurement_path(then, "mcell", model)
+    assert new.parent != old.parent and new.parent.parent == old.parent.parent == build / "measurements"
+    measure_once(then, "mcell", model)
+    assert len(log.read_text().splitlines()) == 2  # measured again under the new code
+    assert new.is_file() and not old.parent.exists()  # the old version's entries are gone

@@ -4,11 +4,12 @@ did (the same sample sets, the same metrics) reads the chapter's numbers instead
 A measurement is the ``then(name, model)`` of :func:`~motionlab.train.many.train_many`: seeded by its
 arguments alone, so the same function with the same arguments, on the same weights, under the same code,
 torch, thread count and numerical path, gives the same value. :func:`measure_once` keys its entry
-``<build>/measurements/<name>-<hash>.pkl`` by all of these (the function and its bound arguments pickled,
-every tensor among them and the weights by their bytes, a digest of the package's source), so an entry is
-only ever read where measuring again would give it bit for bit; anything else is measured afresh. An entry
-that cannot be read is measured again and replaced; entries are written whole (a temporary file renamed),
-so two notebooks measuring at once cannot leave half of one.
+``<build>/measurements/<source>/<name>-<hash>.pkl`` by all of these (the function and its bound arguments
+pickled, every tensor among them and the weights by their bytes; ``<source>`` a digest of the package's
+source), so an entry is only ever read where measuring again would give it bit for bit; anything else is
+measured afresh. An entry that cannot be read is measured again and replaced; entries are written whole (a
+temporary file renamed), so two notebooks measuring at once cannot leave half of one. The first entry of a
+new version of the code removes the older versions' folders.
 """
 
 from __future__ import annotations
@@ -17,6 +18,7 @@ import functools
 import hashlib
 import os
 import pickle
+import shutil
 import tempfile
 from collections.abc import Callable
 from pathlib import Path
@@ -83,8 +85,18 @@ def measurement_key(then: Callable[[str, nn.Module], Any], name: str, model: nn.
 
 
 def measurement_path(then: Callable[[str, nn.Module], Any], name: str, model: nn.Module) -> Path:
-    """``<build>/measurements/<name>-<hash>.pkl`` (:func:`measurement_key`)."""
-    return config.build_dir() / "measurements" / f"{name}-{measurement_key(then, name, model)}.pkl"
+    """``<build>/measurements/<source>/<name>-<hash>.pkl``: ``<source>`` the first characters of
+    :func:`source_digest` (entries of other code are stale), ``<hash>`` the :func:`measurement_key`."""
+    folder = config.build_dir() / "measurements" / source_digest()[:16]
+    return folder / f"{name}-{measurement_key(then, name, model)}.pkl"
+
+
+def _drop_stale(folder: Path) -> None:
+    """Remove the entries of other versions of the package's code beside ``folder`` (no measurement can
+    read them again), so the store holds one version's measurements, not one per edit."""
+    for other in folder.parent.iterdir():
+        if other != folder and other.is_dir():
+            shutil.rmtree(other, ignore_errors=True)
 
 
 def measure_once(then: Callable[[str, nn.Module], M], name: str, model: nn.Module) -> M:
@@ -98,7 +110,9 @@ def measure_once(then: Callable[[str, nn.Module], M], name: str, model: nn.Modul
         except Exception:  # noqa: BLE001 - truncated or unreadable: measured again below and replaced
             pass
     value = then(name, model)
-    path.parent.mkdir(parents=True, exist_ok=True)
+    if not path.parent.is_dir():
+        path.parent.mkdir(parents=True, exist_ok=True)
+        _drop_stale(path.parent)
     with tempfile.NamedTemporaryFile(
         dir=path.parent, prefix=f".{name}-", suffix=".tmp", delete=False
     ) as file:
