@@ -15,6 +15,7 @@ import math
 from pathlib import Path
 from typing import Any
 
+from motionlab.course.results import _OPS
 from motionlab.paths import REPO_ROOT
 
 #: Where the table is kept.
@@ -60,15 +61,6 @@ def save(record: dict[str, Any], path: Path | None = None) -> Path:
     return path
 
 
-def _holds(value: float, op: str, threshold: float) -> bool:
-    return {
-        "<": value < threshold,
-        "<=": value <= threshold,
-        ">": value > threshold,
-        ">=": value >= threshold,
-    }[op]
-
-
 def _number(value: float) -> str:
     return f"{value:.3g}" if math.isfinite(value) else str(value)
 
@@ -94,7 +86,7 @@ def chapter_table(number: str, path: Path | None = None) -> str:
             if value is None:
                 cells.append("–")
                 continue
-            holds = _holds(value, claim["op"], claim["threshold"])
+            holds = _OPS[claim["op"]](value, claim["threshold"])
             held, measured = held + holds, measured + 1
             cells.append(_number(value) + ("" if holds else " ✗"))
         if claim["expected"] is False:
