@@ -96,24 +96,24 @@ def build(monkeypatch, tmp_path: Path) -> Path:
     return tmp_path / "build" / "course-quick"
 
 
-def test_a_chapter_whose_kernel_hangs_once_is_executed_again_and_the_retry_is_reported(tmp_path: Path, build):
+def test_a_kernel_that_hangs_once_is_executed_again_and_one_that_hangs_twice_fails_naming_the_cell(
+    tmp_path: Path, build, monkeypatch
+):
+    """Both chapters in one build, side by side (two notebooks at a time), so their waits overlap."""
+    monkeypatch.setenv("MOTIONLAB_PARALLEL", "2")
     marker = tmp_path / "hung-once"
     hang_first_time = f"import pathlib\nif not pathlib.Path({str(marker)!r}).exists():\n" + "".join(
         "    " + line + "\n"
         for line in [f"pathlib.Path({str(marker)!r}).touch()", *DROP_REPLIES.splitlines()]
     )
     _chapter(tmp_path, "01_flaky", hang_first_time, "print('done')")
-    [run] = course.build(tmp_path / "notebooks")
-    assert run.error is None and len(run.retries) == 1 and "cell 0" in run.retries[0]
+    _chapter(tmp_path, "02_stuck", DROP_REPLIES, "print('never answered')")
+    flaky, stuck = sorted(course.build(tmp_path / "notebooks"), key=lambda run: run.name)
+    assert flaky.error is None and len(flaky.retries) == 1 and "cell 0" in flaky.retries[0]
+    assert stuck.error.startswith("cell 0: KernelNotAnswering") and len(stuck.retries) == 1
     results = json.loads((build / "results.json").read_text())
-    assert results["notebooks"]["01_flaky"]["retries"] == list(run.retries)
+    assert results["notebooks"]["01_flaky"]["retries"] == list(flaky.retries)
     assert "executed again after" in (build / "index.html").read_text()
-
-
-def test_a_chapter_whose_kernel_hangs_twice_fails_naming_the_cell(tmp_path: Path, build):
-    _chapter(tmp_path, "01_stuck", DROP_REPLIES, "print('never answered')")
-    [run] = course.build(tmp_path / "notebooks")
-    assert run.error.startswith("cell 0: KernelNotAnswering") and len(run.retries) == 1
 
 
 @pytest.mark.parametrize(

@@ -302,8 +302,16 @@ def test_widget_callbacks_and_builders(sampler):
         odmo_widgets.interpolation_widget(sampler, PARENTS, names),
         odmo_widgets.end_point_widget(sampler, names),
     ]
-    assert all(isinstance(w, widgets.VBox) for w in built)
-    plt.close("all")
+    for widget in built:
+        controls, output = widget.children
+        [image] = output.outputs
+        slider = next(c for c in controls.children if isinstance(c, widgets.IntSlider | widgets.FloatSlider))
+        slider.value = slider.max if slider.value != slider.max else slider.min
+        [redrawn] = output.outputs
+        assert redrawn["data"]["image/png"] != image["data"]["image/png"], (
+            f"{slider.description} did not redraw"
+        )
+    assert not plt.get_fignums()  # each figure closed once shown
 
 
 def test_real_row_equals_set_metrics_on_the_canonical_test_clips():

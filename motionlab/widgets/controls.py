@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 import io
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 
 import ipywidgets as widgets
 import matplotlib.pyplot as plt
@@ -29,3 +29,19 @@ def show_figure(output: widgets.Output, fig: Figure, dpi: int = 72) -> None:
     plt.close(fig)
     output.outputs = ()
     output.append_display_data(Image(data=buffer.getvalue(), format="png"))
+
+
+def wire(
+    output: widgets.Output, draw: Callable[..., Figure], controls: dict[str, widgets.ValueWidget]
+) -> Callable[..., None]:
+    """Show ``draw(**values)`` in ``output`` (:func:`show_figure`) now and whenever one of ``controls``
+    changes, ``values`` being each control's value under its name; returns the redraw callback (to detach it
+    from a control that redraws by other means)."""
+
+    def redraw(_change: object = None) -> None:
+        show_figure(output, draw(**{name: control.value for name, control in controls.items()}))
+
+    for control in controls.values():
+        control.observe(redraw, names="value")
+    redraw()
+    return redraw

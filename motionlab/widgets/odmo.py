@@ -11,14 +11,12 @@ from collections.abc import Sequence
 from functools import partial
 
 import ipywidgets as widgets
-import matplotlib.pyplot as plt
 import numpy as np
-from IPython.display import display
 from matplotlib.figure import Figure
 
 from motionlab.models.odmo.sampling import ODMOSampler, Samples, mode_interpolation, styles_to_end_point
 from motionlab.viz import GENERATED_COLOR, filmstrip, plot_root_paths
-from motionlab.widgets.controls import action_dropdown
+from motionlab.widgets.controls import action_dropdown, wire
 
 
 def _check_mode(sampler: ODMOSampler, action: int, mode: int) -> None:
@@ -92,17 +90,6 @@ def end_point_figure(
     return fig
 
 
-def _shown(callback):
-    """``callback`` as an ``interactive_output`` target: display its figure once, then release it."""
-
-    def show(**values) -> None:
-        fig = callback(**values)
-        display(fig)
-        plt.close(fig)
-
-    return show
-
-
 def _mode_slider(sampler: ODMOSampler, action: int, description: str, value: int = 0) -> widgets.IntSlider:
     n_modes = sampler.modes.classes[action].n_modes
     return widgets.IntSlider(
@@ -132,9 +119,8 @@ def mode_sampler_widget(
     mode = _mode_slider(sampler, 0, "mode")
     seed = widgets.IntSlider(value=0, min=0, max=20, description="seed", continuous_update=False)
     _follow_action(action, sampler, mode)
-    out = widgets.interactive_output(
-        _shown(partial(mode_sample_figure, sampler, parents)), {"action": action, "mode": mode, "seed": seed}
-    )
+    out = widgets.Output()
+    wire(out, partial(mode_sample_figure, sampler, parents), {"action": action, "mode": mode, "seed": seed})
     return widgets.VBox([widgets.HBox([action, mode, seed]), out])
 
 
@@ -149,8 +135,10 @@ def interpolation_widget(
         value=0.5, min=0.0, max=1.0, step=0.1, description="weight", continuous_update=False
     )
     _follow_action(action, sampler, mode_a, mode_b)
-    out = widgets.interactive_output(
-        _shown(partial(interpolation_figure, sampler, parents)),
+    out = widgets.Output()
+    wire(
+        out,
+        partial(interpolation_figure, sampler, parents),
         {"action": action, "mode_a": mode_a, "mode_b": mode_b, "weight": weight},
     )
     return widgets.VBox([widgets.HBox([action, mode_a, mode_b, weight]), out])
@@ -166,7 +154,6 @@ def end_point_widget(sampler: ODMOSampler, action_names: Sequence[str]) -> widge
         value=1.0, min=-4.0, max=4.0, step=0.5, description="y (m)", continuous_update=False
     )
     seed = widgets.IntSlider(value=0, min=0, max=20, description="seed", continuous_update=False)
-    out = widgets.interactive_output(
-        _shown(partial(end_point_figure, sampler)), {"action": action, "x": x, "y": y, "seed": seed}
-    )
+    out = widgets.Output()
+    wire(out, partial(end_point_figure, sampler), {"action": action, "x": x, "y": y, "seed": seed})
     return widgets.VBox([widgets.HBox([action, x, y, seed]), out])
