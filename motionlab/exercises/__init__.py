@@ -18,54 +18,52 @@ Modules: :mod:`~motionlab.exercises.rotations` (chapter 01), :mod:`~motionlab.ex
 :mod:`~motionlab.exercises.checking` holds what they share.
 """
 
-from motionlab.exercises.autoregressive import check_keep_mask, check_sample_loop
-from motionlab.exercises.checking import CheckResult
-from motionlab.exercises.diffusion import check_ancestral_step
-from motionlab.exercises.flows import check_coupling_forward, check_coupling_inverse
-from motionlab.exercises.hierarchy import check_impact_weights, check_subtree_reach
-from motionlab.exercises.kinematics import check_chain_positions
-from motionlab.exercises.metrics import check_apd, check_fid
-from motionlab.exercises.mocap import check_bone_length_variation, check_mirror
-from motionlab.exercises.rotations import check_quat_mul, check_slerp
-from motionlab.exercises.sequences import (
-    check_contrastive_loss,
-    check_dct_matrix,
-    check_given_trajectories,
-    check_prior_kl,
-)
-from motionlab.exercises.skating import check_foot_skating
-from motionlab.exercises.vae import (
-    check_covariance_prior,
-    check_gaussian_kl,
-    check_negative_elbo,
-    check_reparameterize,
-)
-from motionlab.exercises.vrnn import check_motion_cell_step
+from __future__ import annotations
 
-__all__ = [
-    "CheckResult",
-    "check_ancestral_step",
-    "check_apd",
-    "check_bone_length_variation",
-    "check_chain_positions",
-    "check_contrastive_loss",
-    "check_coupling_forward",
-    "check_coupling_inverse",
-    "check_covariance_prior",
-    "check_dct_matrix",
-    "check_fid",
-    "check_foot_skating",
-    "check_gaussian_kl",
-    "check_given_trajectories",
-    "check_impact_weights",
-    "check_keep_mask",
-    "check_mirror",
-    "check_motion_cell_step",
-    "check_negative_elbo",
-    "check_prior_kl",
-    "check_quat_mul",
-    "check_reparameterize",
-    "check_sample_loop",
-    "check_slerp",
-    "check_subtree_reach",
-]
+import importlib
+from typing import Any
+
+#: Each public name with the module that holds it. A chapter imports only its own checkers' modules (and
+#: what they check against): ``from motionlab.exercises import check_slerp`` loads the rotations module
+#: alone, not the models of every chapter.
+_MODULE_OF: dict[str, str] = {
+    "CheckResult": "checking",
+    "check_ancestral_step": "diffusion",
+    "check_apd": "metrics",
+    "check_bone_length_variation": "mocap",
+    "check_chain_positions": "kinematics",
+    "check_contrastive_loss": "sequences",
+    "check_coupling_forward": "flows",
+    "check_coupling_inverse": "flows",
+    "check_covariance_prior": "vae",
+    "check_dct_matrix": "sequences",
+    "check_fid": "metrics",
+    "check_foot_skating": "skating",
+    "check_gaussian_kl": "vae",
+    "check_given_trajectories": "sequences",
+    "check_impact_weights": "hierarchy",
+    "check_keep_mask": "autoregressive",
+    "check_mirror": "mocap",
+    "check_motion_cell_step": "vrnn",
+    "check_negative_elbo": "vae",
+    "check_prior_kl": "sequences",
+    "check_quat_mul": "rotations",
+    "check_reparameterize": "vae",
+    "check_sample_loop": "autoregressive",
+    "check_slerp": "rotations",
+    "check_subtree_reach": "hierarchy",
+}
+
+__all__ = sorted(_MODULE_OF)
+
+
+def __getattr__(name: str) -> Any:
+    if name not in _MODULE_OF:
+        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+    value = getattr(importlib.import_module(f"{__name__}.{_MODULE_OF[name]}"), name)
+    globals()[name] = value
+    return value
+
+
+def __dir__() -> list[str]:
+    return sorted(set(globals()) | set(_MODULE_OF))
