@@ -15,21 +15,47 @@ def _is_notebook_cell(item: pytest.Item) -> bool:
     return type(item).__name__ == "IPyNbCell"
 
 
+#: Seconds each scope of ``make test`` keeps one pytest worker busy (quick profile, two workers side by side,
+#: on the slower of the two machines of the project's kind). The scheduler hands the scopes out longest
+#: first, so the two workers end together instead of one running a long chapter alone at the end; a scope
+#: not listed counts as a second.
+TYPICAL_SECONDS: dict[str, float] = {}
+
+
+def _scope(nodeid: str) -> str:
+    """The xdist scope of a test: ``chapter NN`` for a chapter, its appendices and the live JupyterLab test
+    (which drives chapter 11, so it runs on the worker that ran the chapter, with its models in the build's
+    cache), else the test's module."""
+    path = nodeid.split("::", 1)[0]
+    if path.startswith("notebooks/") and path.endswith(".ipynb"):
+        return f"chapter {Path(path).name[:2]}"
+    if path == "tests/test_jupyterlab_widgets.py":
+        return "chapter 11"
+    return path
+
+
+def pytest_collection_modifyitems(config: pytest.Config, items: list[pytest.Item]) -> None:
+    """The longest scopes first (:data:`TYPICAL_SECONDS`); a scope's tests keep their order."""
+    items.sort(key=lambda item: -TYPICAL_SECONDS.get(_scope(item.nodeid), 1.0))
+
+
 @pytest.hookimpl(optionalhook=True)
 def pytest_xdist_make_scheduler(config: pytest.Config, log: Any) -> Any:
-    """``--dist loadscope`` with a chapter and its appendices as one scope: the appendix runs after its
-    chapter on the same worker and reads the models and measurements the chapter left in the build (run
-    apart, both would train and measure the same models). A test module stays one scope."""
+    """``--dist loadscope`` over the scopes of :func:`_scope`, in the order of the collection: a chapter and
+    its appendices form one scope, so an appendix runs after its chapter on the same worker and reads the
+    models and measurements the chapter left in the build (run apart, both would train and measure the same
+    models). xdist's own reordering, by the number of tests in a scope, is turned off: a notebook cell and a
+    unit test are not the same amount of work."""
     from xdist.scheduler import LoadScopeScheduling
 
     class ChapterScopeScheduling(LoadScopeScheduling):
         def _split_scope(self, nodeid: str) -> str:
-            path = nodeid.split("::", 1)[0]
-            if path.startswith("notebooks/") and path.endswith(".ipynb"):
-                return f"chapter {Path(path).name[:2]}"
-            return super()._split_scope(nodeid)
+            return _scope(nodeid)
 
-    return ChapterScopeScheduling(config, log) if config.getvalue("dist") == "loadscope" else None
+    if config.getvalue("dist") != "loadscope":
+        return None
+    config.option.loadscopereorder = False
+    return ChapterScopeScheduling(config, log)
 
 
 def pytest_runtest_setup(item: pytest.Item) -> None:
