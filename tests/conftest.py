@@ -1,13 +1,20 @@
 """Settings of the unit tests: one torch thread, property tests that do not depend on the
 machine's speed, and the shared fixtures (the notebooks' settings: ``conftest.py`` at the top)."""
 
+import os
+
 import pytest
 import torch
 from hypothesis import HealthCheck, settings
 
 from motionlab import config
+from motionlab.course.assets import VENDOR_VARIABLE, vendor_dir
 
 config.set_threads()
+
+# The report's npm packages are fetched and unpacked once for every course build of the tests (each in its
+# own temporary MOTIONLAB_BUILD), not once per build.
+os.environ.setdefault(VENDOR_VARIABLE, str(vendor_dir().resolve()))
 
 # Hypothesis times each example (its deadline) and the drawing of the first ones (the too_slow health check)
 # by the wall clock, so a busy machine could fail a property that holds. Every test's own settings start

@@ -26,33 +26,13 @@ def build(monkeypatch, tmp_path):
     return tmp_path / "build"
 
 
-def test_the_command_runs_chapters_writes_the_report_and_fails_when_a_chapter_fails(tmp_path, build):
-    _notebook(
-        tmp_path,
-        "01_ok",
-        "from motionlab.course.results import Chapter\n"
-        "c = Chapter('01_ok')\nc.metric('x.value', 2.5)\n"
-        "c.claim('01.small', 2.5, 3.0, '<', 'value is small')\nprint('done')",
-    )
-    _notebook(tmp_path, "02_broken", "raise RuntimeError('boom')")
-    assert course.main(["--notebooks", str(tmp_path / "notebooks")]) == 1
-    out = build / "course-quick"
-    results = json.loads((out / "results.json").read_text())
-    assert results["notebooks"]["01_ok"]["metrics"] == {"x.value": 2.5}
-    assert results["notebooks"]["01_ok"]["seconds"] > 0
-    index = (out / "index.html").read_text()
-    assert "01_ok.html" in index and "01.small" in index
-    assert index.count("failed: ") == 1 and "boom" in index
-    assert "done" in (out / "01_ok.html").read_text()
-
-
-def test_missing_chapters_are_reported(tmp_path):
-    with pytest.raises(FileNotFoundError, match="no chapters"):
-        course.chapter_notebooks(tmp_path)
-
-
-def test_an_appendix_is_built_like_a_chapter_right_after_it(tmp_path, build):
-    _notebook(tmp_path, "02_later", "raise RuntimeError('--only 01 must not run chapter 02')")
+def test_the_command_builds_the_chosen_chapters_with_their_appendices_and_fails_when_one_fails(
+    tmp_path, build, monkeypatch
+):
+    """One build, two notebooks at a time: chapter 01 with its appendix after it, a chapter that fails
+    beside them, one left out."""
+    monkeypatch.setenv("MOTIONLAB_PARALLEL", "2")
+    _notebook(tmp_path, "03_later", "raise RuntimeError('--only 01 02 must not run chapter 03')")
     _notebook(
         tmp_path,
         "01a_ok_appendix",
@@ -60,18 +40,34 @@ def test_an_appendix_is_built_like_a_chapter_right_after_it(tmp_path, build):
         "c = Chapter('01a_ok_appendix')\nc.metric('x.audit', 4.0)\n"
         "c.claim('01a.audited', 4.0, 5.0, '<', 'the audit passes')\nprint('appendix ran')",
     )
-    _notebook(tmp_path, "01_ok", "print('chapter ran')")
-    runs = course.build(tmp_path / "notebooks", only=["01"])
-    assert [(r.name, r.error) for r in runs] == [("01_ok", None), ("01a_ok_appendix", None)]
+    _notebook(
+        tmp_path,
+        "01_ok",
+        "from motionlab.course.results import Chapter\n"
+        "c = Chapter('01_ok')\nc.metric('x.value', 2.5)\n"
+        "c.claim('01.small', 2.5, 3.0, '<', 'value is small')\nprint('chapter ran')",
+    )
+    _notebook(tmp_path, "02_broken", "raise RuntimeError('boom')")
+    assert course.main(["--notebooks", str(tmp_path / "notebooks"), "--only", "01", "02"]) == 1
     out = build / "course-quick"
-    entry = json.loads((out / "results.json").read_text())["notebooks"]["01a_ok_appendix"]
-    assert entry["metrics"] == {"x.audit": 4.0} and entry["claims"]["01a.audited"]["holds"]
-    assert entry["seconds"] > 0
+    notebooks = json.loads((out / "results.json").read_text())["notebooks"]
+    assert sorted(notebooks) == ["01_ok", "01a_ok_appendix", "02_broken"]
+    assert notebooks["01_ok"]["metrics"] == {"x.value": 2.5} and notebooks["01_ok"]["seconds"] > 0
+    appendix = notebooks["01a_ok_appendix"]
+    assert appendix["metrics"] == {"x.audit": 4.0} and appendix["claims"]["01a.audited"]["holds"]
+    assert appendix["seconds"] > 0
+    assert "chapter ran" in (out / "01_ok.html").read_text()
     assert "appendix ran" in (out / "01a_ok_appendix.html").read_text()
     index = (out / "index.html").read_text()
-    chapter, appendix = index.index("id='01_ok'"), index.index("id='01a_ok_appendix'")
-    assert chapter < appendix and "class='card appendix'" in index[appendix - 40 : appendix]
-    assert "appendix to chapter 01" in index and "01a.audited" in index and "02_later" not in index
+    chapter, after = index.index("id='01_ok'"), index.index("id='01a_ok_appendix'")
+    assert chapter < after and "class='card appendix'" in index[after - 40 : after]
+    assert "appendix to chapter 01" in index and "01.small" in index and "01a.audited" in index
+    assert index.count("failed: ") == 1 and "boom" in index and "03_later" not in index
+
+
+def test_missing_chapters_are_reported(tmp_path):
+    with pytest.raises(FileNotFoundError, match="no chapters"):
+        course.chapter_notebooks(tmp_path)
 
 
 def test_only_selects_a_chapter_with_its_appendices_or_an_appendix_alone(tmp_path):

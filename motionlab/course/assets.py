@@ -7,7 +7,8 @@ raw LaTeX, empty widget boxes and blank buttons. So the course build copies loca
 ``<course>/_static/`` (the widget manager into ``<course>/@jupyter-widgets/``, where its stylesheet looks
 for its fonts) and points the pages there. They are pinned npm packages (:data:`NPM_PACKAGES`), fetched
 once with ``npm pack`` from the npm registry into ``build/vendor/`` (checked against their pinned SHA-512
-integrity) and reused after that; only the files the pages use are copied.
+integrity) and reused after that; the files the pages use are unpacked there once too, and each build links
+them into its report (a copy where the file system cannot link).
 
 When npm or the registry is not reachable, :func:`install_assets` says so and the pages keep the web
 addresses for what is missing (they then need a network, as before).
@@ -17,9 +18,11 @@ from __future__ import annotations
 
 import base64
 import hashlib
+import os
 import shutil
 import subprocess
 import tarfile
+import tempfile
 from dataclasses import dataclass
 from fnmatch import fnmatch
 from pathlib import Path
@@ -95,9 +98,16 @@ MATHJAX_CONFIG = "TeX-AMS-MML_SVG-full,Safe"
 FONT_AWESOME_WEB = "https://maxcdn.bootstrapcdn.com/font-awesome/4.4.0/css/font-awesome.min.css"
 
 
+#: The environment variable that names the vendor folder, for builds under another ``MOTIONLAB_BUILD`` that
+#: share one (the tests' builds in temporary folders).
+VENDOR_VARIABLE = "MOTIONLAB_VENDOR"
+
+
 def vendor_dir() -> Path:
-    """Where fetched npm packages are kept between builds: ``build/vendor``."""
-    return build_dir() / "vendor"
+    """Where fetched npm packages are kept between builds: ``MOTIONLAB_VENDOR`` if set, else
+    ``build/vendor``."""
+    named = os.environ.get(VENDOR_VARIABLE, "").strip()
+    return Path(named) if named else build_dir() / "vendor"
 
 
 def _sha512(path: Path) -> str:
@@ -112,23 +122,63 @@ def fetch_npm_package(package: NpmPackage, directory: Path | None = None) -> Pat
     tarball = directory / package.tarball
     if not tarball.exists():
         spec = f"{package.name}@{package.version}"
+        # Packed into a folder of its own, then moved into place: a build beside this one never reads a
+        # tarball half written.
+        staging = Path(tempfile.mkdtemp(prefix=".pack-", dir=directory))
         try:
-            proc = subprocess.run(
-                ["npm", "pack", spec, "--silent", "--pack-destination", str(directory)],
-                capture_output=True,
-                text=True,
-                timeout=300,
-            )
-        except (OSError, subprocess.TimeoutExpired) as error:
-            raise RuntimeError(f"npm pack {spec}: {error}") from error
-        if proc.returncode != 0 or not tarball.exists():
-            raise RuntimeError(f"npm pack {spec} failed: {proc.stderr.strip()[-300:]}")
+            try:
+                proc = subprocess.run(
+                    ["npm", "pack", spec, "--silent", "--pack-destination", str(staging)],
+                    capture_output=True,
+                    text=True,
+                    timeout=300,
+                )
+            except (OSError, subprocess.TimeoutExpired) as error:
+                raise RuntimeError(f"npm pack {spec}: {error}") from error
+            if proc.returncode != 0 or not (staging / package.tarball).exists():
+                raise RuntimeError(f"npm pack {spec} failed: {proc.stderr.strip()[-300:]}")
+            os.replace(staging / package.tarball, tarball)
+        finally:
+            shutil.rmtree(staging, ignore_errors=True)
     if _sha512(tarball) != package.integrity:
         tarball.unlink()
         raise RuntimeError(
             f"{package.name}@{package.version}: the downloaded tarball does not match its pinned integrity"
         )
     return tarball
+
+
+def _unpacked(tarball: Path, files: tuple[str, ...]) -> Path:
+    """The folder beside ``tarball`` that holds ``files`` unpacked from it (:func:`_extract`), made on first
+    use (in a folder of its own, then renamed into place, so a build beside this one sees it whole or not
+    at all)."""
+    digest = hashlib.sha256("\n".join(files).encode()).hexdigest()[:12]
+    folder = tarball.with_name(f"{tarball.name.removesuffix('.tgz')}-{digest}")
+    if not folder.is_dir():
+        staging = Path(tempfile.mkdtemp(prefix=".unpack-", dir=tarball.parent))
+        try:
+            _extract(tarball, files, staging)
+            staging.rename(folder)
+        except OSError:
+            if not folder.is_dir():  # not another build's folder that won the race
+                raise
+        finally:
+            shutil.rmtree(staging, ignore_errors=True)
+    return folder
+
+
+def _link_or_copy(source: str, destination: str) -> None:
+    """A hard link of ``source`` at ``destination`` (the report's assets are never written to), a copy where
+    the two are on different file systems."""
+    try:
+        os.link(source, destination)
+    except OSError:
+        shutil.copy2(source, destination)
+
+
+def _install(tarball: Path, files: tuple[str, ...], target: Path) -> None:
+    """``files`` of ``tarball`` in ``target``, keeping their paths inside the package."""
+    shutil.copytree(_unpacked(tarball, files), target, copy_function=_link_or_copy, dirs_exist_ok=True)
 
 
 def _extract(tarball: Path, files: tuple[str, ...], target: Path) -> None:
@@ -163,14 +213,14 @@ def install_assets(report_dir: Path) -> dict[str, str]:
         if key == "html-manager":
             # Its stylesheet asks for its icon fonts at "@jupyter-widgets/html-manager/dist/" and at
             # "@jupyter-widgets/", both relative to the page: the manager goes where it expects to be.
-            _extract(tarball, package.files, report_dir / "@jupyter-widgets" / "html-manager")
-            _extract(tarball, package.files[1:], report_dir / "@jupyter-widgets" / "flat")
-            for font in (report_dir / "@jupyter-widgets" / "flat" / "dist").iterdir():
-                font.replace(report_dir / "@jupyter-widgets" / font.name)
-            shutil.rmtree(report_dir / "@jupyter-widgets" / "flat")
+            _install(tarball, package.files, report_dir / "@jupyter-widgets" / "html-manager")
+            fonts = _unpacked(tarball, package.files[1:]) / "dist"
+            shutil.copytree(
+                fonts, report_dir / "@jupyter-widgets", copy_function=_link_or_copy, dirs_exist_ok=True
+            )
             urls["widget_renderer_url"] = "@jupyter-widgets/html-manager/dist/embed-amd.js"
             continue
-        _extract(tarball, package.files, report_dir / STATIC / key)
+        _install(tarball, package.files, report_dir / STATIC / key)
         if key == "mathjax":
             urls["mathjax_url"] = f"{STATIC}/mathjax/MathJax.js?config={MATHJAX_CONFIG}"
         elif key == "requirejs":
