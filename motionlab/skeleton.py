@@ -274,11 +274,11 @@ def average_skeleton() -> Skeleton:
 
 
 def subtree_reach(parents: Sequence[int], bone_lengths: np.ndarray) -> np.ndarray:
-    """``L_k`` ``(J,)``: the longest path (sum of bone lengths) from joint ``k`` down to an end effector.
+    """``L_j`` ``(J,)``: the longest path (sum of bone lengths) from joint ``j`` down to an end effector.
 
     ``bone_lengths[j]`` is the length of the bone from joint ``j``'s parent to ``j``; ``parents[j] < j``.
     Children are visited before their parents (from the last joint back), so a child's reach is known when
-    its parent takes the maximum over its children. End effectors have ``L_k = 0``.
+    its parent takes the maximum over its children. End effectors have ``L_j = 0``.
     """
     reach = np.zeros(len(parents))
     for j in range(len(parents) - 1, 0, -1):
@@ -288,18 +288,19 @@ def subtree_reach(parents: Sequence[int], bone_lengths: np.ndarray) -> np.ndarra
 
 
 def joint_impact_weights(skeleton: Skeleton | None = None, leaf_floor: float = 0.1) -> np.ndarray:
-    """Weights ``alpha_k`` ``(J,)`` of the Motion Cell paper (eq. 23): how far a joint's rotation reaches.
+    """Joint weights ``λ_j`` ``(J,)`` of the Motion Cell paper (eq. 23, its ``α_k``): how far a joint's
+    rotation reaches.
 
-    ``L_k`` is the longest path (sum of bone lengths) from joint ``k`` down to an end effector of its
-    subtree, so rotating joint ``k`` by a small angle moves some joint by up to ``L_k`` times that angle.
-    Leaves have ``L_k = 0``: their rotation moves no joint, yet it still carries the orientation of the
+    ``L_j`` is the longest path (sum of bone lengths) from joint ``j`` down to an end effector of its
+    subtree, so rotating joint ``j`` by a small angle moves some joint by up to ``L_j`` times that angle.
+    Leaves have ``L_j = 0``: their rotation moves no joint, yet it still carries the orientation of the
     head, hands and feet, so a zero weight would leave it unconstrained in a rotation loss. We raise every
-    ``L_k`` to at least ``leaf_floor * max(L)`` and then divide by the mean, so the weights average 1 and a
+    ``L_j`` to at least ``leaf_floor * max(L)`` and then divide by the mean, so the weights average 1 and a
     weighted loss keeps the scale of the unweighted one.
 
     Args:
         skeleton: the tree to weigh; default :func:`average_skeleton` (the mean of the body types).
-        leaf_floor: the floor as a fraction of the largest ``L_k``, in ``[0, 1]``.
+        leaf_floor: the floor as a fraction of the largest ``L_j``, in ``[0, 1]``.
     Returns:
         float64 ``(J,)``, positive, mean 1.
     """

@@ -506,7 +506,7 @@ def _reach(combine="max", include_own=False, forward=False):
         (_reach(combine="sum"), "longest single path"),
         (_reach(include_own=True), "own bone"),
         (_reach(forward=True), "visit children before"),
-        (lambda parents, bones: np.zeros(len(parents) - 1), "one L_k per joint"),
+        (lambda parents, bones: np.zeros(len(parents) - 1), "one L_j per joint"),
     ],
 )
 def test_subtree_reach_checker_names_the_mistake(wrong, says) -> None:
@@ -641,7 +641,7 @@ def _prior(trace=lambda logvar, s2: logvar.exp() / s2, log_det_sign=-1.0, on_mea
             lambda feet, contacts, fps: _skating()(feet, contacts, fps) * np.ones(2),
             "one number",
         ),
-        ("check_impact_weights", _weights(floor="none"), "end effectors get alpha = 0"),
+        ("check_impact_weights", _weights(floor="none"), "end effectors get λ = 0"),
         ("check_impact_weights", _weights(floor="absolute"), "a fraction of the largest"),
         ("check_impact_weights", _weights(normalise="sum"), "sum to 1"),
         ("check_impact_weights", _weights(normalise="max"), "largest weight is 1"),
@@ -649,7 +649,7 @@ def _prior(trace=lambda logvar, s2: logvar.exp() / s2, log_det_sign=-1.0, on_mea
         (
             "check_impact_weights",
             lambda reach, leaf_floor: _weights()(reach, leaf_floor)[1:],
-            "one alpha_k per joint",
+            "one λ_j per joint",
         ),
         ("check_keep_mask", _keep(rescale=lambda p: 1.0), "not rescaled"),
         ("check_keep_mask", _keep(rescale=lambda p: 1 - p), "divide by it instead"),

@@ -3,7 +3,7 @@
 The model has the chapter's size in the active profile (``make bench`` runs the default, full profile:
 :meth:`motionlab.models.moglow.experiment.ExperimentConfig.moglow`; its history dropout acts in training
 only, so generation reads the full history); weights are untrained, which does not change the speed. Each
-clip starts from ``tau`` seed frames and generates 120 frames (4 s at 30 fps).
+clip starts from ``H`` seed frames (the history, the paper's ``τ``) and generates 120 frames (4 s at 30 fps).
 """
 
 from __future__ import annotations

@@ -1,6 +1,6 @@
-"""Appendix 04a's exercises: how far each joint's rotation reaches, the ``L_k`` behind the Motion Cell's joint
-weights (eq. 23), and the weights themselves, checked against :func:`motionlab.skeleton.subtree_reach` and
-:func:`motionlab.skeleton.joint_impact_weights`."""
+"""Appendix 04a's exercises: how far each joint's rotation reaches, the ``L_j`` behind the Motion Cell's joint
+weights ``λ_j`` (eq. 23), and the weights themselves, checked against
+:func:`motionlab.skeleton.subtree_reach` and :func:`motionlab.skeleton.joint_impact_weights`."""
 
 from __future__ import annotations
 
@@ -38,19 +38,19 @@ def _reach_values(fn: SubtreeReach) -> None:
         got = np.asarray(fn(parents, bones), dtype=float)
         want = subtree_reach(parents, bones)
         if got.shape != want.shape:
-            raise Diagnosis(f"for {name} return one L_k per joint, shape {want.shape}, got {got.shape}")
+            raise Diagnosis(f"for {name} return one L_j per joint, shape {want.shape}, got {got.shape}")
         if np.allclose(got, want):
             continue
         if np.allclose(got, _subtree_sum(parents, bones)):
             raise Diagnosis(
-                f"for {name} you added up every bone below joint k; L_k is the longest single path to an end "
+                f"for {name} you added up every bone below joint j; L_j is the longest single path to an end "
                 "effector (a max over the children, not a sum)"
             )
         if np.allclose(got, want + bones):
-            raise Diagnosis(f"for {name} each L_k includes the joint's own bone; start from its children")
+            raise Diagnosis(f"for {name} each L_j includes the joint's own bone; start from its children")
         leaves = [j for j in range(len(parents)) if j not in parents]
         if not np.allclose(got[leaves], 0):
-            raise Diagnosis(f"for {name} the end effectors {leaves} should have L_k = 0: they move no joint")
+            raise Diagnosis(f"for {name} the end effectors {leaves} should have L_j = 0: they move no joint")
         first = int(np.flatnonzero(~np.isclose(got, want))[0])
         raise Diagnosis(
             f"for {name} joint {first} has L = {got[first]:.3f}, not {want[first]:.3f}: visit children "
@@ -92,7 +92,7 @@ def _weights_values(fn: ImpactWeights) -> None:
     for name, reach, floor, want in _weight_cases():
         got = np.asarray(fn(reach.copy(), floor), dtype=float)
         if got.shape != want.shape:
-            raise Diagnosis(f"for {name} return one alpha_k per joint, shape {want.shape}, got {got.shape}")
+            raise Diagnosis(f"for {name} return one λ_j per joint, shape {want.shape}, got {got.shape}")
         if np.allclose(got, want):
             continue
         floored = np.maximum(reach, floor * reach.max())
@@ -102,19 +102,17 @@ def _weights_values(fn: ImpactWeights) -> None:
             raise Diagnosis(f"for {name} the largest weight is 1; divide by the mean so that they average 1")
         if np.allclose(got, reach / reach.mean()):
             raise Diagnosis(
-                f"for {name} the end effectors get alpha = 0; raise every L_k to at least leaf_floor * "
+                f"for {name} the end effectors get λ = 0; raise every L_j to at least leaf_floor * "
                 "max(L) first, so that their orientation still counts in the loss"
             )
         absolute = np.maximum(reach, floor)
         if np.allclose(got, absolute / absolute.mean()):
-            raise Diagnosis(f"for {name} the floor is a fraction of the largest L_k: leaf_floor * max(L)")
+            raise Diagnosis(f"for {name} the floor is a fraction of the largest L_j: leaf_floor * max(L)")
         if not np.isclose(got.mean(), 1.0):
             raise Diagnosis(
                 f"for {name} the weights average {got.mean():.3f}: floor first, then divide by the mean"
             )
-        raise Diagnosis(
-            f"for {name} the weights are wrong: alpha = max(L, leaf_floor * max(L)), over its mean"
-        )
+        raise Diagnosis(f"for {name} the weights are wrong: λ = max(L, leaf_floor * max(L)), over its mean")
 
 
 @checker(
@@ -122,5 +120,5 @@ def _weights_values(fn: ImpactWeights) -> None:
     "matches motionlab.skeleton.joint_impact_weights on the skeleton, a chain and a random tree",
 )
 def check_impact_weights(fn: ImpactWeights) -> CheckResult:
-    """Check ``fn(reach (J,), leaf_floor) -> alpha (J,)``: each ``L_k`` raised to at least ``leaf_floor *
+    """Check ``fn(reach (J,), leaf_floor) -> λ (J,)``: each ``L_j`` raised to at least ``leaf_floor *
     max(L)``, then divided by the mean (eq. 23's joint impact weights, mean 1)."""

@@ -37,18 +37,18 @@ def _reference(rotations: torch.Tensor, root: torch.Tensor, offsets: torch.Tenso
 def _own_rotation_variant(rotations: torch.Tensor, root: torch.Tensor, offsets: torch.Tensor) -> torch.Tensor:
     """The common mistake: each joint's offset turned by its *own* global rotation."""
     positions, frame = [root], rotations[..., 0, :]
-    for k in range(1, offsets.shape[0]):
-        frame = geo.quat_mul(frame, rotations[..., k, :])
-        positions.append(positions[-1] + geo.quat_apply(frame, offsets[k].expand_as(root)))
+    for j in range(1, offsets.shape[0]):
+        frame = geo.quat_mul(frame, rotations[..., j, :])
+        positions.append(positions[-1] + geo.quat_apply(frame, offsets[j].expand_as(root)))
     return torch.stack(positions, dim=-2)
 
 
 def _reversed_composition(rotations: torch.Tensor, root: torch.Tensor, offsets: torch.Tensor) -> torch.Tensor:
-    """The other common mistake: ``G_k = q_k ⊗ G_{k-1}``."""
+    """The other common mistake: ``G_j = q_j ⊗ G_{j-1}``."""
     positions, frame = [root], rotations[..., 0, :]
-    for k in range(1, offsets.shape[0]):
-        positions.append(positions[-1] + geo.quat_apply(frame, offsets[k].expand_as(root)))
-        frame = geo.quat_mul(rotations[..., k, :], frame)
+    for j in range(1, offsets.shape[0]):
+        positions.append(positions[-1] + geo.quat_apply(frame, offsets[j].expand_as(root)))
+        frame = geo.quat_mul(rotations[..., j, :], frame)
     return torch.stack(positions, dim=-2)
 
 
@@ -67,12 +67,12 @@ def _chain_values(fn: ChainFK) -> None:
         raise Diagnosis("joint 0 (the root) should sit at the root position")
     if close(got, _own_rotation_variant(rotations, root, offsets)):
         raise Diagnosis(
-            "each offset is turned by its own joint's global rotation; joint k's offset o_k is turned by its "
-            "parent's, G_{k-1}: a joint's own rotation moves its children, not itself"
+            "each offset is turned by its own joint's global rotation; joint j's offset o_j is turned by its "
+            "parent's, G_{j-1}: a joint's own rotation moves its children, not itself"
         )
     if close(got, _reversed_composition(rotations, root, offsets)):
-        raise Diagnosis("the global rotations compose in the wrong order: G_k = G_{k-1} ⊗ q_k (parent first)")
-    first = next(k for k in range(4) if not close(got[:, k], want[:, k]))
+        raise Diagnosis("the global rotations compose in the wrong order: G_j = G_{j-1} ⊗ q_j (parent first)")
+    first = next(j for j in range(4) if not close(got[:, j], want[:, j]))
     raise Diagnosis(f"joint {first} is the first one in the wrong place (joints before it are right)")
 
 
@@ -83,7 +83,7 @@ def _chain_batches_and_gradient(fn: ChainFK) -> None:
     got = as_result(fn(rotations, root, offsets), "chain_positions")
     if got.shape != (2, 3, 3, 3) or not close(got, _reference(rotations.detach(), root, offsets)):
         raise Diagnosis(
-            "with two leading dimensions (clips, frames) the result is wrong or mis-shaped: use q[..., k, :] "
+            "with two leading dimensions (clips, frames) the result is wrong or mis-shaped: use q[..., j, :] "
             "so any leading dimensions work"
         )
     if not got.requires_grad:
@@ -96,4 +96,4 @@ def _chain_batches_and_gradient(fn: ChainFK) -> None:
 )
 def check_chain_positions(fn: ChainFK) -> CheckResult:
     """Check ``fn(rotations (..., K, 4), root (..., 3), offsets (K, 3)) -> positions (..., K, 3)`` for a chain
-    in which joint ``k``'s parent is ``k - 1``."""
+    in which joint ``j``'s parent is ``j - 1``."""

@@ -1,6 +1,6 @@
 """Chapter 03's exercises: the negative ELBO of one batch, checked against
 :func:`motionlab.models.vae.losses.negative_elbo`, and (in its appendix) the reparameterisation trick and the
-closed-form Gaussian KL, checked against :mod:`motionlab.models.gaussian`; and chapter 08's σ² prior on the
+closed-form Gaussian KL, checked against :mod:`motionlab.models.gaussian`; and chapter 08's σ₀² prior on the
 code covariance (ODMO's eq. 1), checked
 against :func:`motionlab.models.odmo.losses.prior_term`."""
 
@@ -127,7 +127,7 @@ def check_gaussian_kl(fn: GaussianKL) -> CheckResult:
 
 def _covariance_reference(mu: torch.Tensor, logvar: torch.Tensor, prior_variance: float) -> torch.Tensor:
     """Eq. 1's term ``(B,)``: the package's ``prior_term(..., "covariance")`` plus its minimum,
-    ``D (1 - ln σ²)``."""
+    ``D (1 - ln σ₀²)``."""
     minimum = logvar.shape[-1] * (1.0 - math.log(prior_variance))
     return prior_term(mu, logvar, prior_variance, "covariance") + minimum
 
@@ -148,33 +148,33 @@ def _covariance_values(fn: CovariancePrior) -> None:
         return
     variance = logvar.exp()
     for wrong, text in (
-        (want + (mu**2).sum(-1) / sigma2, "the paper puts no prior on the means: drop the mu^2 / σ² term"),
+        (want + (mu**2).sum(-1) / sigma2, "the paper puts no prior on the means: drop the mu^2 / σ₀² term"),
         (want + (mu**2).sum(-1), "the paper puts no prior on the means: drop the mu^2 term"),
         ((variance / sigma2 + logvar).sum(-1), "wrong sign of the log-determinant: -ln det Σ = -sum logvar"),
         (
             (variance / sigma2**2 - logvar).sum(-1),
-            "prior_variance is σ² already, a variance: divide by it, not its square",
+            "prior_variance is σ₀² already, a variance: divide by it, not its square",
         ),
         (
             (variance / sigma2**0.5 - logvar).sum(-1),
-            "prior_variance is σ², a variance: divide by it, not its root",
+            "prior_variance is σ₀², a variance: divide by it, not its root",
         ),
-        ((variance * sigma2 - logvar).sum(-1), "Tr Σ is divided by σ², not multiplied"),
-        ((logvar / sigma2 - logvar).sum(-1), "logvar is log s²: the trace needs the variances exp(logvar)"),
+        ((variance * sigma2 - logvar).sum(-1), "Tr Σ is divided by σ₀², not multiplied"),
+        ((logvar / sigma2 - logvar).sum(-1), "logvar is log σ²: the trace needs the variances exp(logvar)"),
         (
             (logvar.exp().sqrt() / sigma2 - logvar).sum(-1),
-            "Σ = diag(s²): exp(logvar) is s², not exp(logvar / 2)",
+            "Σ = diag(σ²): exp(logvar) is σ², not exp(logvar / 2)",
         ),
-        (0.5 * want, "eq. 1's term has no factor 1/2: -ln det Σ + Tr Σ / σ²"),
+        (0.5 * want, "eq. 1's term has no factor 1/2: -ln det Σ + Tr Σ / σ₀²"),
         (
             want - logvar.shape[-1] * (1 - math.log(sigma2)),
             "that is the package's prior_term, the term minus its minimum; write eq. 1's term itself, "
-            "-ln det Σ + Tr Σ / σ²",
+            "-ln det Σ + Tr Σ / σ₀²",
         ),
     ):
         if close(got, wrong):
             raise Diagnosis(text)
-    raise Diagnosis("the term is wrong: sum over k of exp(logvar_k) / σ² - logvar_k")
+    raise Diagnosis("the term is wrong: sum over the code coordinates i of exp(logvar_i) / σ₀² - logvar_i")
 
 
 def _covariance_minimum_and_gradient(fn: CovariancePrior) -> None:
@@ -183,21 +183,23 @@ def _covariance_minimum_and_gradient(fn: CovariancePrior) -> None:
     mu = torch.zeros(2, 4, dtype=torch.float64)
     got = as_result(fn(mu, logvar, sigma2), "covariance_prior")
     if not close(got, _covariance_reference(mu, logvar.detach(), sigma2)):
-        raise Diagnosis(f"wrong for σ² = {sigma2} at its minimum s² = σ²: use prior_variance, not a constant")
+        raise Diagnosis(
+            f"wrong for σ₀² = {sigma2} at its minimum σ² = σ₀²: use prior_variance, not a constant"
+        )
     if not got.requires_grad:
         raise Diagnosis("no gradient reaches logvar: compute with torch operations only")
     (gradient,) = torch.autograd.grad(got.sum(), logvar)
     if not close(gradient, torch.zeros_like(gradient)):
-        raise Diagnosis("the gradient should vanish at s² = σ², the term's minimum")
+        raise Diagnosis("the gradient should vanish at σ² = σ₀², the term's minimum")
 
 
 @checker(
     [_covariance_values, _covariance_minimum_and_gradient],
-    "matches eq. 1's covariance term (the package's prior_term plus its minimum), smallest at s² = σ²",
+    "matches eq. 1's covariance term (the package's prior_term plus its minimum), smallest at σ² = σ₀²",
 )
 def check_covariance_prior(fn: CovariancePrior) -> CheckResult:
-    """Check ``fn(mu, logvar, prior_variance) -> (B,)``: ODMO's eq. 1 prior term ``-ln det Σ + Tr Σ / σ²`` for
-    ``Σ = diag(exp(logvar))``, codes ``(B, D)``, no term on ``mu``."""
+    """Check ``fn(mu, logvar, prior_variance) -> (B,)``: ODMO's eq. 1 prior term ``-ln det Σ + Tr Σ / σ₀²``
+    for ``Σ = diag(exp(logvar))``, codes ``(B, D)``, no term on ``mu``."""
 
 
 NegativeElbo = Callable[

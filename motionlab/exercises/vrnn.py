@@ -14,12 +14,12 @@ from motionlab.models.motion_cell.model import cell_step
 
 CellStep = Callable[..., tuple[Tensor, Tensor, Tensor]]
 
-#: Batch, word, state and latent sizes of the checker's small networks.
-B, W, H, Z = 5, 4, 6, 3
+#: Batch, word, state and latent sizes (``D_w``, ``D_h``, ``D_z``) of the checker's small networks.
+B, D_W, D_H, D_Z = 5, 4, 6, 3
 
 
 def _pieces(seed: int) -> tuple[tuple[Tensor, Tensor, Tensor], dict[str, Callable[..., object]]]:
-    """``(word (B, W), state (B, H), eps (B, Z))`` and four small nonlinear networks of fixed weights
+    """``(word (B, D_w), state (B, D_h), eps (B, D_z))`` and four small nonlinear networks of fixed weights
     (float64): ``prior(h)``, ``posterior(w, h)``, ``decode(z, h)``, ``transition(w, z, h)``."""
     g = torch.Generator().manual_seed(seed)
 
@@ -27,10 +27,10 @@ def _pieces(seed: int) -> tuple[tuple[Tensor, Tensor, Tensor], dict[str, Callabl
         return torch.randn(n_in, n_out, generator=g, dtype=torch.float64) / n_in**0.5
 
     w_prior, w_post, w_dec, w_trans = (
-        weights(H, 2 * Z),
-        weights(W + H, 2 * Z),
-        weights(Z + H, W),
-        weights(W + Z + H, H),
+        weights(D_H, 2 * D_Z),
+        weights(D_W + D_H, 2 * D_Z),
+        weights(D_Z + D_H, D_W),
+        weights(D_W + D_Z + D_H, D_H),
     )
 
     def gaussian(x: Tensor, weight: Tensor, shift: float) -> tuple[Tensor, Tensor]:
@@ -43,7 +43,7 @@ def _pieces(seed: int) -> tuple[tuple[Tensor, Tensor, Tensor], dict[str, Callabl
         "decode": lambda z, h: torch.tanh(torch.cat([z, h], -1) @ w_dec),
         "transition": lambda w, z, h: torch.tanh(torch.cat([w, z, h], -1) @ w_trans),
     }
-    inputs = tuple(torch.randn(B, n, generator=g, dtype=torch.float64) for n in (W, H, Z))
+    inputs = tuple(torch.randn(B, n, generator=g, dtype=torch.float64) for n in (D_W, D_H, D_Z))
     return inputs, networks  # type: ignore[return-value]
 
 
@@ -82,7 +82,7 @@ def _step_values(fn: CellStep) -> None:
                     "the decoder read the new state h_t; it reads h_{t-1}, the state before the word"
                 )
             raise Diagnosis("the decoded word is wrong: decode(z, h_{t-1}) with z drawn from the posterior")
-        if kl.shape == (B, Z):
+        if kl.shape == (B, D_Z):
             raise Diagnosis(
                 "the KL is per latent dimension; sum over them: one value per example, shape (B,)"
             )
@@ -146,5 +146,5 @@ def _gradients_reach_the_word(fn: CellStep) -> None:
     "teacher-forced state",
 )
 def check_motion_cell_step(fn: CellStep) -> CheckResult:
-    """Check ``fn(word (B, W), state (B, H), eps (B, Z), prior, posterior, decode, transition) -> (word_hat,
-    kl (B,), next_state (B, H))``, one teacher-forced step of a VRNN over motion words."""
+    """Check ``fn(word (B, D_w), state (B, D_h), eps (B, D_z), prior, posterior, decode, transition) ->
+    (word_hat, kl (B,), next_state (B, D_h))``, one teacher-forced step of a VRNN over motion words."""

@@ -3,12 +3,12 @@ Rand index.
 
 **Mode homogeneity** (Lu et al. 2022, "ODMO", §4.3.1 and Table 3) works on the *motions* of each class,
 grouped by the modes discovered for that class. With :math:`\mathcal G_c` the sequences of class ``c``,
-:math:`\mathcal G(c, k)` those of its mode ``k`` and APD the average pairwise distance of whole flattened
+:math:`\mathcal G(c, m)` those of its mode ``m`` and APD the average pairwise distance of whole flattened
 sequences (:func:`motionlab.metrics.apd`),
 
 .. math::
-    \text{mode-APD}(\mathcal G_c) = \frac{1}{|\mathcal G_c|} \sum_k |\mathcal G(c, k)|\,
-        \mathrm{APD}(\mathcal G(c, k)), \qquad
+    \text{mode-APD}(\mathcal G_c) = \frac{1}{|\mathcal G_c|} \sum_m |\mathcal G(c, m)|\,
+        \mathrm{APD}(\mathcal G(c, m)), \qquad
     \text{mode-homogeneity} = 100 \cdot \frac{1}{|C|} \sum_c
         \frac{\mathrm{APD}(\mathcal G_c) - \text{mode-APD}(\mathcal G_c)}{\mathrm{APD}(\mathcal G_c)} .
 

@@ -63,7 +63,7 @@ CHAPTER, DEFAULT_RUN = "04_motion_cell", "mcell"
 TABLE = {
     "mcell": "Motion Cell",
     "nc": "NC (no classifier loss)",
-    "nl": "NL (all alpha_k = 1)",
+    "nl": "NL (all joint weights 1)",
     "sl": "SL (single layer: no word encoder or decoder)",
     "erd": "ERD",
     "quaternet": "QuaterNet-style",

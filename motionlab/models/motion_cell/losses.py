@@ -2,20 +2,22 @@ r"""The terms of the Motion Cell objective (the paper's eq. 14), shared by the b
 
 Per frame, for predicted pose vectors against the data (all terms are means over clips and frames):
 
-* hierarchical geodesic reconstruction (eq. 22): :math:`\sum_k \alpha_k\, d_1(q_k, \hat q_k)` over the
-  non-root joints, with :math:`d_1` the rotation angle between the two quaternions and
-  :math:`\alpha_k` the joint impact weights of :func:`motionlab.skeleton.joint_impact_weights` (eq. 23;
-  rescaled to mean 1 over the non-root joints), or all ones for the NL ablation; plus the squared error
-  of the 6 standardised root channels;
+* hierarchical geodesic reconstruction (eq. 22): :math:`\sum_j \lambda_j\, d_1(q_j, \hat q_j)` over the
+  non-root joints ``j``, with :math:`d_1` the rotation angle between the two quaternions and
+  :math:`\lambda_j` the joint impact weights of :func:`motionlab.skeleton.joint_impact_weights` (eq. 23's
+  :math:`\alpha_k`; rescaled to mean 1 over the non-root joints), or all ones for the NL ablation; plus the
+  squared error of the 6 standardised root channels;
 * KL of the posterior from the learned prior, summed over latent dimensions, per word divided by the
   word length (nats per frame, so SL and the word models are on one scale);
 * classifier loss (eq. 24): for each training clip ``X`` and its reconstruction ``X~``, the squared l2
   distance between the frozen conv classifier's activations of the two on every intermediate layer
-  (each layer with a fixed weight ``beta_l``), plus the cross-entropy of its action and body heads on
-  ``X~`` against the clip's attribute labels (:class:`ClassifierLoss`). The classifier reads the joint
-  positions of both (ours; eq. 24 applies it to the poses themselves, joint angles and root channels);
-* quaternion-norm constraint (eq. 26 as printed, :math:`\sum_k (\lVert q_k\rVert^2 - 1)`, can be negative
-  and is unbounded below; we penalise :math:`(\lVert q\rVert - 1)^2` of the raw quaternion outputs).
+  (each layer ``l`` with a fixed weight ``λ_l``, the paper's ``β_(c,l)``), plus the cross-entropy of its
+  action and body heads on ``X~`` against the clip's attribute labels (:class:`ClassifierLoss`). The
+  classifier reads the joint positions of both (ours; eq. 24 applies it to the poses themselves, joint
+  angles and root channels);
+* quaternion-norm constraint (eq. 26 as printed, in our letters :math:`\sum_j (\lVert q_j\rVert^2 - 1)`,
+  can be negative and is unbounded below; we penalise :math:`(\lVert q\rVert - 1)^2` of the raw
+  quaternion outputs).
 """
 
 from __future__ import annotations
@@ -51,7 +53,7 @@ class LossConfig(Checked):
     ``"word_drop"`` (probability of feeding the model's own output word instead of the real one).
 
     Attributes:
-        joint_weights: ``"impact"`` (eq. 23 alpha_k) or ``"uniform"`` (all alpha_k = 1, the NL ablation).
+        joint_weights: ``"impact"`` (eq. 23's ``λ_j``) or ``"uniform"`` (all ``λ_j = 1``, the NL ablation).
         root_weight: weight of the squared error on the 6 standardised root channels, per frame.
         norm_weight: lambda of the quaternion-norm constraint (eq. 26).
         feature_weight, entropy_weight: weights of the layer-distance and cross-entropy parts of the
@@ -74,7 +76,7 @@ class LossConfig(Checked):
 
 
 def joint_weights(kind: str, n_joints: int = 22) -> Tensor:
-    """The non-root joints' weights ``alpha_k`` ``(J - 1,)``, mean 1: ``"impact"`` (eq. 23) or
+    """The non-root joints' weights ``λ_j`` ``(J - 1,)``, mean 1: ``"impact"`` (eq. 23) or
     ``"uniform"``."""
     check_choice(kind, "kind", "joint_weights", JOINT_WEIGHTINGS)
     if kind == "uniform":
@@ -88,7 +90,7 @@ def joint_weights(kind: str, n_joints: int = 22) -> Tensor:
 
 
 def rotation_loss(predicted: Tensor, target: Tensor, weights: Tensor) -> Tensor:
-    """Eq. 22: mean over frames of ``sum_k alpha_k d1(q_k, q^_k)`` for quaternions ``(..., J - 1, 4)``."""
+    """Eq. 22: mean over frames of ``sum_j λ_j d1(q_j, q^_j)`` for quaternions ``(..., J - 1, 4)``."""
     if predicted.shape != target.shape or predicted.shape[-2:] != (weights.numel(), 4):
         raise ValueError(
             f"rotation_loss: predicted {tuple(predicted.shape)} and target {tuple(target.shape)} must "
@@ -134,7 +136,7 @@ def pose_loss(
 class ClassifierLoss(nn.Module):
     r"""Eq. 24 with a frozen classifier ``l`` (the benchmark's conv evaluator, with action and body heads):
 
-    .. math:: \mathcal L_{CL} = \sum_{l} \beta_l\, \lVert l(X) - l(\tilde X)\rVert^2
+    .. math:: \mathcal L_{CL} = \sum_{l} \lambda_l\, \lVert l(X) - l(\tilde X)\rVert^2
         + \beta_{ce} \big[\mathrm{CE}(\mathrm{action}(\tilde X), a)
         + \mathrm{CE}(\mathrm{body}(\tilde X), b)\big]
 
@@ -142,13 +144,13 @@ class ClassifierLoss(nn.Module):
     applies the classifier to the joint-angle poses, and the paper has one classifier per attribute): the
     squared l2 distance of every intermediate layer's activations (mean over channels and frames, then over
     clips) and the cross-entropy of the attribute heads on the reconstruction against the clip's labels. The
-    layer weights ``beta_l`` are fixed when the loss is built: one over the layer's mean squared activation
+    layer weights ``λ_l`` are fixed when the loss is built: one over the layer's mean squared activation
     on the real clips ``positions`` (so every layer counts alike, whatever its scale; :class:`LossConfig`
     scales the two parts by ``feature_weight`` and ``entropy_weight``).
 
     ``forward(reconstructed, real, action, body)`` takes joint positions ``(B, T, 22, 3)`` of the
     reconstructions (differentiable) and of the clips, with attributes ``(B,)``, and returns
-    ``(layer_distance, cross_entropy)`` (``layer_distance`` already weighted by ``beta_l``).
+    ``(layer_distance, cross_entropy)`` (``layer_distance`` already weighted by ``λ_l``).
     """
 
     def __init__(self, evaluator: Evaluator, positions: Tensor, chunk: int = 128) -> None:

@@ -10,8 +10,8 @@ real clips; the paper reports no such artefact.
 
 1. makes the quaternions continuous in time (:func:`continuous_poses`: ``q`` and ``-q`` are the same
    rotation; differences are taken between neighbours on the same hemisphere);
-2. finds the excess step at every boundary frame ``s = n l``: the step ``x_s - x_{s-1}`` minus the mean of
-   the steps on either side, ``j_s = d_s - (d_{s-1} + d_{s+1}) / 2`` with ``d_k = x_k - x_{k-1}``;
+2. finds the excess step at every boundary frame ``s``, a multiple of ``l``: the step ``x_s - x_{s-1}``
+   minus the mean of the steps on either side, ``Δ_s - (Δ_{s-1} + Δ_{s+1}) / 2`` with ``Δ_t = x_t - x_{t-1}``;
 3. spreads that excess over the ``2 l - 1`` steps around the boundary with the triangular weights of two
    ``l``-frame boxes (``[1, 2, 3, 2, 1] / 9`` for ``l = 3``), keeping the total displacement, and integrates
    the steps back into poses (what the words do between boundaries is kept);

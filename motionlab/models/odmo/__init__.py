@@ -2,7 +2,7 @@
 
 Modules, in the order of the chapter: :mod:`.data` (local movement profile + root trajectory, class-balanced
 batches), :mod:`.model` (the config, the LMP encoder and the two generators), :mod:`.losses` (the joint
-objective, eq. 5, with the contrastive term of eq. 1 and the σ² prior term), :mod:`.modes` (mode discovery
+objective, eq. 5, with the contrastive term of eq. 1 and the σ₀² prior term), :mod:`.modes` (mode discovery
 and sampling in the code space), :mod:`.sampling` (codes to joint positions, on-demand customisation),
 :mod:`.evaluate` (Tables 1–4 and the adjusted Rand index against the true modes) and :mod:`.experiment`
 (the chapter's sizes and variants, every variant trained and measured on both cores).

@@ -17,7 +17,7 @@ reference, every term averages over channels where eqs. 2-4 sum. The ablations s
 config (:data:`~motionlab.models.odmo.experiment.VARIANTS`); every term is still logged.
 
 **Contrastive term** (eq. 1's first two lines, halved: see *Weights*). For a pair of clips with code means
-:math:`\mu_i, \mu_j` at distance :math:`d = \lVert\mu_i - \mu_j\rVert_2` and :math:`y = 1` when both clips
+:math:`\mu, \mu'` at distance :math:`d = \lVert\mu - \mu'\rVert_2` and :math:`y = 1` when both clips
 show the same action:
 
 .. math:: L_c = \tfrac12\Big[\,y\,d^2 + (1 - y)\,\max(0,\ \alpha - d)^2\Big]
@@ -28,23 +28,25 @@ apart until they are ``α`` apart (the margin, 5 in the paper), and then stop in
 :math:`\max(0, d^2 - \text{slack}^2)`.
 
 **Prior term** (eq. 1's last two lines). The encoder gives :math:`q(z \mid x) = \mathcal N(\mu,
-\Sigma)` with :math:`\Sigma = \mathrm{diag}\, s^2`; the paper regularises only the covariance, per clip,
+\Sigma)` with :math:`\Sigma = \mathrm{diag}\, \sigma^2`; the paper regularises only the covariance, per clip,
 
-.. math:: L_{prior} = -\ln\det\Sigma + \frac{1}{\sigma^2}\operatorname{Tr}\Sigma
-          = \sum_k \Big(\frac{s_k^2}{\sigma^2} - \ln s_k^2\Big),
+.. math:: L_{prior} = -\ln\det\Sigma + \frac{1}{\sigma_0^2}\operatorname{Tr}\Sigma
+          = \sum_i \Big(\frac{\sigma_i^2}{\sigma_0^2} - \ln \sigma_i^2\Big),
 
-the negative log of a Gamma prior on each :math:`s_k^2` whose mode is :math:`\sigma^2` (supplement §3.1);
-we subtract its minimum, :math:`D(1 - \ln\sigma^2)`, so that it is 0 at :math:`s^2 = \sigma^2` (a constant,
-no change to any gradient). :math:`\sigma^2` is a variance, 0.05 in the paper. There is no term on
+over the coordinates :math:`i` of the code: the negative log of a Gamma prior on each
+:math:`\sigma_i^2` whose mode is :math:`\sigma_0^2` (supplement §3.1); we subtract its minimum,
+:math:`D(1 - \ln\sigma_0^2)`, so that it is 0 at :math:`\sigma^2 = \sigma_0^2` (a constant, no change to
+any gradient). :math:`\sigma_0^2` is a variance, 0.05 in the paper. There is no term on
 :math:`\mu`: the supplement replaces the standard VAE's Gaussian prior on :math:`\mu` by the contrastive
 springs. The three choices of ``ODMOConfig.prior`` (:data:`~motionlab.models.odmo.model.PRIOR_TERMS`):
 
-* ``"covariance"``, the paper's term above (equal to :math:`2\,\mathrm{KL}(\mathcal N(0, s^2)\,\Vert\,\mathcal
-  N(0, \sigma^2 I))`; the reference implementation adds that KL once, i.e. half of it);
-* ``"covariance_and_mean"``, an extension: the same plus :math:`\lVert\mu\rVert^2/\sigma^2`, i.e.
-  :math:`2\,\mathrm{KL}(\mathcal N(\mu, s^2)\,\Vert\,\mathcal N(0, \sigma^2 I))`, a spring of stiffness
-  :math:`2/\sigma^2 = 40` pulling every code mean to the origin;
-* ``"standard"``, a standard VAE: :math:`\mathrm{KL}(\mathcal N(\mu, s^2)\,\Vert\,\mathcal N(0, I))`.
+* ``"covariance"``, the paper's term above (equal to
+  :math:`2\,\mathrm{KL}(\mathcal N(0, \sigma^2)\,\Vert\,\mathcal N(0, \sigma_0^2 I))`; the reference
+  implementation adds that KL once, i.e. half of it);
+* ``"covariance_and_mean"``, an extension: the same plus :math:`\lVert\mu\rVert^2/\sigma_0^2`, i.e.
+  :math:`2\,\mathrm{KL}(\mathcal N(\mu, \sigma^2)\,\Vert\,\mathcal N(0, \sigma_0^2 I))`, a spring of stiffness
+  :math:`2/\sigma_0^2 = 40` pulling every code mean to the origin;
+* ``"standard"``, a standard VAE: :math:`\mathrm{KL}(\mathcal N(\mu, \sigma^2)\,\Vert\,\mathcal N(0, I))`.
 
 **Weights.** Eq. 1 is written for one pair: the contrastive term of the pair plus both clips' covariance
 terms, and eq. 5 adds each clip's reconstruction terms. Per clip that is :math:`\tfrac12 L_c(\text{pair})
@@ -110,7 +112,7 @@ def contrastive_loss(mu_a: Tensor, mu_b: Tensor, same: Tensor, margin: float, sl
 def prior_term(mu: Tensor, logvar: Tensor, prior_variance: float, kind: str) -> Tensor:
     """The prior term of each clip ``(B,)`` from ``mu``, ``logvar`` ``(B, D)``, summed over the ``D`` code
     dimensions; ``kind`` is one of :data:`~motionlab.models.odmo.model.PRIOR_TERMS`, ``prior_variance`` the
-    variance ``σ²`` (see the module notes)."""
+    variance ``σ₀²`` (see the module notes)."""
     check_choice(kind, "kind", "prior_term", PRIOR_TERMS)
     check_scalar(prior_variance, "prior_variance", "prior_term", minimum=0, include_minimum=False)
     if kind == "standard":

@@ -1,7 +1,7 @@
 r"""ODMO: the LMP encoder, the trajectory generator and the motion generator, and their config.
 
 A clip ``x`` (local movement profile and root trajectory, see :mod:`.data`, standardised per channel) of
-action ``c`` is encoded to ``q(z | x) = N(μ, s²)``; a code ``z = μ + s ε``, the class and the end point
+action ``c`` is encoded to ``q(z | x) = N(μ, diag σ²)``; a code ``z = μ + σ ε``, the class and the end point
 ``r_e`` of ``x`` give the trajectory ``r̂``, and ``r̂``, ``z`` and ``c`` give the motion ``x̂``. The joint
 objective that trains the three networks together is in :mod:`.losses`.
 
@@ -12,7 +12,7 @@ the generators read the class and the code; the outer product is the reference i
 
 **LMP encoder.** An LSTM reads the local movement profile (joints relative to the root, no trajectory) frame
 by frame; its outputs, averaged over the frames, go through two fully connected layers with BatchNorm and
-PReLU to ``(μ, log s²)``. The reference implementation reads the LSTM's last hidden state instead of the
+PReLU to ``(μ, log σ²)``. The reference implementation reads the LSTM's last hidden state instead of the
 average. On our clips the last state forgets what happened mid-clip: with it, a linear probe could not tell
 a front kick's code from a side kick's (48 % on two balanced classes), and with the average it could
 (100 %), with the same training. The paper's LMP is in world axes (the axes of the clip's first frame here);
@@ -66,13 +66,13 @@ from motionlab.validation import (
     tuple_of,
 )
 
-#: The prior term of the embedding loss (see :mod:`.losses`), with the code's ``q(z | x) = N(μ, diag s²)``:
-#: ``"covariance"`` eq. 1's covariance terms, ``-ln det Σ + Tr(Σ) / σ²`` per clip (the paper; the reference
+#: The prior term of the embedding loss (see :mod:`.losses`), with the code's ``q(z | x) = N(μ, diag σ²)``:
+#: ``"covariance"`` eq. 1's covariance terms, ``-ln det Σ + Tr(Σ) / σ₀²`` per clip (the paper; the reference
 #: implementation's KL on the noise is half of it): no term on ``μ``, which only the contrastive springs
 #: shape;
-#: ``"covariance_and_mean"`` those terms plus ``|μ|² / σ²`` (an extension: a Gaussian prior N(0, σ²) on ``μ``
-#: as well, which the paper's supplement §3.1 replaces by the springs);
-#: ``"standard"`` KL(N(μ, s²) || N(0, I)) (a standard VAE).
+#: ``"covariance_and_mean"`` those terms plus ``|μ|² / σ₀²`` (an extension: a Gaussian prior N(0, σ₀²) on
+#: ``μ`` as well, which the paper's supplement §3.1 replaces by the springs);
+#: ``"standard"`` KL(N(μ, σ²) || N(0, I)) (a standard VAE).
 PriorTerm = Literal["covariance", "covariance_and_mean", "standard"]
 PRIOR_TERMS: tuple[str, ...] = ("covariance", "covariance_and_mean", "standard")
 
@@ -116,7 +116,7 @@ class ODMOConfig(Checked):
         margin: contrastive margin ``α`` between codes of different classes (the paper: 5).
         same_class_slack: same-class codes closer than this do not attract each other (0 is the paper's
             eq. 1; the reference implementation, and the chapter, use 0.5, which leaves room for styles).
-        prior_variance: ``σ²`` of the prior term, a variance: the posterior variance ``s²`` the term pulls
+        prior_variance: ``σ₀²`` of the prior term, a variance: the posterior variance ``σ²`` the term pulls
             every code coordinate to (the paper: 0.05, supplement §2.1 and Table S1; the reference code's
             ``sigma = 0.05`` is the scale of a ``torch.distributions.Normal``, a standard deviation, so its
             posterior variance is 0.05² = 0.0025).
@@ -130,7 +130,7 @@ class ODMOConfig(Checked):
             encoder frame; the default is the course skeleton's).
         decoder_trajectory: how the decoder reads the trajectory, see :data:`DecoderTrajectory`.
         contrastive_weight, prior_weight: weights of the two embedding terms in the joint objective. The
-            prior's 0.5 is the reference implementation's balance (it adds KL(N(0, s²) || N(0, σ²)), half of
+            prior's 0.5 is the reference implementation's balance (it adds KL(N(0, σ²) || N(0, σ₀²)), half of
             eq. 1's covariance terms), which fits our reconstruction terms, averaged over channels like the
             reference's; the standard VAE weighs its KL with 1.
     """
@@ -227,7 +227,7 @@ def heading_frame(lmp: Tensor, hips: tuple[int, int]) -> Tensor:
 
 
 class LMPEncoder(nn.Module):
-    """``(B, T, 3 (J - 1))`` local movement profiles -> ``μ (B, D)``, ``log s² (B, D)``."""
+    """``(B, T, 3 (J - 1))`` local movement profiles -> ``μ (B, D)``, ``log σ² (B, D)``."""
 
     def __init__(self, cfg: ODMOConfig) -> None:
         super().__init__()
@@ -394,7 +394,7 @@ class ODMO(nn.Module):
         check_tensor(features, "features", where, trailing=(self.cfg.n_frames, self.cfg.feature_dim), ndim=3)
 
     def encode(self, features: Tensor) -> tuple[Tensor, Tensor]:
-        """``μ`` and ``log s²`` ``(B, D)`` of clips ``(B, T, F)`` in metres (only the local movement profile
+        """``μ`` and ``log σ²`` ``(B, D)`` of clips ``(B, T, F)`` in metres (only the local movement profile
         is read)."""
         self._check_features(features, "ODMO.encode")
         return self._encode(features)

@@ -1,9 +1,9 @@
 """Mode discovery and sampling in ODMO's code space.
 
 **Discovery.** For each action class, a Gaussian mixture (scikit-learn) is fitted to the code means ``μ``
-of that class's training clips for every number of components ``k = 3 … 11``, and each fit is scored
-by the silhouette of its hard assignments. The number of modes is the first ``k_i`` whose silhouette
-``S_i`` is more than 95 % of the next one's (``S_i > 0.95 · S_{i+1}``): more components are taken only
+of that class's training clips for every number of components ``K = 3 … 11``, and each fit is scored
+by the mean silhouette ``s̄_K`` of its hard assignments. The number of modes is the first ``K`` whose
+silhouette is more than 95 % of the next one's (``s̄_K > 0.95 · s̄_{K+1}``): more components are taken only
 while they make the clusters clearly better separated. Components that keep fewer than ``min_share`` of
 the class's codes are dropped (tiny clusters are outliers, not styles), and the others' weights are
 renormalised; the share is ours, the paper's supplement (§2.2) drops components of fewer than 10 codes.
@@ -112,7 +112,7 @@ class ModeSet:
     ) -> tuple[np.ndarray, np.ndarray]:
         """Mode-preserving sampling of ``n`` codes of ``action``: ``codes (n, D)`` and their modes ``(n,)``.
 
-        Mode ``k`` gets ``n · p_k`` samples (largest remainders get the leftovers), with ``p`` the mixture
+        Mode ``m`` gets ``n · p_m`` samples (largest remainders get the leftovers), with ``p`` the mixture
         weights, the given ``probabilities``, or all mass on ``mode``.
         """
         modes = self.classes[self.check_action(action)]
@@ -154,7 +154,8 @@ def mode_counts(probabilities: np.ndarray, n: int) -> np.ndarray:
 def choose_component_count(
     k_values: Sequence[int], silhouettes: Sequence[float], ratio: float = SILHOUETTE_RATIO
 ) -> int:
-    """The first ``k_i`` with ``S_i > ratio · S_{i+1}`` (the last ``k`` when there is none)."""
+    """The first component count ``K`` (of ``k_values``) whose mean silhouette ``s̄_K`` exceeds
+    ``ratio · s̄_{K+1}``, the next count's (the last count when there is none)."""
     if len(k_values) != len(silhouettes) or not k_values:
         raise ValueError(
             f"choose_component_count: need one silhouette per k, got {len(k_values)} k and "

@@ -157,8 +157,8 @@ def sample_clip_metrics(
     sets.
 
     Each of ``cfg.n_repeats`` repeats draws ``cfg.per_action`` clips of every action with codes
-    z ~ N(0, s^2 I) (:func:`~motionlab.models.vae.sampling.sample_clips`), where s is the prior's standard
-    deviation, or ``latent_std`` when given (to show what sampling from the wrong prior does).
+    z ~ N(0, σ² I) (:func:`~motionlab.models.vae.sampling.sample_clips`), where σ is the prior's standard
+    deviation σ_p, or ``latent_std`` when given (to show what sampling from the wrong prior does).
     """
     n_actions = model.cfg.n_classes
     if n_actions == 0:

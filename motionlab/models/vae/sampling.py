@@ -24,14 +24,14 @@ def sample_clips(
     generator: torch.Generator,
     latent_std: float | None = None,
 ) -> Tensor:
-    """Global positions ``(B, L, 22, 3)`` of clips a clip CVAE decodes from codes ``z ~ N(0, s^2 I)``.
+    """Global positions ``(B, L, 22, 3)`` of clips a clip CVAE decodes from codes ``z ~ N(0, σ² I)``.
 
     Args:
         model: a conditional MLP VAE on standardised windows ``(L, 67)``.
         codec: the windows' :class:`~motionlab.models.vae.data.ClipCodec`.
         labels: the action of each clip ``(B,)`` (int64).
         generator: draws the codes ``(B, latent_dim)``, nothing else.
-        latent_std: ``s``; ``None`` is the model's prior standard deviation ``sigma_p`` (another value shows
+        latent_std: ``σ``; ``None`` is the model's prior standard deviation ``σ_p`` (another value shows
             what sampling from the wrong prior does).
     """
     std = math.exp(0.5 * model.cfg.prior_logvar) if latent_std is None else float(latent_std)
