@@ -28,26 +28,26 @@ def _dct_values(fn: DCTMatrix) -> None:
     want = dct_matrix(n, dtype=torch.float64)
     if got.shape != (n, n):
         raise Diagnosis(
-            f"dct_matrix({n}) should be ({n}, {n}) (frequency k, frame t), got {tuple(got.shape)}"
+            f"dct_matrix({n}) should be ({n}, {n}) (frequency u, frame t), got {tuple(got.shape)}"
         )
     if close(got, want, 1e-6):
         return
     if close(got, want.T, 1e-6):
-        raise Diagnosis("the matrix is transposed: row k should be frequency k, column t frame t (X = D x)")
-    rows_right = [k for k in range(n) if close(got[k], want[k], 1e-6)]
+        raise Diagnosis("the matrix is transposed: row u should be frequency u, column t frame t (a = U h)")
+    rows_right = [u for u in range(n) if close(got[u], want[u], 1e-6)]
     if rows_right == list(range(1, n)):
         raise Diagnosis("row 0 (the constant) is off: its scale is sqrt(1/N), the other rows' sqrt(2/N)")
     ratio = got / want
     if torch.allclose(ratio[1:], ratio[1, 0].expand_as(ratio[1:]), rtol=1e-6):
         raise Diagnosis(
-            "the cosines are right but not their scale: s_0 = sqrt(1/N) and s_k = sqrt(2/N) make the rows "
+            "the cosines are right but not their scale: s_0 = sqrt(1/N) and s_u = sqrt(2/N) make the rows "
             "orthonormal"
         )
     gram = got @ got.T
     orthonormal = close(gram, torch.eye(n, dtype=gram.dtype), 1e-6)
     raise Diagnosis(
-        "the cosines are wrong: D[k, t] = s_k cos(pi (2t + 1) k / (2N))"
-        + ("" if orthonormal else "; your rows are not orthonormal either (D D^T should be I)")
+        "the cosines are wrong: U[u, t] = s_u cos(pi (2t + 1) u / (2N))"
+        + ("" if orthonormal else "; your rows are not orthonormal either (U U^T should be I)")
     )
 
 
