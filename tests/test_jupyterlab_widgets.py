@@ -45,8 +45,8 @@ pytestmark = pytest.mark.skipif(
 CHAPTERS: dict[str, tuple[tuple[str, str], ...]] = {
     "notebooks/11_motion_diffusion.ipynb": (
         ("sample_widget(", "seed"),
-        ("interpolation_widget(", "alpha"),
-        ("inbetween_widget(", "k"),
+        ("interpolation_widget(", "weight"),
+        ("inbetween_widget(", "kept"),
     ),
 }
 #: Seconds for JupyterLab to answer, for the chapter to open with an idle kernel, and for a slider's new

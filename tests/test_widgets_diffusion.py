@@ -77,12 +77,12 @@ def test_slerp_runs_on_the_great_circle():
     assert torch.equal(dw.slerp(a, b, 0.0), a) and torch.allclose(dw.slerp(a, b, 1.0), b, atol=1e-6)
     norm = float(a.norm())
     same_norm = b * norm / b.norm()
-    for alpha in (0.25, 0.5, 0.9):
-        assert float(dw.slerp(a, same_norm, alpha).norm()) == pytest.approx(norm, rel=1e-5)
+    for weight in (0.25, 0.5, 0.9):
+        assert float(dw.slerp(a, same_norm, weight).norm()) == pytest.approx(norm, rel=1e-5)
     # two draws are nearly orthogonal: halfway along the straight line the norm drops by about sqrt(2)
     assert float(((a + b) / 2).norm()) / norm == pytest.approx(2**-0.5, abs=0.03)
     assert float(dw.slerp(a, b, 0.5).norm()) / norm == pytest.approx(1.0, abs=0.03)
-    # equal angles for equal steps of alpha
+    # equal angles for equal steps of the weight
     quarter = dw.slerp(a, same_norm, 0.25)
     cosine = torch.nn.functional.cosine_similarity
     first, second = (
@@ -98,7 +98,7 @@ def test_slerp_runs_on_the_great_circle():
     [
         ((np.zeros(3), torch.ones(3), 0.5), TypeError, "a must be a torch.Tensor"),
         ((torch.ones(3), torch.ones(4), 0.5), ValueError, "one shape"),
-        ((torch.ones(3), torch.ones(3), 1.5), ValueError, "alpha"),
+        ((torch.ones(3), torch.ones(3), 1.5), ValueError, "weight"),
         ((torch.zeros(3), torch.ones(3), 0.5), ValueError, "non-zero"),
         ((torch.ones(3), -torch.ones(3), 0.5), ValueError, "opposite"),
     ],
@@ -110,7 +110,7 @@ def test_slerp_rejects_bad_arguments(args, error, match):
 
 def test_interpolation_goes_from_one_seed_clip_to_the_other_smoothly(model):
     ends = [dw.sample_motion(model, 0, seed, 10, 2.5) for seed in (0, 1)]
-    path = [dw.interpolated_motion(model, 0, 0, 1, alpha, 10, 2.5) for alpha in (0.0, 0.45, 0.5, 1.0)]
+    path = [dw.interpolated_motion(model, 0, 0, 1, weight, 10, 2.5) for weight in (0.0, 0.45, 0.5, 1.0)]
     assert torch.equal(path[0], ends[0]) and torch.allclose(path[3], ends[1], atol=1e-5)
     assert torch.equal(path[2], dw.interpolated_motion(model, 0, 0, 1, 0.5, 10, 2.5))
     step = float((path[2] - path[1]).abs().mean())
@@ -140,7 +140,7 @@ def test_editing_masks_and_the_joints_they_fix():
     assert {name for name, j in JOINT.items() if fixed[0, j]} == names  # spine1 hangs off the pelvis only
     with pytest.raises(ValueError, match="keep"):
         dw.editing_mask(FRAMES, 22, "arms", 3)
-    with pytest.raises(ValueError, match="k"):
+    with pytest.raises(ValueError, match="kept"):
         dw.editing_mask(FRAMES, 22, "ends", FRAMES // 2 + 1)
     with pytest.raises(TypeError, match="known"):
         dw.fixed_joints(ends.float())
@@ -168,7 +168,7 @@ def test_figures_draw_keyframes_and_say_what_they_show(model, data):
         and "jog, seed 2: 10 DDIM steps, guidance 2.5, sampled in" in strip._suptitle.get_text()
     )
     morph = dw.interpolation_figure(model, 1, 2, 3, 0.5, 10)
-    assert len(morph.axes) == 6 and "alpha = 0.50" in morph._suptitle.get_text()
+    assert len(morph.axes) == 6 and "weight = 0.50" in morph._suptitle.get_text()
     editor = dw.inbetween_figure(model, data, 0, "ends", 2, 0, 0, 10, action_names=NAMES)
     assert len(editor.axes) == 12
     assert [ax.get_title().split(",")[0] for ax in editor.axes] == ["reference"] * 6 + ["completion"] * 6
@@ -218,12 +218,12 @@ def test_sample_widget_redraws_on_every_control(model):
 def test_interpolation_widget_morphs_and_comes_back(model):
     box = dw.interpolation_widget(model, NAMES)
     controls = _controls(box)
-    assert list(controls) == ["action", "seed A", "seed B", "alpha", "DDIM steps"]
+    assert list(controls) == ["action", "seed A", "seed B", "weight", "DDIM steps"]
     start = _image(box)
-    controls["alpha"].value = 0.5
+    controls["weight"].value = 0.5
     middle = _image(box)
-    controls["alpha"].value = 0.0
-    assert middle != start and _image(box) == start  # deterministic: the same alpha draws the same figure
+    controls["weight"].value = 0.0
+    assert middle != start and _image(box) == start  # deterministic: the same weight draws the same figure
     controls["seed A"].value = 4
     assert _image(box) != start
 
@@ -231,10 +231,10 @@ def test_interpolation_widget_morphs_and_comes_back(model):
 def test_inbetween_widget_follows_the_clip_and_redraws_once(model, data, monkeypatch):
     box = dw.inbetween_widget(model, data, NAMES)
     controls = _controls(box)
-    assert list(controls) == ["clip", "keep", "k", "action", "seed", "DDIM steps"]
+    assert list(controls) == ["clip", "keep", "kept", "action", "seed", "DDIM steps"]
     assert controls["action"].value == int(data.action[0])
     first = _image(box)
-    controls["k"].value = 2
+    controls["kept"].value = 2
     assert _image(box) != first
     draws = []
     real = dw.show_figure

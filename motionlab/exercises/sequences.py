@@ -33,7 +33,7 @@ def _dct_values(fn: DCTMatrix) -> None:
     if close(got, want, 1e-6):
         return
     if close(got, want.T, 1e-6):
-        raise Diagnosis("the matrix is transposed: row u should be frequency u, column t frame t (X = D x)")
+        raise Diagnosis("the matrix is transposed: row u should be frequency u, column t frame t (a = U h)")
     rows_right = [u for u in range(n) if close(got[u], want[u], 1e-6)]
     if rows_right == list(range(1, n)):
         raise Diagnosis("row 0 (the constant) is off: its scale is sqrt(1/N), the other rows' sqrt(2/N)")
@@ -46,8 +46,8 @@ def _dct_values(fn: DCTMatrix) -> None:
     gram = got @ got.T
     orthonormal = close(gram, torch.eye(n, dtype=gram.dtype), 1e-6)
     raise Diagnosis(
-        "the cosines are wrong: D[u, t] = s_u cos(pi (2t + 1) u / (2N))"
-        + ("" if orthonormal else "; your rows are not orthonormal either (D D^T should be I)")
+        "the cosines are wrong: U[u, t] = s_u cos(pi (2t + 1) u / (2N))"
+        + ("" if orthonormal else "; your rows are not orthonormal either (U U^T should be I)")
     )
 
 

@@ -70,14 +70,14 @@ def contact_share(
 
 def resample(positions: ArrayLike, fps: float, new_fps: float) -> np.ndarray:
     """A clip ``(T, J, 3)`` at ``fps`` linearly interpolated to ``new_fps`` over the same duration:
-    ``(floor((T - 1) new_fps / fps) + 1, J, 3)``, frame ``k`` at time ``k / new_fps``."""
+    ``(floor((T - 1) new_fps / fps) + 1, J, 3)``, frame ``t`` at time ``t / new_fps``."""
     func = "resample"
     x = _clip(positions, func)
     rate = float(check_scalar(fps, "fps", func, minimum=0, include_minimum=False))
     new_rate = float(check_scalar(new_fps, "new_fps", func, minimum=0, include_minimum=False))
     times = np.arange(int(np.floor((x.shape[0] - 1) * new_rate / rate + 1e-9)) + 1) * rate / new_rate
     flat = x.reshape(x.shape[0], -1)
-    columns = [np.interp(times, np.arange(x.shape[0]), flat[:, k]) for k in range(flat.shape[1])]
+    columns = [np.interp(times, np.arange(x.shape[0]), flat[:, channel]) for channel in range(flat.shape[1])]
     return np.stack(columns, axis=-1).reshape((len(times),) + x.shape[1:])
 
 

@@ -40,7 +40,7 @@ from motionlab.widgets.controls import action_dropdown, show_figure
 #: The step counts offered for the respaced DDIM schedule (those up to the model's diffusion steps).
 STEP_CHOICES: tuple[int, ...] = (10, 25, 50, 100)
 
-#: What the in-betweening editor keeps of the reference clip: ``"ends"`` its first and last ``k`` frames
+#: What the in-betweening editor keeps of the reference clip: ``"ends"`` its first and last ``kept`` frames
 #: whole, ``"legs"`` the :data:`LEG_JOINTS`' rotations and the root position in every frame.
 Keep = Literal["ends", "legs"]
 KEEP_CHOICES: tuple[str, ...] = ("ends", "legs")
@@ -108,12 +108,12 @@ def start_noise(model: MDM, seed: int) -> Tensor:
     return torch.randn(shape, generator=torch.Generator().manual_seed(seed))
 
 
-def slerp(a: Tensor, b: Tensor, alpha: float) -> Tensor:
-    r"""Spherical interpolation from ``a`` (``alpha = 0``) to ``b`` (``alpha = 1``), tensors of one shape
-    taken as single vectors:
+def slerp(a: Tensor, b: Tensor, weight: float) -> Tensor:
+    r"""Spherical interpolation from ``a`` (``weight = 0``) to ``b`` (``weight = 1``), tensors of one shape
+    taken as single vectors: with the weight :math:`w`,
 
-    .. math:: \operatorname{slerp}(a, b; \alpha) = \frac{\sin((1 - \alpha)\,\Omega)}{\sin \Omega}\, a
-              + \frac{\sin(\alpha\,\Omega)}{\sin \Omega}\, b,
+    .. math:: \operatorname{slerp}(a, b; w) = \frac{\sin((1 - w)\,\Omega)}{\sin \Omega}\, a
+              + \frac{\sin(w\,\Omega)}{\sin \Omega}\, b,
 
     :math:`\Omega` the angle between them (from ``2 atan2(|â - b̂|, |â + b̂|)`` on the unit vectors, accurate
     at every angle; written with ``sinc`` so that :math:`\Omega \to 0` is exact).
@@ -124,7 +124,7 @@ def slerp(a: Tensor, b: Tensor, alpha: float) -> Tensor:
     :math:`\sqrt{D / 2}`: it is no typical draw of the start :math:`x_S` (the sampler would start from too
     little noise, and the middle of the morph would come out damped). Along the great circle the norm stays
     near :math:`\sqrt D` (exactly when the two norms are equal), and for orthogonal ``a``, ``b`` each point
-    :math:`\cos(\alpha\pi/2)\, a + \sin(\alpha\pi/2)\, b` is itself distributed as :math:`\mathcal N(0,
+    :math:`\cos(w\pi/2)\, a + \sin(w\pi/2)\, b` is itself distributed as :math:`\mathcal N(0,
     I)`. Spherical interpolation of the start noise is what DDIM's interpolation experiments use too (Song,
     Meng and Ermon 2021).
     """
@@ -133,7 +133,7 @@ def slerp(a: Tensor, b: Tensor, alpha: float) -> Tensor:
     check_tensor(b, "b", where)
     if a.shape != b.shape:
         raise ValueError(f"{where}: a and b must have one shape, got {tuple(a.shape)} and {tuple(b.shape)}")
-    check_scalar(alpha, "alpha", where, minimum=0.0, maximum=1.0)
+    check_scalar(weight, "weight", where, minimum=0.0, maximum=1.0)
     norm_a, norm_b = torch.linalg.vector_norm(a), torch.linalg.vector_norm(b)
     if float(norm_a) == 0.0 or float(norm_b) == 0.0:
         raise ValueError(f"{where}: a and b must be non-zero, got norms {float(norm_a)} and {float(norm_b)}")
@@ -144,9 +144,9 @@ def slerp(a: Tensor, b: Tensor, alpha: float) -> Tensor:
     sinc_omega = torch.sinc(omega / torch.pi)
     if float(sinc_omega) < 1e-6:
         raise ValueError(f"{where}: a and b point in opposite directions: no single great circle joins them")
-    weight_a = (1 - alpha) * torch.sinc((1 - alpha) * omega / torch.pi) / sinc_omega
-    weight_b = alpha * torch.sinc(alpha * omega / torch.pi) / sinc_omega
-    return weight_a * a + weight_b * b
+    coefficient_a = (1 - weight) * torch.sinc((1 - weight) * omega / torch.pi) / sinc_omega
+    coefficient_b = weight * torch.sinc(weight * omega / torch.pi) / sinc_omega
+    return coefficient_a * a + coefficient_b * b
 
 
 def sample_motion(
@@ -222,15 +222,15 @@ def sample_figure(
 
 
 def interpolated_motion(
-    model: MDM, action: int, seed_a: int, seed_b: int, alpha: float, steps: int, guidance: float
+    model: MDM, action: int, seed_a: int, seed_b: int, weight: float, steps: int, guidance: float
 ) -> Tensor:
     """The clip ``(T, F)`` sampled deterministically (DDIM, ``eta = 0``) from the :func:`slerp` of the start
-    noises of ``seed_a`` and ``seed_b`` at ``alpha``: ``alpha = 0`` gives ``seed_a``'s clip of
-    :func:`sample_motion`, ``alpha = 1`` ``seed_b``'s, and the clips in between change smoothly with
-    ``alpha``."""
+    noises of ``seed_a`` and ``seed_b`` at ``weight``: ``weight = 0`` gives ``seed_a``'s clip of
+    :func:`sample_motion`, ``weight = 1`` ``seed_b``'s, and the clips in between change smoothly with
+    ``weight``."""
     where = "interpolated_motion"
     _check_seed(seed_b, "seed_b", where)
-    noise = slerp(start_noise(model, seed_a), start_noise(model, seed_b), alpha)
+    noise = slerp(start_noise(model, seed_a), start_noise(model, seed_b), weight)
     return sample_motion(model, action, seed_a, steps, guidance, initial_noise=noise)
 
 
@@ -239,7 +239,7 @@ def interpolation_figure(
     action: int,
     seed_a: int,
     seed_b: int,
-    alpha: float,
+    weight: float,
     steps: int,
     guidance: float = GUIDANCE_SCALE,
     fps: float = 15.0,
@@ -247,10 +247,10 @@ def interpolation_figure(
 ) -> Figure:
     """Keyframes of :func:`interpolated_motion`."""
     check_scalar(fps, "fps", "interpolation_figure", minimum=0.0, include_minimum=False)
-    features = interpolated_motion(model, action, seed_a, seed_b, alpha, steps, guidance)
+    features = interpolated_motion(model, action, seed_a, seed_b, weight, steps, guidance)
     title = (
         f"{_action_name(action, action_names)}: start noise slerp(seed {seed_a}, seed {seed_b}; "
-        f"alpha = {alpha:.2f}), {_sampler_words(steps, guidance)}"
+        f"weight = {weight:.2f}), {_sampler_words(steps, guidance)}"
     )
     return _clip_strip(features, fps, title)
 
@@ -267,17 +267,17 @@ def _check_data(model: MDM, data: MDMData, where: str) -> MDMData:
     return data
 
 
-def editing_mask(n_frames: int, n_joints: int, keep: Keep, k: int) -> Tensor:
-    """Which channels of a clip the editor keeps ``(n_frames, 6 J + 3)`` bool: the first and last ``k``
-    frames (``keep="ends"``, ``1 <= k <= n_frames // 2``), or the :data:`LEG_JOINTS`' rotations and the root
-    position in every frame (``keep="legs"``, ``k`` unused)."""
+def editing_mask(n_frames: int, n_joints: int, keep: Keep, kept: int) -> Tensor:
+    """Which channels of a clip the editor keeps ``(n_frames, 6 J + 3)`` bool: the first and last ``kept``
+    frames (``keep="ends"``, ``1 <= kept <= n_frames // 2``), or the :data:`LEG_JOINTS`' rotations and the
+    root position in every frame (``keep="legs"``, ``kept`` unused)."""
     where = "editing_mask"
     check_choice(keep, "keep", where, KEEP_CHOICES)
     check_scalar(n_frames, "n_frames", where, kind=numbers.Integral, minimum=2)
     if keep == "legs":
         return known_mask(n_frames, n_joints, joints=LEG_JOINTS, root_position=True)
-    check_scalar(k, "k", where, kind=numbers.Integral, minimum=1, maximum=n_frames // 2)
-    frames = [*range(k), *range(n_frames - k, n_frames)]
+    check_scalar(kept, "kept", where, kind=numbers.Integral, minimum=1, maximum=n_frames // 2)
+    frames = [*range(kept), *range(n_frames - kept, n_frames)]
     return known_mask(n_frames, n_joints, frames=frames)
 
 
@@ -316,7 +316,7 @@ def complete_clip(
     data: MDMData,
     clip: int,
     keep: Keep,
-    k: int,
+    kept: int,
     action: int,
     seed: int,
     steps: int,
@@ -330,20 +330,20 @@ def complete_clip(
     _check_data(model, data, where)
     check_scalar(clip, "clip", where, kind=numbers.Integral, minimum=0, maximum=len(data) - 1)
     reference = data.features[int(clip)]
-    known = editing_mask(model.cfg.n_frames, model.cfg.n_joints, keep, k)
+    known = editing_mask(model.cfg.n_frames, model.cfg.n_joints, keep, kept)
     completion = sample_motion(model, action, seed, steps, guidance, edit=Edit(reference[None], known))
     return Completion(reference, known, completion)
 
 
-def editor_keyframes(n_frames: int, keep: Keep, k: int) -> np.ndarray:
+def editor_keyframes(n_frames: int, keep: Keep, kept: int) -> np.ndarray:
     """The frames the editor's figure shows (sorted indices): for ``keep="ends"`` the first and last frame,
-    the given frames next to the gap (``k - 1`` and ``n_frames - k``) and two frames evenly inside it, so the
-    seams show; for ``keep="legs"`` six frames evenly over the clip."""
+    the given frames next to the gap (``kept - 1`` and ``n_frames - kept``) and two frames evenly inside it,
+    so the seams show; for ``keep="legs"`` six frames evenly over the clip."""
     check_choice(keep, "keep", "editor_keyframes", KEEP_CHOICES)
     if keep == "legs":
         return keyframe_indices(n_frames, 6)
-    inside = np.linspace(k - 1, n_frames - k, 4)[1:3].round()
-    return np.unique(np.r_[0, k - 1, inside, n_frames - k, n_frames - 1].astype(np.int64))
+    inside = np.linspace(kept - 1, n_frames - kept, 4)[1:3].round()
+    return np.unique(np.r_[0, kept - 1, inside, n_frames - kept, n_frames - 1].astype(np.int64))
 
 
 def _draw_rows(
@@ -375,7 +375,7 @@ def inbetween_figure(
     data: MDMData,
     clip: int,
     keep: Keep,
-    k: int,
+    kept: int,
     action: int,
     seed: int,
     steps: int,
@@ -386,7 +386,7 @@ def inbetween_figure(
     """Keyframes of the reference clip (top) and of :func:`complete_clip`'s completion (bottom), the part
     given to the sampler drawn over both in :data:`GIVEN_COLOR`."""
     check_scalar(fps, "fps", "inbetween_figure", minimum=0.0, include_minimum=False)
-    reference, known, completion = complete_clip(model, data, clip, keep, k, action, seed, steps, guidance)
+    reference, known, completion = complete_clip(model, data, clip, keep, kept, action, seed, steps, guidance)
     fixed = fixed_joints(known).numpy()
     fig = _draw_rows(
         [
@@ -394,12 +394,12 @@ def inbetween_figure(
             ("completion", clip_positions(completion), GENERATED_COLOR),
         ],
         fixed,
-        editor_keyframes(len(known), keep, k),
+        editor_keyframes(len(known), keep, kept),
         fps,
     )
-    kept = f"first and last {k} frames" if keep == "ends" else "legs and root"
+    given = f"first and last {kept} frames" if keep == "ends" else "legs and root"
     fig.suptitle(
-        f"clip {clip}: {kept} given, the rest sampled for {_action_name(action, action_names)} "
+        f"clip {clip}: {given} given, the rest sampled for {_action_name(action, action_names)} "
         f"(seed {seed}, {_sampler_words(steps, guidance)})",
         fontsize=10,
     )
@@ -457,14 +457,14 @@ def sample_widget(model: MDM, action_names: Sequence[str], fps: float = 15.0) ->
 
 
 def interpolation_widget(model: MDM, action_names: Sequence[str], fps: float = 15.0) -> widgets.VBox:
-    """Two seeds and a slider ``alpha``: the clip sampled from the :func:`slerp` of their start noises."""
+    """Two seeds and a slider ``weight``: the clip sampled from the :func:`slerp` of their start noises."""
     _check_model(model, "interpolation_widget")
     controls = {
         "action": action_dropdown(action_names),
         "seed_a": _seed_slider("seed A", 0),
         "seed_b": _seed_slider("seed B", 1),
-        "alpha": widgets.FloatSlider(
-            value=0.0, min=0.0, max=1.0, step=0.1, description="alpha", continuous_update=False
+        "weight": widgets.FloatSlider(
+            value=0.0, min=0.0, max=1.0, step=0.1, description="weight", continuous_update=False
         ),
         "steps": _steps_dropdown(model),
     }
@@ -483,7 +483,7 @@ def interpolation_widget(model: MDM, action_names: Sequence[str], fps: float = 1
 def inbetween_widget(
     model: MDM, data: MDMData, action_names: Sequence[str], fps: float = 15.0
 ) -> widgets.VBox:
-    """Pick a reference clip of ``data``, keep its first and last ``k`` frames or its legs, and sample the
+    """Pick a reference clip of ``data``, keep its first and last ``kept`` frames or its legs, and sample the
     rest for an action (the clip's own when the clip is picked). Clip slider over ``data``'s clips."""
     where = "inbetween_widget"
     _check_model(model, where)
@@ -494,8 +494,8 @@ def inbetween_widget(
     controls = {
         "clip": clip,
         "keep": widgets.ToggleButtons(options=list(KEEP_CHOICES), value="ends", description="keep"),
-        "k": widgets.IntSlider(
-            value=5, min=1, max=model.cfg.n_frames // 2, description="k", continuous_update=False
+        "kept": widgets.IntSlider(
+            value=5, min=1, max=model.cfg.n_frames // 2, description="kept", continuous_update=False
         ),
         "action": action,
         "seed": _seed_slider(),

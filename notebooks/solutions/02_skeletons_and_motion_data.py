@@ -9,16 +9,16 @@ from motionlab.geometry import quat_apply, quat_mul
 
 
 def my_chain_positions(rotations: torch.Tensor, root: torch.Tensor, offsets: torch.Tensor) -> torch.Tensor:
-    """Forward kinematics of a chain: joint k's parent is k - 1.
+    """Forward kinematics of a chain: joint j's parent is j - 1.
 
     rotations (..., K, 4) local unit quaternions (joint 0's is its global orientation), root (..., 3) the
     position of joint 0, offsets (K, 3) rest offsets from each joint's parent. Returns positions (..., K, 3):
-    x_0 = root, x_k = x_{k-1} + G_{k-1} o_k with G_0 = q_0 and G_k = G_{k-1} ⊗ q_k.
+    x_0 = root, x_j = x_{j-1} + G_{j-1} o_j with G_0 = q_0 and G_j = G_{j-1} ⊗ q_j.
     """
     positions, frame = [root], rotations[..., 0, :]
-    for k in range(1, rotations.shape[-2]):
-        positions.append(positions[-1] + quat_apply(frame, offsets[k].expand_as(root)))
-        frame = quat_mul(frame, rotations[..., k, :])
+    for j in range(1, rotations.shape[-2]):
+        positions.append(positions[-1] + quat_apply(frame, offsets[j].expand_as(root)))
+        frame = quat_mul(frame, rotations[..., j, :])
     return torch.stack(positions, dim=-2)
 
 

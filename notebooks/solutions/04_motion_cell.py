@@ -10,7 +10,7 @@ import torch
 
 
 def my_subtree_reach(parents: Sequence[int], bone_lengths: np.ndarray) -> np.ndarray:
-    """L_k (J,): the longest path from joint k to an end effector, as a sum of bone lengths.
+    """L_j (J,): the longest path from joint j to an end effector, as a sum of bone lengths.
 
     Walk from the last joint back to the first (children come after parents), so every child's L is final
     when its parent takes the maximum of child L + bone over its children.
@@ -23,14 +23,15 @@ def my_subtree_reach(parents: Sequence[int], bone_lengths: np.ndarray) -> np.nda
 
 
 def my_impact_weights(reach: np.ndarray, leaf_floor: float) -> np.ndarray:
-    """alpha (J,), mean 1: each L_k raised to at least leaf_floor * max(L) (so that the end effectors'
-    orientation still counts), then divided by the mean (so that a weighted loss keeps its scale)."""
+    """The joint weights lambda_j (J,), mean 1: each L_j raised to at least leaf_floor * max(L) (so that the
+    end effectors' orientation still counts), then divided by the mean (so that a weighted loss keeps its
+    scale)."""
     floored = np.maximum(reach, leaf_floor * reach.max())
     return floored / floored.mean()
 
 
 def my_motion_cell_step(word, state, eps, prior, posterior, decode, transition):
-    """One teacher-forced step over a motion word: (word_hat (B, W), kl (B,), next_state (B, H)).
+    """One teacher-forced step over a motion word: (word_hat (B, W), kl (B,), next_state (B, D_h)).
 
     Draw z_t from the posterior, which reads the real word, decode it with the state before the word, score
     the posterior against the learned prior with the closed-form Gaussian KL, and update the state from the

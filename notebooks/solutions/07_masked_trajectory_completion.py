@@ -8,13 +8,13 @@ import torch
 
 
 def my_dct_matrix(n_frames: int) -> torch.Tensor:
-    """The orthonormal DCT-II matrix (n_frames, n_frames): U[k, t] = s_k cos(pi (2t + 1) k / (2T)),
-    s_0 = sqrt(1/T), s_k = sqrt(2/T) for k > 0, with T = n_frames."""
-    k = torch.arange(n_frames, dtype=torch.float64)[:, None]
+    """The orthonormal DCT-II matrix (n_frames, n_frames): U[u, t] = s_u cos(pi (2t + 1) u / (2T)),
+    s_0 = sqrt(1/T), s_u = sqrt(2/T) for u > 0, with T = n_frames."""
+    u = torch.arange(n_frames, dtype=torch.float64)[:, None]
     t = torch.arange(n_frames, dtype=torch.float64)[None, :]
     scale = torch.full((n_frames, 1), math.sqrt(2.0 / n_frames), dtype=torch.float64)
     scale[0] = math.sqrt(1.0 / n_frames)
-    return scale * torch.cos(math.pi * (2 * t + 1) * k / (2 * n_frames))
+    return scale * torch.cos(math.pi * (2 * t + 1) * u / (2 * n_frames))
 
 
 def my_given_trajectories(poses: torch.Tensor, mask: torch.Tensor) -> torch.Tensor:

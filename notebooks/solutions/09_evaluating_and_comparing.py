@@ -11,8 +11,8 @@ def my_apd(samples: torch.Tensor) -> torch.Tensor:
     """Average pairwise distance of K samples (K, T, D): each sample flattened, mean over pairs i != j."""
     flat = samples.reshape(samples.shape[0], -1)
     distances = torch.cdist(flat, flat)  # (K, K), zero diagonal
-    k = flat.shape[0]
-    return distances.sum() / (k * (k - 1))
+    count = flat.shape[0]
+    return distances.sum() / (count * (count - 1))
 
 
 def my_fid(a: torch.Tensor, b: torch.Tensor) -> float:

@@ -3,13 +3,13 @@ r"""The orthonormal DCT-II over time, written as a matrix, and its inverse.
 For a signal :math:`h_0, \dots, h_{T-1}` over ``T`` frames the orthonormal DCT-II is (chapter 07's notation)
 
 .. math::
-    a_k = s_k \sum_{t=0}^{T-1} h_t \cos\Big(\frac{\pi (2t + 1) k}{2T}\Big), \qquad
-    s_0 = \sqrt{1/T},\; s_{k>0} = \sqrt{2/T},
+    a_u = s_u \sum_{t=0}^{T-1} h_t \cos\Big(\frac{\pi (2t + 1) u}{2T}\Big), \qquad
+    s_0 = \sqrt{1/T},\; s_{u>0} = \sqrt{2/T},
 
-the same numbers as ``scipy.fft.dct(h, type=2, norm="ortho")``: :math:`a = U h` with the matrix
-:math:`U_{kt}`, which is orthogonal (:math:`U U^\top = I`), so the inverse is its transpose. Keeping only
-the first ``C`` rows gives the ``C`` lowest frequencies; the inverse from them is the least-squares smooth
-approximation of the signal.
+for the frequencies :math:`u = 0, \dots, T - 1`; the same numbers as ``scipy.fft.dct(h, type=2,
+norm="ortho")``: :math:`a = U h` with the matrix :math:`U_{ut}`, which is orthogonal (:math:`U U^\top = I`),
+so the inverse is its transpose. Keeping only the first ``C`` rows gives the ``C`` lowest frequencies; the
+inverse from them is the least-squares smooth approximation of the signal.
 
 TrajeVAE takes the DCT of a sequence of frame embeddings over the time axis, so each latent variable
 belongs to one frequency instead of one frame.
@@ -36,9 +36,9 @@ def dct_matrix(n_frames: int, n_components: int | None = None, dtype: torch.dtyp
     if n_components is None:
         n_components = n_frames
     check_scalar(n_components, "n_components", where, kind=numbers.Integral, minimum=1, maximum=n_frames)
-    k = torch.arange(n_components, dtype=torch.float64)[:, None]
-    n = torch.arange(n_frames, dtype=torch.float64)[None, :]
-    matrix = torch.cos(math.pi * (2 * n + 1) * k / (2 * n_frames)) * math.sqrt(2.0 / n_frames)
+    u = torch.arange(n_components, dtype=torch.float64)[:, None]  # frequency
+    t = torch.arange(n_frames, dtype=torch.float64)[None, :]  # frame
+    matrix = torch.cos(math.pi * (2 * t + 1) * u / (2 * n_frames)) * math.sqrt(2.0 / n_frames)
     matrix[0] = math.sqrt(1.0 / n_frames)
     return matrix.to(dtype)
 

@@ -12,7 +12,8 @@ norm over the whole ``J * 3`` pose of a frame, in metres, on the completed frame
 entry is the mean over the test windows with the half-width of its 95% Student-t interval (each window is
 one sample set of fixed size ``K``).
 
-**Number of trajectories** ``k``: the first ``k`` joints of
+**Number of trajectories** ``k`` (the chapters' :math:`J_g`, the number of given trajectories; TrajeVAE's
+:math:`k`): the first ``k`` joints of
 :data:`~motionlab.models.trajevae.masks.FULL_ORDER` are given (k = 1..4: right foot, left foot, right hand,
 left hand, the paper's Table 1 and Figure 6; up to all 22 joints).
 
