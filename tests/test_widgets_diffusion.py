@@ -17,6 +17,7 @@ from motionlab.data.synthetic import generate  # noqa: E402
 from motionlab.models.diffusion.data import prepare  # noqa: E402
 from motionlab.models.diffusion.model import MDM, MDMConfig  # noqa: E402
 from motionlab.skeleton import JOINT  # noqa: E402
+from motionlab.widgets import controls as controls_module  # noqa: E402
 from motionlab.widgets import diffusion as dw  # noqa: E402
 
 NAMES = ["walk", "jog", "jump", "lift", "wave", "kick"]
@@ -237,8 +238,10 @@ def test_inbetween_widget_follows_the_clip_and_redraws_once(model, data, monkeyp
     controls["kept"].value = 2
     assert _image(box) != first
     draws = []
-    real = dw.show_figure
-    monkeypatch.setattr(dw, "show_figure", lambda output, fig: draws.append(fig) or real(output, fig))
+    real = controls_module.show_figure
+    monkeypatch.setattr(
+        controls_module, "show_figure", lambda output, fig: draws.append(fig) or real(output, fig)
+    )
     other = next(i for i in range(len(data)) if int(data.action[i]) != int(data.action[0]))
     controls["clip"].value = other
     assert controls["action"].value == int(data.action[other]) and len(draws) == 1

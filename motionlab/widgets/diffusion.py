@@ -18,7 +18,7 @@ from __future__ import annotations
 
 import numbers
 import time
-from collections.abc import Callable, Sequence
+from collections.abc import Sequence
 from typing import Literal, NamedTuple
 
 import ipywidgets as widgets
@@ -35,7 +35,7 @@ from motionlab.skeleton import JOINT, PARENTS
 from motionlab.validation import check_choice, check_scalar, check_tensor
 from motionlab.viz import GENERATED_COLOR, REAL_COLOR, filmstrip
 from motionlab.viz.stick_figure import Scene, common_extent, draw_stick_figure, keyframe_indices, plot_pose
-from motionlab.widgets.controls import action_dropdown, show_figure
+from motionlab.widgets.controls import action_dropdown, wire
 
 #: The step counts offered for the respaced DDIM schedule (those up to the model's diffusion steps).
 STEP_CHOICES: tuple[int, ...] = (10, 25, 50, 100)
@@ -421,21 +421,6 @@ def _seed_slider(description: str = "seed", value: int = 0) -> widgets.IntSlider
     return widgets.IntSlider(value=value, min=0, max=20, description=description, continuous_update=False)
 
 
-def _wire(
-    output: widgets.Output, draw: Callable[..., Figure], controls: dict[str, widgets.ValueWidget]
-) -> Callable[..., None]:
-    """Draw ``draw(**values)`` into ``output`` now and whenever one of ``controls`` changes; returns the
-    redraw callback (to detach it from a control that redraws by other means)."""
-
-    def redraw(_change: object = None) -> None:
-        show_figure(output, draw(**{name: control.value for name, control in controls.items()}))
-
-    for control in controls.values():
-        control.observe(redraw, names="value")
-    redraw()
-    return redraw
-
-
 def sample_widget(model: MDM, action_names: Sequence[str], fps: float = 15.0) -> widgets.VBox:
     """Pick an action, a seed, the number of DDIM steps and the guidance scale; see the sampled clip and the
     time sampling took. ``fps``: the model's frame rate."""
@@ -451,7 +436,7 @@ def sample_widget(model: MDM, action_names: Sequence[str], fps: float = 15.0) ->
     def draw(**values) -> Figure:
         return sample_figure(model, fps=fps, action_names=action_names, **values)
 
-    _wire(output, draw, controls)
+    wire(output, draw, controls)
     parts = list(controls.values())
     return widgets.VBox([widgets.HBox(parts[:2]), widgets.HBox(parts[2:]), output])
 
@@ -475,7 +460,7 @@ def interpolation_widget(model: MDM, action_names: Sequence[str], fps: float = 1
             model, guidance=GUIDANCE_SCALE, fps=fps, action_names=action_names, **values
         )
 
-    _wire(output, draw, controls)
+    wire(output, draw, controls)
     parts = list(controls.values())
     return widgets.VBox([widgets.HBox(parts[:3]), widgets.HBox(parts[3:]), output])
 
@@ -508,7 +493,7 @@ def inbetween_widget(
             model, data, guidance=GUIDANCE_SCALE, fps=fps, action_names=action_names, **values
         )
 
-    redraw = _wire(output, draw, controls)
+    redraw = wire(output, draw, controls)
     clip.unobserve(redraw, names="value")
 
     def change_clip(change: dict) -> None:
