@@ -231,7 +231,7 @@ class WatchedClient(TimedClient):
         """A short diagnosis of a kernel that stopped answering request ``msg_id``: its CPU use over one
         second, whether it still answers on its control channel, and whether a second request on the shell
         channel is answered and brings the missing reply along (a request stranded in the kernel's socket
-        until the next message woke it)."""
+        until the next message woke it). Each question waits up to 5 s, or the answer limit if shorter."""
         assert self.km is not None and self.kc is not None
         diagnosis: dict[str, Any] = {}
         pid = getattr(getattr(self.km, "provisioner", None), "pid", None)
@@ -241,8 +241,9 @@ class WatchedClient(TimedClient):
             after = _process_cpu_seconds(pid)
             if before is not None and after is not None:
                 diagnosis["cpu_seconds_in_1s"] = round(after - before, 3)
-        diagnosis["control_answers"], _ = await self._ask(self.kc.control_channel, 5.0)
-        diagnosis["shell_answers"], others = await self._ask(self.kc.shell_channel, 5.0)
+        ask_seconds = min(5.0, self.limits.answer_seconds)  # no longer than the request was given
+        diagnosis["control_answers"], _ = await self._ask(self.kc.control_channel, ask_seconds)
+        diagnosis["shell_answers"], others = await self._ask(self.kc.shell_channel, ask_seconds)
         diagnosis["late_reply_came"] = any(m["parent_header"].get("msg_id") == msg_id for m in others)
         return diagnosis
 
