@@ -143,30 +143,30 @@ def test_quat_mul_checker_names_the_mistake(wrong, says) -> None:
     assert result.status == "wrong" and says in result.message, result
 
 
-def _naive_slerp(q0, q1, t):
-    t = torch.as_tensor(t, dtype=q0.dtype).unsqueeze(-1)
+def _naive_slerp(q0, q1, w):
+    w = torch.as_tensor(w, dtype=q0.dtype).unsqueeze(-1)
     q1 = torch.where((q0 * q1).sum(-1, keepdim=True) < 0, -q1, q1)
     omega = torch.acos((q0 * q1).sum(-1, keepdim=True).clamp(-1, 1))
-    return (torch.sin((1 - t) * omega) * q0 + torch.sin(t * omega) * q1) / torch.sin(omega)
+    return (torch.sin((1 - w) * omega) * q0 + torch.sin(w * omega) * q1) / torch.sin(omega)
 
 
-def _long_way_slerp(q0, q1, t):
-    t = torch.as_tensor(t, dtype=q0.dtype).unsqueeze(-1)
+def _long_way_slerp(q0, q1, w):
+    w = torch.as_tensor(w, dtype=q0.dtype).unsqueeze(-1)
     omega = torch.acos((q0 * q1).sum(-1, keepdim=True).clamp(-1, 1))
-    return (torch.sin((1 - t) * omega) * q0 + torch.sin(t * omega) * q1) / torch.sin(omega)
+    return (torch.sin((1 - w) * omega) * q0 + torch.sin(w * omega) * q1) / torch.sin(omega)
 
 
-def _lerp(q0, q1, t):
-    t = torch.as_tensor(t, dtype=q0.dtype).unsqueeze(-1)
-    return (1 - t) * q0 + t * q1
+def _lerp(q0, q1, w):
+    w = torch.as_tensor(w, dtype=q0.dtype).unsqueeze(-1)
+    return (1 - w) * q0 + w * q1
 
 
-def _scalar_t_only(q0, q1, t):
-    return geo.quat_slerp(q0, q1, float(t) if not isinstance(t, torch.Tensor) else float(t.flatten()[0]))
+def _scalar_w_only(q0, q1, w):
+    return geo.quat_slerp(q0, q1, float(w) if not isinstance(w, torch.Tensor) else float(w.flatten()[0]))
 
 
-def _too_fast(q0, q1, t):
-    return geo.quat_slerp(q0, q1, torch.as_tensor(t, dtype=q0.dtype) ** 2)
+def _too_fast(q0, q1, w):
+    return geo.quat_slerp(q0, q1, torch.as_tensor(w, dtype=q0.dtype) ** 2)
 
 
 @pytest.mark.parametrize(
@@ -176,9 +176,9 @@ def _too_fast(q0, q1, t):
         (_lerp, "unit sphere"),
         (_long_way_slerp, "shorter arc"),
         (_naive_slerp, "NaN"),
-        (_scalar_t_only, "(9, 4)"),
+        (_scalar_w_only, "(9, 4)"),
         (_too_fast, "evenly"),
-        (lambda q0, q1, t: q1, "at t = 0.0"),
+        (lambda q0, q1, w: q1, "at w = 0.0"),
     ],
 )
 def test_slerp_checker_names_the_mistake(wrong, says) -> None:

@@ -115,7 +115,7 @@ def test_invalid_euler_orders_raise(order):
 
 
 def test_interpolation_arguments_are_checked():
-    with pytest.raises(ValueError, match="quat_slerp: t contains NaN"):
+    with pytest.raises(ValueError, match="quat_slerp: w contains NaN"):
         g.quat_slerp(Q, Q, torch.tensor([0.1, math.nan]))
     with pytest.raises(ValueError, match="interpolation_paths: n must be an integer >= 2"):
         g.interpolation_paths(Q[0], Q[1], n=1)

@@ -60,9 +60,9 @@ def test_gradcheck_euler(order):
 
 def test_gradcheck_interpolation():
     q0, q1 = random_quats(3, 5), random_quats(3, 6)
-    t = torch.tensor([0.2, 0.5, 0.9], dtype=torch.float64)
-    check(g.quat_slerp, q0, q1, t)
-    check(g.quat_nlerp, q0, q1, t)
+    w = torch.tensor([0.2, 0.5, 0.9], dtype=torch.float64)
+    check(g.quat_slerp, q0, q1, w)
+    check(g.quat_nlerp, q0, q1, w)
 
 
 def test_gradcheck_distances_and_penalties():
@@ -151,11 +151,11 @@ def test_euler_has_finite_gradients_in_gimbal_lock(dtype):
 @pytest.mark.parametrize("dtype", DTYPES)
 def test_interpolation_has_finite_gradients_for_equal_and_opposite_endpoints(dtype):
     q = random_quats(3, 11, dtype)
-    t = torch.tensor([0.0, 0.3, 1.0], dtype=dtype)
+    w = torch.tensor([0.0, 0.3, 1.0], dtype=dtype)
     for other in (q, -q):
-        assert_finite_gradients(g.quat_slerp, q, other, t)
-        assert_finite_gradients(g.quat_nlerp, q, other, t)
-    assert torch.allclose(g.quat_slerp(q, -q, t), q, atol=1e-6)
+        assert_finite_gradients(g.quat_slerp, q, other, w)
+        assert_finite_gradients(g.quat_nlerp, q, other, w)
+    assert torch.allclose(g.quat_slerp(q, -q, w), q, atol=1e-6)
 
 
 def test_normalisation_gradient_is_orthogonal_to_q_and_the_penalty_gradient_is_parallel():

@@ -300,14 +300,14 @@ def test_distances_at_tiny_and_near_half_turn_angles(dtype):
 def test_slerp_matches_scipy(dtype, q, seed):
     q0 = quats(q, dtype)
     q1 = from_scipy(Rotation.random(len(q0), random_state=seed), dtype)
-    t = torch.tensor(np.random.default_rng(seed).uniform(size=len(q0)), dtype=dtype)
+    w = torch.tensor(np.random.default_rng(seed).uniform(size=len(q0)), dtype=dtype)
     expected = np.stack(
         [
             Slerp([0.0, 1.0], to_scipy(torch.stack([a, b])))([float(s)]).as_matrix()[0]
-            for a, b, s in zip(q0, q1, t)
+            for a, b, s in zip(q0, q1, w)
         ]
     )
-    assert_close(g.quat_to_matrix(g.quat_slerp(q0, q1, t)), expected, dtype, scale=4)
+    assert_close(g.quat_to_matrix(g.quat_slerp(q0, q1, w)), expected, dtype, scale=4)
 
 
 def test_interpolation_paths_slerp_has_constant_speed_nlerp_does_not():

@@ -14,15 +14,15 @@ from motionlab.viz.rotations import plot_interpolation, show_interpolation  # no
 
 
 def test_show_interpolation_draws_both_paths_and_slerp_angle_is_linear():
-    fig = show_interpolation(0, 0, 0, 120, 30, -45, t=0.25)
+    fig = show_interpolation(0, 0, 0, 120, 30, -45, w=0.25)
     try:
         sphere_ax, angle_ax = fig.axes[:2]
         labels = [line.get_label() for line in angle_ax.get_lines()]
         assert labels[:2] == ["slerp", "nlerp"]
         slerp, nlerp = angle_ax.get_lines()[:2]
-        t, slerp_angle, nlerp_angle = slerp.get_xdata(), slerp.get_ydata(), nlerp.get_ydata()
-        # slerp: angle from q0 grows linearly in t; nlerp: same endpoints, different speed
-        np.testing.assert_allclose(slerp_angle, slerp_angle[-1] * t, atol=1e-9)
+        w, slerp_angle, nlerp_angle = slerp.get_xdata(), slerp.get_ydata(), nlerp.get_ydata()
+        # slerp: angle from q0 grows linearly in the weight w; nlerp: same endpoints, different speed
+        np.testing.assert_allclose(slerp_angle, slerp_angle[-1] * w, atol=1e-9)
         np.testing.assert_allclose(nlerp_angle[[0, -1]], slerp_angle[[0, -1]], atol=1e-9)
         assert np.abs(nlerp_angle - slerp_angle).max() > 1.0  # degrees
         assert len(sphere_ax.get_lines()) >= 2
@@ -32,7 +32,7 @@ def test_show_interpolation_draws_both_paths_and_slerp_angle_is_linear():
 
 def test_plot_interpolation_checks_its_arguments():
     q = torch.tensor([1.0, 0, 0, 0])
-    with pytest.raises(ValueError, match=r"plot_interpolation: t must be in \[0, 1\], got 1.5"):
+    with pytest.raises(ValueError, match=r"plot_interpolation: w must be in \[0, 1\], got 1.5"):
         plot_interpolation(q, q, 1.5)
     with pytest.raises(ValueError, match=r"plot_interpolation: q1 must be 1-dimensional, got shape \(2, 4\)"):
         plot_interpolation(q, torch.ones(2, 4), 0.5)

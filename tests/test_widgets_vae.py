@@ -105,8 +105,8 @@ def test_interpolation_endpoints_are_the_two_samples(clips, codec_and_windows):
     codec, _, _ = codec_and_windows
     model = _cvae()
     parents = clips.parents
-    for t, seed in ((0.0, 4), (1.0, 9)):
-        fig = show_latent_interpolation(model, codec, parents, action=1, seed_a=4, seed_b=9, t=t, n_frames=2)
+    for w, seed in ((0.0, 4), (1.0, 9)):
+        fig = show_latent_interpolation(model, codec, parents, action=1, seed_a=4, seed_b=9, w=w, n_frames=2)
         try:
             expected = decode_clip(model, codec, prior_code(model, seed), 1).numpy()
             np.testing.assert_allclose(_joint_lines(fig)[0], expected[0], atol=1e-5)
@@ -120,8 +120,8 @@ def test_widget_bad_inputs(clips, codec_and_windows):
     model = _cvae()
     with pytest.raises(ValueError, match=r"decode_clip: action must be in \[0, 5\]"):
         decode_clip(model, codec, torch.zeros(4), 6)
-    with pytest.raises(ValueError, match=r"show_latent_interpolation: t must be in \[0, 1\]"):
-        show_latent_interpolation(model, codec, clips.parents, 0, 1, 2, t=1.5)
+    with pytest.raises(ValueError, match=r"show_latent_interpolation: w must be in \[0, 1\]"):
+        show_latent_interpolation(model, codec, clips.parents, 0, 1, 2, w=1.5)
     with pytest.raises(ValueError, match="prior_code: seed must be at least 0"):
         prior_code(model, -1)
     with pytest.raises(ValueError, match="pose_features: every must be at least 1"):

@@ -62,7 +62,8 @@ from motionlab.validation import check_scalar, integer
 TABLE2_METRICS = ("accuracy", "fid", "diversity", "multimodality")
 
 #: ODMO's Table 2 (CMU MoCap): ``{row: {metric: (mean, 95 % half-width)}}``, accuracy in per cent. Its
-#: ``"-L_es"`` is, by the paper's §4.2.4, "a classic VAE"; the course's -L_es keeps eq. 1's σ² prior.
+#: ``"-L_es"`` is, by the paper's §4.2.4, "a classic VAE"; the course's -L_es keeps eq. 1's prior term, which
+#: pulls the posterior's variance towards ODMO's target variance σ₀².
 PAPER_TABLE2: dict[str, dict[str, tuple[float, float]]] = {
     "real": {
         "accuracy": (98.54, 0.14),

@@ -101,34 +101,34 @@ def _pair_at_angle(angle: float, seed: int) -> tuple[torch.Tensor, torch.Tensor]
 
 def _slerp_endpoints_and_path(fn: Slerp) -> None:
     q0, q1 = _pair_at_angle(2.0, 10)
-    for t, want, name in ((0.0, q0, "q0"), (1.0, q1, "q1")):
-        got = as_result(fn(q0, q1, t), "slerp")
+    for w, want, name in ((0.0, q0, "q0"), (1.0, q1, "q1")):
+        got = as_result(fn(q0, q1, w), "slerp")
         if got.shape != (4,):
             raise Diagnosis(
-                f"single quaternions (4,) and t = {t} should give shape (4,), got {tuple(got.shape)}"
+                f"single quaternions (4,) and w = {w} should give shape (4,), got {tuple(got.shape)}"
             )
         if not close(got, want, 1e-7):
-            raise Diagnosis(f"at t = {t} slerp should return {name}, got {got.tolist()}")
-    t = torch.linspace(0, 1, 9, dtype=torch.float64)
-    got = as_result(fn(q0, q1, t), "slerp")
+            raise Diagnosis(f"at w = {w} slerp should return {name}, got {got.tolist()}")
+    w = torch.linspace(0, 1, 9, dtype=torch.float64)
+    got = as_result(fn(q0, q1, w), "slerp")
     if got.shape != (9, 4):
         raise Diagnosis(
-            f"t of shape (9,) with single quaternions (4,) should give (9, 4), got {tuple(got.shape)}"
+            f"w of shape (9,) with single quaternions (4,) should give (9, 4), got {tuple(got.shape)}"
         )
     norms = got.norm(dim=-1)
     if not close(norms, torch.ones_like(norms), 1e-7):
-        raise Diagnosis("the path leaves the unit sphere: slerp of unit quaternions has norm 1 at every t")
-    want = geo.quat_slerp(q0, q1, t)
+        raise Diagnosis("the path leaves the unit sphere: slerp of unit quaternions has norm 1 at every w")
+    want = geo.quat_slerp(q0, q1, w)
     if close(got, want, 1e-7):
         return
-    if close(got, geo.quat_nlerp(q0, q1, t), 1e-7):
+    if close(got, geo.quat_nlerp(q0, q1, w), 1e-7):
         raise Diagnosis(
             "this is nlerp (normalised linear interpolation): same great circle, but not at constant speed; "
-            "weight q0 and q1 by sin((1 - t)Ω)/sin Ω and sin(tΩ)/sin Ω"
+            "weight q0 and q1 by sin((1 - w)Ω)/sin Ω and sin(wΩ)/sin Ω"
         )
     travelled = geo.quat_geodesic(q0.expand(9, 4), got)
     raise Diagnosis(
-        "the path is not slerp's: the angle from q0 should grow evenly with t, got "
+        "the path is not slerp's: the angle from q0 should grow evenly with w, got "
         f"{[round(math.degrees(a), 1) for a in travelled.tolist()]} degrees"
     )
 
@@ -161,4 +161,5 @@ def _slerp_near_equal(fn: Slerp) -> None:
     "matches motionlab.geometry.quat_slerp: end points, constant speed, the short arc, almost equal inputs",
 )
 def check_slerp(fn: Slerp) -> CheckResult:
-    """Check a slerp ``fn(q0, q1, t)`` of unit quaternions ``(..., 4)`` with a number or tensor ``t``."""
+    """Check a slerp ``fn(q0, q1, w)`` of unit quaternions ``(..., 4)`` with an interpolation weight ``w``, a
+    number or a tensor."""

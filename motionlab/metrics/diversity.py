@@ -10,11 +10,12 @@ The norm is over the whole flattened sequence (not per frame), and the mean is o
 ``i ≠ j``, which equals the mean over unordered pairs (``scipy.spatial.distance.pdist``).
 
 **Diversity** and **Multimodality** (Guo et al. 2020, "Action2Motion"; also used by ODMO) work on
-classifier features ``(N, D)``. Diversity draws ``S_d`` index pairs and averages the feature distance;
-multimodality does the same within each action class with ``S_l`` pairs per class and averages over
-classes. As in the authors' evaluation code, both indices of a pair are drawn uniformly *with
+classifier features ``(N, D)``. Diversity draws ``N_d`` index pairs and averages the feature distance;
+multimodality does the same within each action class with ``N_l`` pairs per class and averages over
+classes (the course's ``N_d``, ``N_l`` are Action2Motion's ``S_d``, ``S_l``; ``S`` is the course's number of
+diffusion steps). As in the authors' evaluation code, both indices of a pair are drawn uniformly *with
 replacement*, so a pair can repeat a motion (distance 0): the expected value is
-:math:`\frac{1}{N^2}\sum_{i,j}\lVert f_i - f_j\rVert`. The papers use ``S_d = 200`` and ``S_l = 20``.
+:math:`\frac{1}{N^2}\sum_{i,j}\lVert f_i - f_j\rVert`. The papers use ``N_d = 200`` and ``N_l = 20``.
 
 **n-APD** (Lu et al. 2022, "ODMO"): the APD of all generated sequences of one action class, divided by the
 APD of the real sequences of that class, averaged over classes. 1 means "as diverse as the data".
@@ -30,9 +31,9 @@ from scipy.spatial.distance import pdist
 
 from motionlab.validation import ArrayLike, RngLike, as_float_array, as_labels, as_rng, check_scalar
 
-#: Pairs drawn by :func:`diversity` in Action2Motion's protocol (``S_d``).
+#: Pairs drawn by :func:`diversity` in Action2Motion's protocol (``N_d``).
 DIVERSITY_PAIRS = 200
-#: Pairs per class drawn by :func:`multimodality` in Action2Motion's protocol (``S_l``).
+#: Pairs per class drawn by :func:`multimodality` in Action2Motion's protocol (``N_l``).
 MULTIMODALITY_PAIRS = 20
 
 
@@ -65,7 +66,7 @@ def diversity(features: ArrayLike, n_pairs: int, rng: RngLike) -> float:
 
     Args:
         features: classifier features ``(N, D)`` of ``N >= 2`` generated motions (any classes).
-        n_pairs: ``S_d``, the number of pairs (:data:`DIVERSITY_PAIRS` = 200 in the papers).
+        n_pairs: ``N_d``, the number of pairs (:data:`DIVERSITY_PAIRS` = 200 in the papers).
         rng: a ``numpy.random.Generator`` or an integer seed; the same seed gives the same value.
     """
     func = "diversity"
@@ -83,7 +84,7 @@ def multimodality(features: ArrayLike, labels: ArrayLike, n_pairs: int, rng: Rng
     Args:
         features: classifier features ``(N, D)``.
         labels: action class of each row ``(N,)``; every class present needs at least 2 rows.
-        n_pairs: ``S_l``, pairs per class (:data:`MULTIMODALITY_PAIRS` = 20 in the papers).
+        n_pairs: ``N_l``, pairs per class (:data:`MULTIMODALITY_PAIRS` = 20 in the papers).
         rng: a ``numpy.random.Generator`` or an integer seed. Classes are visited in sorted order.
     """
     func = "multimodality"

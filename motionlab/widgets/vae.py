@@ -74,15 +74,15 @@ def show_latent_interpolation(
     action: int,
     seed_a: int,
     seed_b: int,
-    t: float,
+    w: float,
     action_names: Sequence[str] | None = None,
     n_frames: int = 5,
     fps: float = 30.0,
 ) -> Figure:
-    """Keyframes of the clip decoded at ``(1 - t) z_a + t z_b`` for ``action``; ``z_a``, ``z_b`` from
-    ``seed_a``, ``seed_b``."""
-    check_scalar(t, "t", "show_latent_interpolation", minimum=0.0, maximum=1.0)
-    z = interpolate_codes(prior_code(model, seed_a), prior_code(model, seed_b), float(t))[0]
+    """Keyframes of the clip decoded at ``(1 - w) z_a + w z_b`` for ``action``, with ``w`` the interpolation
+    weight and ``z_a``, ``z_b`` from ``seed_a``, ``seed_b``."""
+    check_scalar(w, "w", "show_latent_interpolation", minimum=0.0, maximum=1.0)
+    z = interpolate_codes(prior_code(model, seed_a), prior_code(model, seed_b), float(w))[0]
     positions = decode_clip(model, codec, z, action)
-    title = f"'{_action_name(action, action_names)}': t = {float(t):.2f} between seeds {seed_a} and {seed_b}"
+    title = f"'{_action_name(action, action_names)}': w = {float(w):.2f} between seeds {seed_a} and {seed_b}"
     return filmstrip(positions, parents, n_frames, fps=fps, color=GENERATED_COLOR, title=title)

@@ -25,13 +25,13 @@ def _sin_ratio(a: torch.Tensor, omega: torch.Tensor) -> torch.Tensor:
     return a * torch.sinc(a * omega / math.pi) / torch.sinc(omega / math.pi)
 
 
-def my_slerp(q0: torch.Tensor, q1: torch.Tensor, t: torch.Tensor | float) -> torch.Tensor:
+def my_slerp(q0: torch.Tensor, q1: torch.Tensor, w: torch.Tensor | float) -> torch.Tensor:
     """Spherical linear interpolation of unit quaternions (..., 4) along the shorter arc.
 
-    t: a number, or a tensor that broadcasts against the leading dimensions (t of shape (n,) with single
-    quaternions gives (n, 4)).
+    w: the interpolation weight (0 at q0, 1 at q1), a number or a tensor that broadcasts against the leading
+    dimensions (w of shape (n,) with single quaternions gives (n, 4)).
     """
-    t = torch.as_tensor(t, dtype=q0.dtype).unsqueeze(-1)
+    w = torch.as_tensor(w, dtype=q0.dtype).unsqueeze(-1)
     q1 = torch.where((q0 * q1).sum(-1, keepdim=True) < 0, -q1, q1)  # the shorter arc
     omega = torch.acos((q0 * q1).sum(-1, keepdim=True).clamp(-1.0, 1.0))
-    return _sin_ratio(1 - t, omega) * q0 + _sin_ratio(t, omega) * q1
+    return _sin_ratio(1 - w, omega) * q0 + _sin_ratio(w, omega) * q1

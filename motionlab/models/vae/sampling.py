@@ -40,9 +40,9 @@ def sample_clips(
     return codec.to_positions(model.decode(z, labels))
 
 
-def interpolate_codes(z0: Tensor, z1: Tensor, t: Tensor | float) -> Tensor:
-    """Straight-line interpolation ``(1 - t) z0 + t z1``: codes ``(D,)`` and ``t`` scalar or ``(K,)`` -> ``(K,
-    D)``."""
+def interpolate_codes(z0: Tensor, z1: Tensor, w: Tensor | float) -> Tensor:
+    """Straight-line interpolation ``(1 - w) z0 + w z1``: codes ``(D,)`` and the weight ``w`` scalar or
+    ``(K,)`` -> ``(K, D)``."""
     check_tensor(z0, "z0", "interpolate_codes", ndim=1)
     check_tensor(z1, "z1", "interpolate_codes", ndim=1)
     if z0.shape != z1.shape:
@@ -50,5 +50,5 @@ def interpolate_codes(z0: Tensor, z1: Tensor, t: Tensor | float) -> Tensor:
             f"interpolate_codes: z0 and z1 must be codes of one size, got {tuple(z0.shape)} and "
             f"{tuple(z1.shape)}"
         )
-    t = torch.as_tensor(t, dtype=z0.dtype).reshape(-1, 1)
-    return (1 - t) * z0 + t * z1
+    w = torch.as_tensor(w, dtype=z0.dtype).reshape(-1, 1)
+    return (1 - w) * z0 + w * z1
