@@ -1,6 +1,6 @@
 """The continuous 6D representation of Zhou et al. (CVPR 2019) and Gram–Schmidt orthonormalisation.
 
-A rotation matrix is stored as its first two columns, ``(c0, c1)`` concatenated into shape ``(..., 6)``.
+A rotation matrix is stored as its first two columns, ``(g1, g2)`` concatenated into shape ``(..., 6)``.
 Going back, Gram–Schmidt turns any two non-parallel 3-vectors into the first two columns of a rotation
 and the cross product supplies the third. Unlike quaternions (double cover) or Euler angles and rotation
 vectors (wrap-arounds), this map from rotations to ``R^6`` is continuous, which is why networks that
@@ -18,7 +18,7 @@ def gram_schmidt(columns: torch.Tensor) -> torch.Tensor:
     """Rotation matrices ``(..., 3, 3)`` from the first two columns of ``columns`` (``(..., 3, 2)`` or ``(...,
     3, 3)``).
 
-    ``b0 = c0 / |c0|``, ``b1 = normalize(c1 - (b0·c1) b0)``, ``b2 = b0 × b1``. A third input column is
+    ``m1 = g1 / |g1|``, ``m2 = normalize(g2 - (m1·g2) m1)``, ``m3 = m1 × m2``. A third input column is
     ignored: the result is always a proper rotation (``det = +1``), and equals classical Gram–Schmidt on
     all three columns whenever ``det(columns) > 0``. Raises ``ValueError`` when the first column is zero,
     the second is zero or parallel to it (to rounding: then its direction is meaningless), or the input
@@ -34,19 +34,19 @@ def gram_schmidt(columns: torch.Tensor) -> torch.Tensor:
     return _orthonormal_frame(columns[..., :, 0], columns[..., :, 1], "gram_schmidt")
 
 
-def _orthonormal_frame(c0: torch.Tensor, c1: torch.Tensor, where: str) -> torch.Tensor:
-    """The rotation whose first column is along ``c0`` and whose second lies in the ``c0, c1`` plane."""
-    norm0 = torch.linalg.vector_norm(c0, dim=-1, keepdim=True)
+def _orthonormal_frame(g1: torch.Tensor, g2: torch.Tensor, where: str) -> torch.Tensor:
+    """The rotation whose first column is along ``g1`` and whose second lies in the ``g1, g2`` plane."""
+    norm0 = torch.linalg.vector_norm(g1, dim=-1, keepdim=True)
     check_positive_finite(norm0[..., 0], "the norm of the first column", where)
-    b0 = c0 / norm0
-    u1 = c1 - (b0 * c1).sum(-1, keepdim=True) * b0
-    # A second pass keeps b1 orthogonal to b0 to rounding even when c1 is nearly parallel to c0.
-    u1 = u1 - (b0 * u1).sum(-1, keepdim=True) * b0
-    norm1 = torch.linalg.vector_norm(u1, dim=-1, keepdim=True)
-    parallel = norm1 <= 16 * torch.finfo(c1.dtype).eps * torch.linalg.vector_norm(c1, dim=-1, keepdim=True)
+    m1 = g1 / norm0
+    u2 = g2 - (m1 * g2).sum(-1, keepdim=True) * m1
+    # A second pass keeps m2 orthogonal to m1 to rounding even when g2 is nearly parallel to g1.
+    u2 = u2 - (m1 * u2).sum(-1, keepdim=True) * m1
+    norm1 = torch.linalg.vector_norm(u2, dim=-1, keepdim=True)
+    parallel = norm1 <= 16 * torch.finfo(g2.dtype).eps * torch.linalg.vector_norm(g2, dim=-1, keepdim=True)
     check_none(parallel[..., 0], "the second column is parallel to the first (or zero)", where)
-    b1 = u1 / norm1
-    return torch.stack([b0, b1, torch.linalg.cross(b0, b1, dim=-1)], dim=-1)
+    m2 = u2 / norm1
+    return torch.stack([m1, m2, torch.linalg.cross(m1, m2, dim=-1)], dim=-1)
 
 
 def matrix_to_sixd(matrix: torch.Tensor) -> torch.Tensor:
