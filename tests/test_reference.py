@@ -185,3 +185,29 @@ def test_a_reference_is_found_by_its_data_shape_not_its_data_bits(
     assert result.loaded_from_cache and result.path.parent == tmp_path / "reference"
     assert not is_cached("tiny_reference", MODEL_CONFIG, CFG, {"x": "fedcba9876543210-(33, 4)", "window": 8})
     assert not is_cached("tiny_reference", MODEL_CONFIG, CFG, {**here, "window": 9})
+
+
+def _values_of(key: str, tree: object) -> list[object]:
+    if isinstance(tree, dict):
+        return [v for k, v in tree.items() if k == key] + [
+            x for v in tree.values() for x in _values_of(key, v)
+        ]
+    if isinstance(tree, list):
+        return [x for v in tree for x in _values_of(key, v)]
+    return []
+
+
+def test_the_shipped_models_trained_on_synthetic_data_name_the_generator_version_of_today() -> None:
+    """A run on the synthetic benchmark whose identity names the generator's version is found only under
+    today's version: a manifest with another one would be passed over, and the course would retrain that
+    model quietly."""
+    from motionlab.data.synthetic import GENERATOR_VERSION
+
+    named = {
+        path.name: versions
+        for path in sorted(reference.REFERENCE_DIR.glob("*.json"))
+        if (versions := _values_of("generator", json.loads(path.read_text())["config"]))
+    }
+    assert named, "no shipped model names the generator's version (the MoGlow runs of chapter 06 do)"
+    stale = {name: versions for name, versions in named.items() if set(versions) != {GENERATOR_VERSION}}
+    assert not stale, f"trained under another generator version than {GENERATOR_VERSION}: {stale}"
