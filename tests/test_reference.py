@@ -211,3 +211,17 @@ def test_the_shipped_models_trained_on_synthetic_data_name_the_generator_version
     assert named, "no shipped model names the generator's version (the MoGlow runs of chapter 06 do)"
     stale = {name: versions for name, versions in named.items() if set(versions) != {GENERATOR_VERSION}}
     assert not stale, f"trained under another generator version than {GENERATOR_VERSION}: {stale}"
+
+
+def test_a_run_without_a_reference_is_trained_and_named_as_trained_here(
+    shipped: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    other = replace(CFG, steps=50)  # a configuration no reference model has
+    trained = train_or_load("tiny_other", MODEL_CONFIG, make_model(), loss_fn, data(), other)
+    assert not trained.loaded_from_cache
+    run()  # loaded from its reference: not listed
+    assert reference.trained_here() == ["tiny_other"]
+    monkeypatch.setenv("MOTIONLAB_RETRAIN", "1")  # a build that retrains everything lists nothing
+    reference.trained_log().unlink()
+    run()
+    assert reference.trained_here() == []

@@ -108,3 +108,18 @@ def test_front_page(tmp_path):
     assert "The five generators on one benchmark" in page and "accuracy against diversity" in page
     assert "<details>" in page and "common.ODMO.fid" in page
     assert not re.search(r"""(src|href)=["']https?://""", page)
+
+
+def test_the_front_page_names_the_models_a_reference_build_trained_itself(tmp_path):
+    _executed(tmp_path / "01_intro.ipynb", "01 · Intro", tagged=False)
+    results = {**RESULTS, "models": "reference", "build": {"trained_here": ["fixed_length_glow", "moglow"]}}
+    page = write_front_page(
+        tmp_path, results, [ChapterStatus("01_intro", 10.0)], {"01_intro": 30.0}
+    ).read_text()
+    assert "the shipped reference models loaded" in page
+    assert "as no reference model has their configuration: fixed_length_glow, moglow." in page
+    quiet = {**RESULTS, "models": "reference", "build": {"trained_here": []}}
+    page = write_front_page(
+        tmp_path, quiet, [ChapterStatus("01_intro", 10.0)], {"01_intro": 30.0}
+    ).read_text()
+    assert "no reference model has" not in page

@@ -267,7 +267,13 @@ def _settings_line(results: dict) -> str:
     }.get(str(results.get("models")), "models of unknown origin")
     numerics = results.get("numerics") or {}
     path = ", ".join(f"{k}={v}" for k, v in sorted(numerics.items())) or "the machine's own numerical path"
-    return html.escape(f"Models: {models}; base training seed {results.get('base_seed', 0)}; {path}.")
+    trained = (results.get("build") or {}).get("trained_here") or []
+    extra = (
+        f" Trained in this build, as no reference model has their configuration: {', '.join(trained)}."
+        if trained and results.get("models") == "reference"
+        else ""
+    )
+    return html.escape(f"Models: {models}; base training seed {results.get('base_seed', 0)}; {path}.{extra}")
 
 
 def write_front_page(

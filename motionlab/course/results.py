@@ -177,12 +177,17 @@ def update_notebook(name: str, update: Callable[[dict[str, Any]], None]) -> None
         save_results(data)
 
 
-def record_wall_time(seconds: float, notebooks: int) -> None:
+def record_wall_time(seconds: float, notebooks: int, trained_here: list[str] | None = None) -> None:
     """Record how long the last ``make course`` took from its first notebook's start to its last one's end
-    (notebooks run two at a time, so this is less than the sum of their seconds)."""
+    (notebooks run two at a time, so this is less than the sum of their seconds), and the runs it trained
+    although the reference models were in use (:func:`motionlab.train.reference.trained_here`)."""
     with _results_lock():
         data = load_results()
-        data["build"] = {"wall_seconds": round(seconds, 1), "notebooks": notebooks}
+        data["build"] = {
+            "wall_seconds": round(seconds, 1),
+            "notebooks": notebooks,
+            "trained_here": list(trained_here or []),
+        }
         save_results(data)
 
 

@@ -325,11 +325,15 @@ def build(notebook_dir: Path, only: list[str] | None = None) -> list[ChapterRun]
         )
         return run
 
+    reference.trained_log().unlink(missing_ok=True)
     started = time.perf_counter()
     done = execute_all(chapters, execute, parallel())
     runs = [done[path.stem] for path in chapters]
-    record_wall_time(time.perf_counter() - started, len(runs))
+    trained = reference.trained_here()
+    record_wall_time(time.perf_counter() - started, len(runs), trained)
     index = write_index(out_dir, runs)
+    if trained:
+        print(f"[course] trained here, no reference model of their configuration: {', '.join(trained)}")
     print(f"[course] report: {index}\n[course] results: {results_path()}")
     return runs
 

@@ -178,5 +178,6 @@ def train_or_load(
         },
     )
     reference.note_use(name, identity)
+    reference.note_trained(name)
     resume.remove()
     return replace(result, path=path)

@@ -246,6 +246,29 @@ def note_use(name: str, identity: dict[str, Any]) -> None:
         handle.write(f"{name}-{config_hash(name, identity)}\n")
 
 
+def trained_log() -> Path:
+    """The build's list of the runs it trained although the reference models were in use (one name a line):
+    runs that have no reference model of their configuration."""
+    return config.checkpoint_dir() / "trained-beside-references.txt"
+
+
+def note_trained(name: str) -> None:
+    """Add run ``name`` to :func:`trained_log` when the reference models are in use (one appended write:
+    worker processes can share it)."""
+    if not in_use():
+        return
+    log = trained_log()
+    log.parent.mkdir(parents=True, exist_ok=True)
+    with log.open("a") as handle:
+        handle.write(f"{name}\n")
+
+
+def trained_here() -> list[str]:
+    """The runs in :func:`trained_log`, sorted, each once."""
+    log = trained_log()
+    return sorted(set(log.read_text().split())) if log.exists() else []
+
+
 def trained_on() -> dict[str, Any]:
     """Where and when a model is being trained: machine, threads, library versions, commit, date."""
     return {
