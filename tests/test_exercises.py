@@ -449,7 +449,7 @@ def _dct(scale_zero=None, scale=None, transpose=False, fixed_n=None, kind=2):
         (_dct(scale_zero=math.sqrt(2 / 8)), "row 0"),
         (_dct(scale_zero=1.0, scale=1.0), "scale"),
         (_dct(kind=1), "cosines are wrong"),
-        (_dct(fixed_n=8), "N = n_frames"),
+        (_dct(fixed_n=8), "T = n_frames"),
     ],
 )
 def test_dct_checker_names_the_mistake(wrong, says) -> None:

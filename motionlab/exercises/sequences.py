@@ -36,17 +36,17 @@ def _dct_values(fn: DCTMatrix) -> None:
         raise Diagnosis("the matrix is transposed: row u should be frequency u, column t frame t (a = U h)")
     rows_right = [u for u in range(n) if close(got[u], want[u], 1e-6)]
     if rows_right == list(range(1, n)):
-        raise Diagnosis("row 0 (the constant) is off: its scale is sqrt(1/N), the other rows' sqrt(2/N)")
+        raise Diagnosis("row 0 (the constant) is off: its scale is sqrt(1/T), the other rows' sqrt(2/T)")
     ratio = got / want
     if torch.allclose(ratio[1:], ratio[1, 0].expand_as(ratio[1:]), rtol=1e-6):
         raise Diagnosis(
-            "the cosines are right but not their scale: s_0 = sqrt(1/N) and s_u = sqrt(2/N) make the rows "
+            "the cosines are right but not their scale: s_0 = sqrt(1/T) and s_u = sqrt(2/T) make the rows "
             "orthonormal"
         )
     gram = got @ got.T
     orthonormal = close(gram, torch.eye(n, dtype=gram.dtype), 1e-6)
     raise Diagnosis(
-        "the cosines are wrong: U[u, t] = s_u cos(pi (2t + 1) u / (2N))"
+        "the cosines are wrong: U[u, t] = s_u cos(pi (2t + 1) u / (2T))"
         + ("" if orthonormal else "; your rows are not orthonormal either (U U^T should be I)")
     )
 
@@ -56,7 +56,7 @@ def _dct_other_sizes(fn: DCTMatrix) -> None:
         got = as_result(fn(n), "the DCT matrix").to(torch.float64)
         if got.shape != (n, n) or not close(got, dct_matrix(n, dtype=torch.float64), 1e-6):
             raise Diagnosis(
-                f"dct_matrix({n}) is wrong (right for 8 frames): use N = n_frames, not a constant"
+                f"dct_matrix({n}) is wrong (right for 8 frames): use T = n_frames, not a constant"
             )
 
 

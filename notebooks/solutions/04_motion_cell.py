@@ -31,7 +31,7 @@ def my_impact_weights(reach: np.ndarray, leaf_floor: float) -> np.ndarray:
 
 
 def my_motion_cell_step(word, state, eps, prior, posterior, decode, transition):
-    """One teacher-forced step over a motion word: (word_hat (B, W), kl (B,), next_state (B, D_h)).
+    """One teacher-forced step over a motion word: (word_hat (B, D_w), kl (B,), next_state (B, D_h)).
 
     Draw z_t from the posterior, which reads the real word, decode it with the state before the word, score
     the posterior against the learned prior with the closed-form Gaussian KL, and update the state from the

@@ -230,10 +230,10 @@ def cell_step(
     :class:`MotionCell`, its control, word dropping and the batching that takes work out of the loop.
 
     Args:
-        word: the real word ``w_t`` (or its features) ``(B, W)``; state: ``h_{t-1}`` ``(B, H)``; eps: noise
-            ``N(0, I)`` ``(B, Z)`` for the draw from the posterior.
-        prior: ``h -> (mu_p, logvar_p)``, each ``(B, Z)``; posterior: ``(w, h) -> (mu_q, logvar_q)``;
-        decode: ``(z, h) -> w~`` the reconstructed word; transition: ``(w, z, h) -> h_t`` ``(B, H)``.
+        word: the real word ``w_t`` (or its features) ``(B, D_w)``; state: ``h_{t-1}`` ``(B, D_h)``; eps:
+            noise ``N(0, I)`` ``(B, D_z)`` for the draw from the posterior.
+        prior: ``h -> (mu_p, logvar_p)``, each ``(B, D_z)``; posterior: ``(w, h) -> (mu_q, logvar_q)``;
+        decode: ``(z, h) -> w~`` the reconstructed word; transition: ``(w, z, h) -> h_t`` ``(B, D_h)``.
 
     Returns:
         ``(w~_t, kl, h_t)``: the word decoded from ``z_t ~ q(z_t | w_t, h_{t-1})``, the KL from that
