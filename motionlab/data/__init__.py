@@ -20,8 +20,7 @@ package, once as ``__main__``).
 
 from __future__ import annotations
 
-import importlib
-from typing import Any
+from motionlab.lazy import lazy_exports
 
 _EXPORTS = {
     "MotionSet": "motionlab.data.store",
@@ -39,14 +38,4 @@ _EXPORTS = {
 
 __all__ = sorted(_EXPORTS)
 
-
-def __getattr__(name: str) -> Any:
-    if name not in _EXPORTS:
-        raise AttributeError(f"module 'motionlab.data' has no attribute {name!r}")
-    value = getattr(importlib.import_module(_EXPORTS[name]), name)
-    globals()[name] = value
-    return value
-
-
-def __dir__() -> list[str]:
-    return sorted(set(globals()) | set(__all__))
+__getattr__, __dir__ = lazy_exports(__name__, _EXPORTS)

@@ -20,50 +20,39 @@ Modules: :mod:`~motionlab.exercises.rotations` (chapter 01), :mod:`~motionlab.ex
 
 from __future__ import annotations
 
-import importlib
-from typing import Any
+from motionlab.lazy import lazy_exports
 
 #: Each public name with the module that holds it. A chapter imports only its own checkers' modules (and
 #: what they check against): ``from motionlab.exercises import check_slerp`` loads the rotations module
 #: alone, not the models of every chapter.
-_MODULE_OF: dict[str, str] = {
-    "CheckResult": "checking",
-    "check_ancestral_step": "diffusion",
-    "check_apd": "metrics",
-    "check_bone_length_variation": "mocap",
-    "check_chain_positions": "kinematics",
-    "check_contrastive_loss": "sequences",
-    "check_coupling_forward": "flows",
-    "check_coupling_inverse": "flows",
-    "check_covariance_prior": "vae",
-    "check_dct_matrix": "sequences",
-    "check_fid": "metrics",
-    "check_foot_skating": "skating",
-    "check_gaussian_kl": "vae",
-    "check_given_trajectories": "sequences",
-    "check_impact_weights": "hierarchy",
-    "check_keep_mask": "autoregressive",
-    "check_mirror": "mocap",
-    "check_motion_cell_step": "vrnn",
-    "check_negative_elbo": "vae",
-    "check_prior_kl": "sequences",
-    "check_quat_mul": "rotations",
-    "check_reparameterize": "vae",
-    "check_sample_loop": "autoregressive",
-    "check_slerp": "rotations",
-    "check_subtree_reach": "hierarchy",
+_EXPORTS: dict[str, str] = {
+    "CheckResult": "motionlab.exercises.checking",
+    "check_ancestral_step": "motionlab.exercises.diffusion",
+    "check_apd": "motionlab.exercises.metrics",
+    "check_bone_length_variation": "motionlab.exercises.mocap",
+    "check_chain_positions": "motionlab.exercises.kinematics",
+    "check_contrastive_loss": "motionlab.exercises.sequences",
+    "check_coupling_forward": "motionlab.exercises.flows",
+    "check_coupling_inverse": "motionlab.exercises.flows",
+    "check_covariance_prior": "motionlab.exercises.vae",
+    "check_dct_matrix": "motionlab.exercises.sequences",
+    "check_fid": "motionlab.exercises.metrics",
+    "check_foot_skating": "motionlab.exercises.skating",
+    "check_gaussian_kl": "motionlab.exercises.vae",
+    "check_given_trajectories": "motionlab.exercises.sequences",
+    "check_impact_weights": "motionlab.exercises.hierarchy",
+    "check_keep_mask": "motionlab.exercises.autoregressive",
+    "check_mirror": "motionlab.exercises.mocap",
+    "check_motion_cell_step": "motionlab.exercises.vrnn",
+    "check_negative_elbo": "motionlab.exercises.vae",
+    "check_prior_kl": "motionlab.exercises.sequences",
+    "check_quat_mul": "motionlab.exercises.rotations",
+    "check_reparameterize": "motionlab.exercises.vae",
+    "check_sample_loop": "motionlab.exercises.autoregressive",
+    "check_slerp": "motionlab.exercises.rotations",
+    "check_subtree_reach": "motionlab.exercises.hierarchy",
 }
 
-__all__ = sorted(_MODULE_OF)
+__all__ = sorted(_EXPORTS)
 
-
-def __getattr__(name: str) -> Any:
-    if name not in _MODULE_OF:
-        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
-    value = getattr(importlib.import_module(f"{__name__}.{_MODULE_OF[name]}"), name)
-    globals()[name] = value
-    return value
-
-
-def __dir__() -> list[str]:
-    return sorted(set(globals()) | set(_MODULE_OF))
+__getattr__, __dir__ = lazy_exports(__name__, _EXPORTS)
