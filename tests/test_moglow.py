@@ -322,6 +322,11 @@ def test_linear_predictor_recovers_a_linear_system_and_is_a_flow_layer():
     rms = model.initialize(pose, control)
     assert rms < 2e-3 and model.linear.fit_rms == rms
     assert "fit_rms" not in str(list(model.state_dict()))
+    fitted = {key: value.clone() for key, value in model.linear.state_dict().items()}
+    assert model.initialize(pose, control, solve=False) == pytest.approx(
+        rms, rel=1e-9
+    )  # measured, not refitted
+    assert all(torch.equal(value, fitted[key]) for key, value in model.linear.state_dict().items())
     assert torch.allclose(model.linear.weight, weight, atol=0.02)
     assert torch.allclose(model.linear.bias, torch.full((6,), 0.5, dtype=torch.float64), atol=0.02)
     layer = model.linear.eval()

@@ -28,12 +28,11 @@ def _prior_tensor(
     if not isinstance(value, torch.Tensor):
         value = torch.tensor(float(value), dtype=like.dtype, device=like.device)
     check_tensor(value, name, where)
-    try:
-        torch.broadcast_shapes(value.shape, like.shape)
-    except RuntimeError as exc:
+    # checked by hand: torch.broadcast_shapes imports sympy (a third of a second) the first time it runs
+    if any(a != b and 1 not in (a, b) for a, b in zip(reversed(value.shape), reversed(like.shape))):
         raise ValueError(
             f"{where}: {name} of shape {tuple(value.shape)} does not broadcast to {tuple(like.shape)}"
-        ) from exc
+        )
     return value
 
 

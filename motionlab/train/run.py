@@ -11,8 +11,9 @@ data (the cache key's data part). Its caching and training are written here once
 
 ``build``, ``loss`` and ``batches`` are picklable callables (module-level functions, ``functools.partial``
 of them, bound methods of frozen dataclasses), so a worker process can run the run
-(:func:`motionlab.train.many.train_many`). ``loss`` and ``batches`` are called only when the run trains: a
-loss may need a frozen network, and batches may need data, that loading the cached weights does not.
+(:func:`motionlab.train.many.train_many`). ``loss``, ``batches`` and ``initialize`` are called only when the
+run trains: a loss may need a frozen network, batches may need data, and a data-dependent initialisation
+(MoGlow's least-squares predictor) costs time, that loading the cached weights does not.
 """
 
 from __future__ import annotations
@@ -58,6 +59,8 @@ class Run:
         train_config: the :class:`~motionlab.train.TrainConfig`: the cache key's training part; its
             ``seed`` seeds the batches and the training loop's random draws.
         data: what defines the training data (fingerprints, window length, ...): the cache key's data part.
+        initialize: ``initialize(model)``, a data-dependent initialisation of the built model before it
+            trains (``None``: none); a model loaded from the cache has its result in its weights.
     """
 
     name: str
@@ -67,6 +70,7 @@ class Run:
     batches: Callable[[nn.Module], BatchSource]
     train_config: TrainConfig
     data: Any = None
+    initialize: Callable[[nn.Module], Any] | None = None
 
     def __post_init__(self) -> None:
         if not isinstance(self.name, str) or not self.name:
@@ -90,6 +94,8 @@ class Run:
         cached = load_cached(self.name, self.model, self.train_config, self.data, model)
         if cached is not None:
             return model, cached
+        if self.initialize is not None:
+            self.initialize(model)
         result = train_or_load(
             self.name,
             self.model,

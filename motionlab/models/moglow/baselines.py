@@ -63,10 +63,12 @@ class GaussianAR(AutoregressiveModel):
             *LOG_STD_RANGE
         )
 
-    def initialize(self, pose: Tensor, control: Tensor, seed: int = 0) -> float:
+    def initialize(self, pose: Tensor, control: Tensor, seed: int = 0, solve: bool = True) -> float:
         """Fit the linear predictor (:mod:`.linear`) to training windows; returns its RMS residual (kept as
-        ``self.linear.fit_rms``)."""
-        return self.linear.fit(pose, control, self.cfg.history, self.cfg.dropout, seed, rescale=True)
+        ``self.linear.fit_rms``). ``solve=False``: measure the residual of the predictor as loaded."""
+        return self.linear.fit(
+            pose, control, self.cfg.history, self.cfg.dropout, seed, rescale=True, solve=solve
+        )
 
     def forward(self, pose: Tensor, control: Tensor, generator: torch.Generator | None = None) -> Tensor:
         """Log-likelihood ``(B,)`` (nats) of frames ``H .. T-1``, as :meth:`MoGlow.forward` (history dropout

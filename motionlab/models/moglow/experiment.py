@@ -186,17 +186,18 @@ def load_data(cfg: ExperimentConfig, benchmark: Benchmark | None = None) -> Prep
 
 
 def build_autoregressive(
-    model_class: type[MoGlow] | type[GaussianAR],
-    model_cfg: MoGlowConfig | GaussianARConfig,
-    data: PreparedData,
-    seed: int,
+    model_class: type[MoGlow] | type[GaussianAR], model_cfg: MoGlowConfig | GaussianARConfig, seed: int
 ) -> MoGlow | GaussianAR:
-    """MoGlow or the Gaussian baseline, its weights drawn from ``seed``, its linear predictor fitted to the
-    training windows (the fit's RMS residual, in standard units, stays on the model as
-    ``model.linear.fit_rms``)."""
-    model = build_seeded(partial(model_class, model_cfg), seed)
+    """MoGlow or the Gaussian baseline, its weights drawn from ``seed`` (its linear predictor is fitted by
+    :func:`fit_predictor` when it trains)."""
+    return build_seeded(partial(model_class, model_cfg), seed)
+
+
+def fit_predictor(data: PreparedData, model: MoGlow | GaussianAR) -> None:
+    """Fit the linear predictor of a model about to train to the training windows (the fit's RMS residual,
+    in standard units, stays on the model as ``model.linear.fit_rms``; a model loaded from the cache has
+    the fitted predictor in its weights, and ``model.initialize(pose, control, solve=False)`` measures it)."""
     model.initialize(data.train.pose, data.train.control)
-    return model
 
 
 def training_batches(data: PreparedData, model: nn.Module) -> TensorBatches:
@@ -217,11 +218,12 @@ def autoregressive_run(
     return Run(
         name,
         model_cfg,
-        partial(build_autoregressive, model_class, model_cfg, data),
+        partial(build_autoregressive, model_class, model_cfg),
         given(nll_per_frame_loss),
         partial(training_batches, data),
         train_config,
         data_identity,
+        partial(fit_predictor, data),
     )
 
 

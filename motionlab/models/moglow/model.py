@@ -96,14 +96,18 @@ class MoGlow(AutoregressiveModel):
         self.flow = FlowSequence(layers)
         self.prior = StandardNormal()
 
-    def initialize(self, pose: Tensor, control: Tensor, seed: int = 0) -> float:
-        """Fit the linear predictor (:mod:`.linear`) to training windows; returns its RMS residual.
-
-        The residual stays available as ``self.linear.fit_rms`` (also on a model loaded from the cache
-        after this call, as :mod:`.experiment`'s runs do).
-        """
+    def initialize(self, pose: Tensor, control: Tensor, seed: int = 0, solve: bool = True) -> float:
+        """Fit the linear predictor (:mod:`.linear`) to training windows; returns its RMS residual, kept as
+        ``self.linear.fit_rms``. With ``solve=False`` (a model loaded from the cache) the predictor stays as
+        loaded and only its residual on the windows is measured."""
         return self.linear.fit(
-            pose, control, self.cfg.history, self.cfg.dropout, seed, rescale=self.cfg.dropout_rescale
+            pose,
+            control,
+            self.cfg.history,
+            self.cfg.dropout,
+            seed,
+            rescale=self.cfg.dropout_rescale,
+            solve=solve,
         )
 
     def latents(

@@ -29,7 +29,7 @@ from typing import NamedTuple, Protocol
 
 import numpy as np
 import torch
-from scipy import stats
+from scipy.special import stdtrit
 from torch import Tensor
 
 from motionlab.evaluation import body_frame_features
@@ -160,7 +160,7 @@ def difference_interval(
     if se == 0.0:
         return diff, diff, diff
     dof = (va + vb) ** 2 / (va**2 / (x.size - 1) + vb**2 / (y.size - 1))
-    half = float(stats.t.ppf(0.5 * (1.0 + confidence), dof)) * se
+    half = float(stdtrit(dof, 0.5 * (1.0 + confidence))) * se  # Student's t quantile (scipy.stats.t.ppf's)
     return diff, diff - half, diff + half
 
 
