@@ -7,22 +7,23 @@ predicts the clean motion), :mod:`.losses` (the simple loss and the geometric lo
 (the ancestral loop, its fast variant, classifier-free guidance, inpainting).
 """
 
-from motionlab.models.diffusion.data import MDMData, known_mask, prepare, to_positions
-from motionlab.models.diffusion.losses import diffusion_objective
-from motionlab.models.diffusion.model import MDM, MDMConfig
-from motionlab.models.diffusion.sampling import Edit, guided_prediction, sample
-from motionlab.models.diffusion.schedule import NoiseSchedule
+from motionlab.lazy import lazy_exports
 
-__all__ = [
-    "MDM",
-    "Edit",
-    "MDMConfig",
-    "MDMData",
-    "NoiseSchedule",
-    "diffusion_objective",
-    "guided_prediction",
-    "known_mask",
-    "prepare",
-    "sample",
-    "to_positions",
-]
+#: Each public name with the module that holds it, imported on first use: a chapter that needs one module
+#: (``from motionlab.models.diffusion.losses import ...``) does not load the others.
+_EXPORTS: dict[str, str] = {
+    "Edit": "motionlab.models.diffusion.sampling",
+    "MDM": "motionlab.models.diffusion.model",
+    "MDMConfig": "motionlab.models.diffusion.model",
+    "MDMData": "motionlab.models.diffusion.data",
+    "NoiseSchedule": "motionlab.models.diffusion.schedule",
+    "diffusion_objective": "motionlab.models.diffusion.losses",
+    "guided_prediction": "motionlab.models.diffusion.sampling",
+    "known_mask": "motionlab.models.diffusion.data",
+    "prepare": "motionlab.models.diffusion.data",
+    "sample": "motionlab.models.diffusion.sampling",
+    "to_positions": "motionlab.models.diffusion.data",
+}
+
+__getattr__, __dir__ = lazy_exports(__name__, _EXPORTS)
+__all__ = sorted(_EXPORTS)

@@ -8,28 +8,28 @@ and sampling in the code space), :mod:`.sampling` (codes to joint positions, on-
 (the chapter's sizes and variants, every variant trained and measured on both cores).
 """
 
-from motionlab.models.odmo.data import ODMOData, prepare, to_positions
-from motionlab.models.odmo.experiment import VARIANTS, ExperimentConfig, train_all, variant_config
-from motionlab.models.odmo.losses import joint_objective
-from motionlab.models.odmo.model import ODMO, ODMOConfig
-from motionlab.models.odmo.modes import ModeSet, choose_component_count, discover_modes
-from motionlab.models.odmo.sampling import ODMOSampler, Samples, encode_clips
+from motionlab.lazy import lazy_exports
 
-__all__ = [
-    "ODMO",
-    "VARIANTS",
-    "ExperimentConfig",
-    "ModeSet",
-    "ODMOConfig",
-    "ODMOData",
-    "ODMOSampler",
-    "Samples",
-    "choose_component_count",
-    "discover_modes",
-    "encode_clips",
-    "joint_objective",
-    "prepare",
-    "to_positions",
-    "train_all",
-    "variant_config",
-]
+#: Each public name with the module that holds it, imported on first use: a chapter that needs one module
+#: (``from motionlab.models.odmo.losses import ...``) does not load the others.
+_EXPORTS: dict[str, str] = {
+    "ExperimentConfig": "motionlab.models.odmo.experiment",
+    "ModeSet": "motionlab.models.odmo.modes",
+    "ODMO": "motionlab.models.odmo.model",
+    "ODMOConfig": "motionlab.models.odmo.model",
+    "ODMOData": "motionlab.models.odmo.data",
+    "ODMOSampler": "motionlab.models.odmo.sampling",
+    "Samples": "motionlab.models.odmo.sampling",
+    "VARIANTS": "motionlab.models.odmo.experiment",
+    "choose_component_count": "motionlab.models.odmo.modes",
+    "discover_modes": "motionlab.models.odmo.modes",
+    "encode_clips": "motionlab.models.odmo.sampling",
+    "joint_objective": "motionlab.models.odmo.losses",
+    "prepare": "motionlab.models.odmo.data",
+    "to_positions": "motionlab.models.odmo.data",
+    "train_all": "motionlab.models.odmo.experiment",
+    "variant_config": "motionlab.models.odmo.experiment",
+}
+
+__getattr__, __dir__ = lazy_exports(__name__, _EXPORTS)
+__all__ = sorted(_EXPORTS)
