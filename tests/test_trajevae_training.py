@@ -173,7 +173,7 @@ def test_experiment_config_profiles_and_model_dispatch(monkeypatch):
     assert run["gru"].loss().__name__ == "gru_loss"
     assert run["cvae_rnn"].loss().__name__ == "cvae_rnn_loss"
     full = ExperimentConfig.full()
-    assert full.trajevae.n_frames == 60 and full.train.steps == 300 and quick.train.steps == 30
+    assert full.trajevae.n_frames == 60 and full.train.steps == 300 and quick.train.steps == 10
     monkeypatch.setenv("MOTIONLAB_PROFILE", "quick")
     assert ExperimentConfig.current() == quick
     monkeypatch.setenv("MOTIONLAB_PROFILE", "full")

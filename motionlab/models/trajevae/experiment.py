@@ -138,12 +138,12 @@ class ExperimentConfig(config.ProfileConfig):
 
     @classmethod
     def quick(cls) -> ExperimentConfig:
-        """Tiny widths and a few dozen steps, so every code path runs in seconds."""
+        """Tiny widths and ten steps, so every code path runs in seconds."""
         return cls(
             trajevae=TrajeVAEConfig(n_frames=60, width=8, latent_dim=4, dct_components=4, heads=2),
             gru=RecurrentConfig(n_frames=60, hidden=8),
             cvae_rnn=RecurrentConfig(n_frames=60, hidden=8, latent_dim=4),
-            train=_train_config(steps=30, batch_size=16, checkpoint_every=None),
+            train=_train_config(steps=10, batch_size=16, checkpoint_every=None),
             n_eval_windows=12,
         )
 
