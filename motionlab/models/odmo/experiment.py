@@ -37,6 +37,7 @@ from motionlab.models.odmo.evaluate import (
 )
 from motionlab.models.odmo.losses import joint_objective
 from motionlab.models.odmo.model import ODMO, ODMOConfig
+from motionlab.models.odmo.modes import K_VALUES
 from motionlab.models.odmo.sampling import ODMOSampler, encode_clips
 from motionlab.train import LinearRamp, TrainConfig
 from motionlab.train.many import Trained, train_many
@@ -99,6 +100,7 @@ class ExperimentConfig(config.ProfileConfig):
             class's real training clips in a set of Table 3; n_per_mode: generated clips per discovered mode
             in a set of the style purity; n_codes, n_end_points: Table 4's codes per class and end points per
             code.
+        mode_counts: the component counts mode discovery tries per class (:data:`~.modes.K_VALUES`).
         prior_sampled: variants whose table sampler draws codes from the prior (the standard VAE); the others
             sample their discovered modes.
         rows: variants that get a row of Tables 1-2 (every one by default).
@@ -119,6 +121,7 @@ class ExperimentConfig(config.ProfileConfig):
     n_per_mode: int = integer(10, minimum=1)
     n_codes: int = integer(40, minimum=1)
     n_end_points: int = integer(10, minimum=1)
+    mode_counts: tuple[int, ...] = tuple_of(K_VALUES, kind=int, minimum=1, nonempty=True)
     prior_sampled: tuple[str, ...] = tuple_of(("standard VAE",), choices=VARIANTS)
     rows: tuple[str, ...] = tuple_of(tuple(VARIANTS), choices=VARIANTS)
     conventional: tuple[str, ...] = tuple_of(("ODMO",), choices=VARIANTS)
@@ -139,8 +142,8 @@ class ExperimentConfig(config.ProfileConfig):
 
     @classmethod
     def quick(cls) -> ExperimentConfig:
-        """Tiny networks, 4 steps and 2 small sample sets per row: the notebook runs end to end in the
-        tests."""
+        """Tiny networks, 4 steps, 2 small sample sets per row and mixtures of 3 or 4 components: the
+        notebook runs end to end in the tests."""
         return cls(
             model=chapter_model(encoder_hidden=16, encoder_mlp=32, trajectory_hidden=16, motion_hidden=16),
             steps=4,
@@ -150,6 +153,7 @@ class ExperimentConfig(config.ProfileConfig):
             n_per_mode=2,
             n_codes=3,
             n_end_points=3,
+            mode_counts=(3, 4),
         )
 
     @classmethod
@@ -253,7 +257,7 @@ def measure_variant(
     """Build the samplers of a trained ``model`` and measure what ``cfg`` asks of ``variant``."""
     check_choice(variant, "variant", "measure_variant", VARIANTS)
     codes = encode_clips(model, data)  # once, for every sampler of the variant
-    modes = ODMOSampler.from_codes(model, codes, data, kind="modes")
+    modes = ODMOSampler.from_codes(model, codes, data, kind="modes", mode_counts=cfg.mode_counts)
     samplers = {
         "table": ODMOSampler.from_codes(model, codes, data, kind="prior")
         if variant in cfg.prior_sampled
@@ -390,7 +394,8 @@ class RealExperimentConfig(ExperimentConfig):
 
     @classmethod
     def quick(cls) -> RealExperimentConfig:
-        """About a hundred clips, tiny networks, 4 steps, 2 sets of 112 clips: the code paths, in seconds."""
+        """About a hundred clips, tiny networks, 4 steps, 2 sets of 112 clips, mixtures of 3 or 4 components:
+        the code paths, in seconds."""
         model = ODMOConfig(
             n_classes=7,
             n_frames=50,
@@ -400,7 +405,16 @@ class RealExperimentConfig(ExperimentConfig):
             trajectory_hidden=16,
             motion_hidden=16,
         )
-        return cls(model=model, n_clips=112, steps=4, batch_size=14, draws=4, n_sets=2, n_per_set=112)
+        return cls(
+            model=model,
+            n_clips=112,
+            steps=4,
+            batch_size=14,
+            draws=4,
+            n_sets=2,
+            n_per_set=112,
+            mode_counts=(3, 4),
+        )
 
     @classmethod
     def long(cls) -> RealExperimentConfig:
@@ -461,7 +475,7 @@ def measure_real(
     """Build ``variant``'s sampler and measure its Table 2 row
     (:func:`~motionlab.evaluation.real.table2_row`)."""
     kind = "prior" if variant in cfg.prior_sampled else "modes"
-    sampler = ODMOSampler.from_data(model, data, kind=kind, seed=cfg.seed)
+    sampler = ODMOSampler.from_data(model, data, kind=kind, seed=cfg.seed, mode_counts=cfg.mode_counts)
     row = table2_row(evaluator, protocol, partial(draw_generated, sampler=sampler, protocol=protocol))
     return RealMeasured(sampler, row)
 

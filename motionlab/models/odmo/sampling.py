@@ -26,7 +26,13 @@ from torch import Tensor
 
 from motionlab.models.odmo.data import ODMOData, to_positions
 from motionlab.models.odmo.model import ODMO
-from motionlab.models.odmo.modes import ModeSet, discover_modes, prior_modes, single_gaussian_modes
+from motionlab.models.odmo.modes import (
+    K_VALUES,
+    ModeSet,
+    discover_modes,
+    prior_modes,
+    single_gaussian_modes,
+)
 from motionlab.validation import check_choice, check_scalar
 
 SAMPLERS = ("modes", "conventional", "prior")
@@ -60,12 +66,20 @@ def encode_clips(model: ODMO, data: ODMOData) -> np.ndarray:
     return mu.numpy().astype(np.float64)
 
 
-def build_modes(kind: str, codes: np.ndarray, data: ODMOData, n_classes: int, seed: int = 0) -> ModeSet:
-    """The :class:`ModeSet` of sampler ``kind`` (one of :data:`SAMPLERS`) over training codes ``(N, D)``."""
+def build_modes(
+    kind: str,
+    codes: np.ndarray,
+    data: ODMOData,
+    n_classes: int,
+    seed: int = 0,
+    mode_counts: Sequence[int] = K_VALUES,
+) -> ModeSet:
+    """The :class:`ModeSet` of sampler ``kind`` (one of :data:`SAMPLERS`) over training codes ``(N, D)``;
+    ``mode_counts``: the component counts mode discovery tries (``kind="modes"``)."""
     check_choice(kind, "kind", "build_modes", SAMPLERS)
     action, ends = data.action.numpy(), data.end_point.numpy()
     if kind == "modes":
-        return discover_modes(codes, action, ends, n_classes, seed=seed)
+        return discover_modes(codes, action, ends, n_classes, mode_counts, seed=seed)
     if kind == "conventional":
         return single_gaussian_modes(codes, action, ends, n_classes)
     return prior_modes(codes, action, ends, n_classes)
@@ -82,19 +96,33 @@ class ODMOSampler:
     floor_clearance: float
 
     @classmethod
-    def from_data(cls, model: ODMO, data: ODMOData, kind: str = "modes", seed: int = 0) -> ODMOSampler:
-        """Encode ``data`` (the training clips), build the modes of ``kind`` and wrap everything."""
-        return cls.from_codes(model, encode_clips(model, data), data, kind, seed)
+    def from_data(
+        cls,
+        model: ODMO,
+        data: ODMOData,
+        kind: str = "modes",
+        seed: int = 0,
+        mode_counts: Sequence[int] = K_VALUES,
+    ) -> ODMOSampler:
+        """Encode ``data`` (the training clips), build the modes of ``kind`` and wrap everything
+        (``mode_counts``: as for :func:`build_modes`)."""
+        return cls.from_codes(model, encode_clips(model, data), data, kind, seed, mode_counts)
 
     @classmethod
     def from_codes(
-        cls, model: ODMO, codes: np.ndarray, data: ODMOData, kind: str = "modes", seed: int = 0
+        cls,
+        model: ODMO,
+        codes: np.ndarray,
+        data: ODMOData,
+        kind: str = "modes",
+        seed: int = 0,
+        mode_counts: Sequence[int] = K_VALUES,
     ) -> ODMOSampler:
         """:meth:`from_data` with the training clips' codes ``(N, D)`` (:func:`encode_clips`) already
-        computed."""
+        computed (``mode_counts``: as for :func:`build_modes`)."""
         return cls(
             model,
-            build_modes(kind, codes, data, model.cfg.n_classes, seed),
+            build_modes(kind, codes, data, model.cfg.n_classes, seed, mode_counts),
             data.frame_stride,
             data.floor_clearance,
         )
