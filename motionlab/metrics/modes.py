@@ -39,7 +39,6 @@ singletons) and the index is 1, as in scikit-learn.
 from __future__ import annotations
 
 import numpy as np
-from scipy.spatial.distance import pdist
 
 from motionlab.validation import ArrayLike, as_float_array, as_labels
 
@@ -73,6 +72,8 @@ def mode_purity(discovered: ArrayLike, truth: ArrayLike) -> float:
 
 def _spread(flat: np.ndarray) -> float:
     """APD of the rows of ``flat``; 0 for a single row (no pairs)."""
+    from scipy.spatial.distance import pdist  # scipy.spatial costs 0.2 s to import: on first use
+
     return float(pdist(flat).mean()) if flat.shape[0] > 1 else 0.0
 
 

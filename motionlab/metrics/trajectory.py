@@ -23,7 +23,6 @@ reach and the one it reached at its last frame.
 from __future__ import annotations
 
 import numpy as np
-from scipy.spatial.distance import cdist
 
 from motionlab.validation import ArrayLike, as_float_array, check_scalar
 
@@ -94,6 +93,8 @@ def multimodal_ground_truth(start_poses: ArrayLike, futures: ArrayLike, threshol
             f"{ahead.shape[0]}"
         )
     radius = float(check_scalar(threshold, "threshold", func, minimum=0, include_minimum=False))
+    from scipy.spatial.distance import cdist  # scipy.spatial costs 0.2 s to import: on first use
+
     distances = cdist(starts.reshape(starts.shape[0], -1), starts.reshape(starts.shape[0], -1))
     return [ahead[np.flatnonzero(row < radius)] for row in distances]
 
