@@ -20,7 +20,7 @@ def _is_notebook_cell(item: pytest.Item) -> bool:
 #: hands the scopes out longest first, so the two workers end together instead of one running a long chapter
 #: alone at the end; a scope not listed counts as a second.
 TYPICAL_SECONDS: dict[str, float] = {
-    "chapter 11": 40.0,  # with the live JupyterLab test
+    "chapter 11": 30.0,  # with the live JupyterLab test
     "chapter 08": 23.0,
     "chapter 06": 22.0,
     "tests/test_execution.py": 21.0,
