@@ -55,6 +55,7 @@ EXPERIMENT = ExperimentConfig(
     n_per_mode=2,
     n_codes=2,
     n_end_points=2,
+    mode_counts=(3, 4),
 )
 
 
@@ -199,7 +200,7 @@ def test_measure_variant_follows_the_config(data, sampler):
     reference = evaluate.Reference(
         StandInEvaluator(), StandInEvaluator().features(real), real, np.array([0, 1] * 4)
     )
-    modes = ODMOSampler.from_data(sampler.model, data, kind="modes")
+    modes = ODMOSampler.from_data(sampler.model, data, kind="modes", mode_counts=EXPERIMENT.mode_counts)
     odmo = measure_variant("ODMO", sampler.model, data, reference, EXPERIMENT)
     assert (
         set(odmo.samplers) == {"table", "modes", "conventional"}
