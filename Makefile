@@ -33,10 +33,13 @@ course: $(STAMP)
 
 # Retrain the reference models: the course with every model trained afresh in build/reference-build, then
 # the runs it used copied to reference/ with their manifests (even when a claim failed: the build's exit
-# status is kept and returned).
+# status is kept and returned). `make reference ALL=0` builds with the reference models in use instead: only
+# the runs whose configuration changed are trained and replaced, the others are kept.
+ALL ?= 1
+
 reference: $(STAMP)
 	rm -rf build/reference-build
-	MOTIONLAB_BUILD=build/reference-build MOTIONLAB_PROFILE=full MOTIONLAB_RETRAIN=1 \
+	MOTIONLAB_BUILD=build/reference-build MOTIONLAB_PROFILE=full MOTIONLAB_RETRAIN=$(ALL) \
 		$(BIN)/python -m motionlab.course.logs reference -- $(BIN)/python -m motionlab.course; \
 		status=$$?; $(BIN)/python -m motionlab.apps.reference export build/reference-build && exit $$status
 

@@ -75,6 +75,25 @@ def test_the_full_profile_loads_the_reference_instead_of_training(shipped: Path)
     assert "tiny_reference" in (shipped / "README.md").read_text()
 
 
+def test_an_export_keeps_the_references_a_build_loaded_and_replaces_what_it_trained(shipped: Path) -> None:
+    """``make reference ALL=0``: a build with the references in use loads the unchanged run and trains the
+    one whose configuration changed; the export adds the new one, keeps the loaded one byte for byte and
+    drops the reference no build used."""
+    before = {path.name: path.read_bytes() for path in shipped.iterdir()}
+    _, loaded = run()
+    changed = {**MODEL_CONFIG, "changed": True}
+    train_or_load("tiny_changed", changed, make_model(), loss_fn, data(), CFG)
+    build = config.checkpoint_dir().parent
+    manifests = reference.export(build, shipped)
+    assert sorted(m["name"] for m in manifests) == ["tiny_changed", "tiny_reference"]
+    assert (shipped / loaded.path.name).read_bytes() == before[loaded.path.name]
+    assert "tiny_changed" in (shipped / "README.md").read_text()
+    (config.checkpoint_dir() / reference.runs_log().name).write_text("")  # a build that used neither
+    train_or_load("tiny_changed", changed, make_model(), loss_fn, data(), CFG)  # loads the new reference
+    assert [m["name"] for m in reference.export(build, shipped)] == ["tiny_changed"]
+    assert not (shipped / loaded.path.name).exists()
+
+
 def test_retrain_ignores_the_references(shipped: Path, monkeypatch: pytest.MonkeyPatch) -> None:
     monkeypatch.setenv("MOTIONLAB_RETRAIN", "1")
     calls: list[int] = []

@@ -53,6 +53,26 @@ def test_claims_are_collected_per_seed_and_shown_per_chapter(tmp_path: Path) -> 
     assert "| `04a.audit` | < 1 | 0.1 | 0.2 | – | holds on the 2 seeds measured |" in table
 
 
+def test_builds_of_some_chapters_update_their_claims_and_keep_the_rest(tmp_path: Path) -> None:
+    """A model family retrained: builds of the chapters that use it replace those chapters' values (a claim
+    the chapter no longer makes loses them) and leave the other chapters' as they were."""
+    base = seeds.collect({0: _build(tmp_path, 0, {"04.small": 0.5, "04.dropped": 0.1})})
+    base["claims"]["05.other"] = {
+        "op": "<",
+        "threshold": 1.0,
+        "expected": True,
+        "text": "",
+        "values": {"0": 0.7},
+    }
+    again = _build(tmp_path / "again", 0, {"04.small": 0.25, "04.new": 0.3})
+    record = seeds.collect({0: again}, base)
+    assert record["claims"]["04.small"]["values"] == {"0": 0.25} and record["claims"]["04.new"]["values"] == {
+        "0": 0.3
+    }
+    assert "04.dropped" not in record["claims"] and record["claims"]["05.other"]["values"] == {"0": 0.7}
+    assert base["claims"]["04.small"]["values"] == {"0": 0.5}  # the base record itself is left alone
+
+
 def test_a_build_that_is_not_the_seed_given_is_refused(tmp_path: Path) -> None:
     with pytest.raises(ValueError, match="seed 1: .* was built with base seed 0"):
         seeds.collect({1: _build(tmp_path, 0, {"04.small": 0.5})})
@@ -68,6 +88,9 @@ def test_the_command_records_the_table_and_refuses_bad_arguments(tmp_path, monke
     assert command.main(["seeds", f"0={build}"]) == 0
     assert "1 claims over seeds 0 written to" in capsys.readouterr().out
     assert json.loads((tmp_path / "claims.json").read_text())["claims"]["04.small"]["values"] == {"0": 0.5}
+    update = _build(tmp_path / "update", 0, {"04.small": 0.25})
+    assert command.main(["seeds", "--update", f"0={update}"]) == 0
+    assert json.loads((tmp_path / "claims.json").read_text())["claims"]["04.small"]["values"] == {"0": 0.25}
     assert command.main(["seeds", f"1={build}"]) == 1
     assert "error: seed 1:" in capsys.readouterr().err
     with pytest.raises(SystemExit) as exit_info:

@@ -1,11 +1,12 @@
-"""``python -m motionlab.apps.reference export BUILD | verify | seeds 0=BUILD 1=BUILD 2=BUILD``: the shipped
-reference models' command.
+"""``python -m motionlab.apps.reference export BUILD | verify | seeds [--update] 0=BUILD 1=BUILD 2=BUILD``:
+the shipped reference models' command.
 
-``export`` copies the full-profile runs a course build used into ``reference/`` with their manifests (what
-``make reference`` runs after its retraining build); ``verify`` checks every reference model against its
-manifest; ``seeds`` records the claims of course builds trained with other base seeds
-(:mod:`motionlab.course.seeds`). Errors end the command with one line on stderr and exit code 1. The store
-itself is :mod:`motionlab.train.reference`.
+``export`` copies the full-profile runs a course build trained into ``reference/`` with their manifests and
+keeps the reference models it loaded (what ``make reference`` runs after its build); ``verify`` checks every
+reference model against its manifest; ``seeds`` records the claims of course builds trained with other base
+seeds (:mod:`motionlab.course.seeds`; with ``--update``, of the chapters those builds ran, the rest kept).
+Errors end the command with one line on stderr and exit code 1. The store itself is
+:mod:`motionlab.train.reference`.
 """
 
 from __future__ import annotations
@@ -37,13 +38,19 @@ def main(argv: list[str] | None = None) -> int:
     sub.add_parser("verify", help="check every reference model against its manifest")
     seeds = sub.add_parser("seeds", help="record the claims of builds trained with base seeds 0, 1, 2, ...")
     seeds.add_argument("builds", nargs="+", type=_seed_build, help="SEED=BUILD, e.g. 1=/tmp/seed1/build")
+    seeds.add_argument(
+        "--update",
+        action="store_true",
+        help="replace only the claims of the notebooks these builds ran; keep the rest of the table",
+    )
     args = parser.parse_args(argv)
     try:
         if args.command == "export":
             manifests = reference.export(args.build.resolve())
             print(f"exported {len(manifests)} reference models to {reference.REFERENCE_DIR}")
         elif args.command == "seeds":
-            record = seed_claims.collect(dict(args.builds))
+            base = seed_claims.load() if args.update else None
+            record = seed_claims.collect(dict(args.builds), base)
             path = seed_claims.save(record)
             print(f"{len(record['claims'])} claims over seeds {', '.join(record['seeds'])} written to {path}")
         else:

@@ -22,16 +22,24 @@ from motionlab.paths import REPO_ROOT
 SEED_CLAIMS_PATH = REPO_ROOT / "reference" / "seeds" / "claims.json"
 
 
-def collect(builds: dict[int, Path]) -> dict[str, Any]:
+def collect(builds: dict[int, Path], base: dict[str, Any] | None = None) -> dict[str, Any]:
     """The claims of the full-profile course builds ``{seed: build folder}``: ``{"seeds": {seed: the build's
     models, numerical path and torch}, "claims": {name: {"op", "threshold", "expected", "text", "values":
     {seed: value}}}}``.
 
+    With ``base`` (a record of this shape, e.g. the shipped table), the builds update it: each replaces its
+    seed's values of the claims of the notebooks it ran (a claim such a notebook no longer makes loses that
+    seed's value, and goes when no seed has one), and the other notebooks' claims stay as recorded. A model
+    family that changed is then measured again in the chapters that use it alone.
+
     Raises ``FileNotFoundError`` naming a build without ``course/results.json`` and ``ValueError`` for a
     build whose recorded base seed is not the one given, or that is not a full-profile build.
     """
-    seeds: dict[str, Any] = {}
-    claims: dict[str, dict[str, Any]] = {}
+    seeds: dict[str, Any] = dict((base or {}).get("seeds", {}))
+    claims: dict[str, dict[str, Any]] = {
+        name: {**claim, "values": dict(claim["values"])}
+        for name, claim in (base or {}).get("claims", {}).items()
+    }
     for seed, folder in sorted(builds.items()):
         path = Path(folder) / "course" / "results.json"
         if not path.is_file():
@@ -44,14 +52,26 @@ def collect(builds: dict[int, Path]) -> dict[str, Any]:
                 f"seed {seed}: {path} is a {results.get('profile')!r} build, not a full-profile one"
             )
         seeds[str(seed)] = {key: results.get(key) for key in ("models", "numerics", "torch")}
+        ran = {stem.split("_", 1)[0] for stem in results.get("notebooks", {})}  # "04", "04a"
+        for name, claim in claims.items():
+            if name.split(".", 1)[0] in ran:  # measured again by this build (or no longer claimed)
+                claim["values"].pop(str(seed), None)
         for notebook in results.get("notebooks", {}).values():
             for name, claim in notebook.get("claims", {}).items():
-                entry = claims.setdefault(
-                    name,
-                    {key: claim.get(key) for key in ("op", "threshold", "expected", "text")} | {"values": {}},
-                )
+                entry = claims.setdefault(name, {"values": {}})
+                entry.update({key: claim.get(key) for key in ("op", "threshold", "expected", "text")})
                 entry["values"][str(seed)] = claim["value"]
-    return {"seeds": seeds, "claims": dict(sorted(claims.items()))}
+    kept = {name: claim for name, claim in claims.items() if claim["values"]}
+    return {"seeds": dict(sorted(seeds.items())), "claims": dict(sorted(kept.items()))}
+
+
+def load(path: Path | None = None) -> dict[str, Any]:
+    """The recorded table at ``path`` (default :data:`SEED_CLAIMS_PATH`); ``FileNotFoundError`` when it is
+    missing."""
+    path = SEED_CLAIMS_PATH if path is None else path
+    if not path.is_file():
+        raise FileNotFoundError(f"{path} is missing: python -m motionlab.apps.reference seeds records it")
+    return json.loads(path.read_text(encoding="utf-8"))
 
 
 def save(record: dict[str, Any], path: Path | None = None) -> Path:
@@ -71,10 +91,7 @@ def chapter_table(number: str, path: Path | None = None) -> str:
     build did not run the chapter) and the verdict: holds on every seed measured, fails, or a known gap.
     Read from ``path`` (default :data:`SEED_CLAIMS_PATH`); raises ``FileNotFoundError`` when it is
     missing."""
-    path = SEED_CLAIMS_PATH if path is None else path
-    if not path.is_file():
-        raise FileNotFoundError(f"{path} is missing: python -m motionlab.apps.reference seeds records it")
-    record = json.loads(path.read_text(encoding="utf-8"))
+    record = load(path)
     seeds = sorted(record["seeds"], key=int)
     rows = []
     for name, claim in record["claims"].items():

@@ -89,7 +89,7 @@ def _cached_result(name: str, identity: dict[str, Any], model: nn.Module) -> Tra
         raise reference.ReferenceError(f"{exc} (retrain it with `make reference`)") from None
     if extra is None:
         return None
-    reference.note_use(name, identity)
+    reference.note_use(name, identity, shipped)
     try:
         history = History.from_dict(extra["history"])
         metrics = {str(k): float(v) for k, v in extra["metrics"].items()}

@@ -19,7 +19,8 @@ model on the machine at hand, through the build's cache as before.
 ``make reference`` rebuilds them: the course in a fresh build folder with ``MOTIONLAB_RETRAIN=1`` (every full
 profile process notes each run it trains or loads in the build's :func:`runs_log`), then
 ``python -m motionlab.apps.reference export BUILD`` copies those entries here and writes their manifests
-and ``reference/README.md``.
+and ``reference/README.md``. ``make reference ALL=0`` builds with the references in use instead: it trains
+only the runs whose configuration changed, and the export replaces those and keeps the rest.
 """
 
 from __future__ import annotations
@@ -232,18 +233,36 @@ def provenance(result: Any, seconds: float | None = None, command: str = "make c
 
 
 def runs_log() -> Path:
-    """The build's list of the full-profile runs it trained or loaded (one ``<name>-<hash>`` per line)."""
+    """The build's list of the full-profile runs it trained or loaded: one ``<name>-<hash>`` per line (the
+    hash of the run's identity), followed by `` <file>`` for a run loaded from that reference model."""
     return config.checkpoint_dir() / "full-profile-runs.txt"
 
 
-def note_use(name: str, identity: dict[str, Any]) -> None:
-    """Add a full-profile run to :func:`runs_log` (one appended write: worker processes can share it)."""
+def note_use(name: str, identity: dict[str, Any], shipped: Path | None = None) -> None:
+    """Add a full-profile run to :func:`runs_log`, with the reference model it was loaded from (``shipped``),
+    if any (one appended write: worker processes can share it)."""
     if config.is_quick():
         return
     log = runs_log()
     log.parent.mkdir(parents=True, exist_ok=True)
     with log.open("a") as handle:
-        handle.write(f"{name}-{config_hash(name, identity)}\n")
+        handle.write(f"{name}-{config_hash(name, identity)}{'' if shipped is None else ' ' + shipped.name}\n")
+
+
+def used_runs(build: Path) -> tuple[set[str], set[str]]:
+    """The runs a course build in ``build`` used, from its :func:`runs_log`: the ``<name>-<hash>`` of those
+    it trained or found in its checkpoint cache, and the file names of the reference models it loaded."""
+    log = build / "checkpoints" / runs_log().name
+    if not log.exists():
+        raise ReferenceError(f"{log} does not exist: build the course there first (see `make reference`)")
+    cached, loaded = set(), set()
+    for line in log.read_text().splitlines():
+        stem, _, shipped = line.strip().partition(" ")
+        if shipped:
+            loaded.add(shipped)
+        elif stem:
+            cached.add(stem)
+    return cached, loaded
 
 
 def trained_log() -> Path:
@@ -304,19 +323,25 @@ def levelling(history: dict[str, Any]) -> dict[str, float | bool] | None:
 
 
 def export(build: Path, out: Path = REFERENCE_DIR) -> list[dict[str, Any]]:
-    """Copy the full-profile runs a course build used (its :func:`runs_log`) into ``out`` with a manifest
-    each, remove the reference models no longer used, write ``out/README.md``; return the manifests."""
-    log = build / "checkpoints" / runs_log().name
-    if not log.exists():
-        raise ReferenceError(f"{log} does not exist: build the course there first (see `make reference`)")
-    stems = sorted(
-        stem for stem in set(log.read_text().split()) if stem.rsplit("-", 1)[0] not in TRAINED_IN_EVERY_BUILD
-    )
+    """Copy the full-profile runs a course build trained (:func:`used_runs`) into ``out`` with a manifest
+    each, keep the reference models it loaded as they are, remove the others, write ``out/README.md``;
+    return the manifests of all that ``out`` then holds.
+
+    A build with ``MOTIONLAB_RETRAIN=1`` trains every run, so every model is exported afresh (``make
+    reference``); a build with the reference models in use trains only the runs whose configuration none of
+    them matches, and only those are replaced (``make reference ALL=0``)."""
+    cached, loaded = used_runs(build)
+    stems = sorted(stem for stem in cached if stem.rsplit("-", 1)[0] not in TRAINED_IN_EVERY_BUILD)
     missing = [stem for stem in stems if not (build / "checkpoints" / f"{stem}.pt").exists()]
     if missing:
         raise ReferenceError(f"{build / 'checkpoints'} lacks {len(missing)} used runs, e.g. {missing[0]}.pt")
+    gone = sorted(name for name in loaded if not (out / name).exists())
+    if gone:
+        raise ReferenceError(f"the build loaded {gone[0]}, which {out} no longer holds: build it again")
+    kept = [read_manifest(out / name) for name in sorted(loaded)]
     out.mkdir(parents=True, exist_ok=True)
-    manifests = [_export_one(build / "checkpoints" / f"{stem}.pt", out) for stem in stems]
+    exported = [_export_one(build / "checkpoints" / f"{stem}.pt", out) for stem in stems]
+    manifests = sorted(exported + kept, key=lambda m: m["file"])
     shipped = {Path(m["file"]).stem for m in manifests}
     if len(shipped) < len(manifests):
         raise ReferenceError("two used runs differ only in their data's bits: they cannot share reference/")
@@ -425,7 +450,8 @@ def _readme(manifests: list[dict[str, Any]], total: int) -> str:
         f"{LEVELLED_SHARE:.0%}).",
         "",
         "Rebuild them all with `make reference` (a course build with `MOTIONLAB_RETRAIN=1` in a fresh",
-        "folder, then `python -m motionlab.apps.reference export`); train any one again with the",
+        "folder, then `python -m motionlab.apps.reference export`), or only those whose configuration",
+        "changed with `make reference ALL=0`; train any one again with the",
         "training command. `seeds/claims.json` holds every claim's value for course builds trained with",
         "base seeds 0, 1 and 2 (`python -m motionlab.apps.reference seeds 0=BUILD 1=BUILD 2=BUILD`),",
         "shown in each chapter's Paper vs. us.",
