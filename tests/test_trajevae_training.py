@@ -19,7 +19,6 @@ from motionlab.models.trajevae.data import (
 )
 from motionlab.models.trajevae.evaluate import (
     FIGURE6_KS,
-    N_SAMPLES,
     PAPER_KS,
     multimodal_futures,
     sweep_given_joints,
@@ -139,7 +138,9 @@ def test_train_all_trains_each_run_once_and_sweeps_it_as_in_process(clips):
         assert set(item.measured) == set(ks)
     for name in ("+ masked future poses", "Base"):  # the sweep in a worker equals the sweep here
         item = trained[name]
-        in_process = sweep_given_joints(item.model, data.test_windows, sorted(item.measured), N_SAMPLES, 0)
+        in_process = sweep_given_joints(
+            item.model, data.test_windows, sorted(item.measured), cfg.n_samples, 0
+        )
         assert item.measured == in_process
 
 

@@ -116,7 +116,8 @@ class ExperimentConfig(config.ProfileConfig):
         trajevae: the full TrajeVAE, the last rung of the ablation ladder (:func:`ladder` builds the others).
         gru: the deterministic GRU baseline; cvae_rnn: the CVAE-RNN baseline.
         train: the schedule every model trains with.
-        n_eval_windows: test windows the metrics average over (each with ``N_SAMPLES`` samples).
+        n_eval_windows: test windows the metrics average over; n_samples: completions drawn per window and
+            number of given trajectories (``N_SAMPLES``, DLow's 50).
     """
 
     trajevae: TrajeVAEConfig = instance(TrajeVAEConfig)
@@ -124,6 +125,7 @@ class ExperimentConfig(config.ProfileConfig):
     cvae_rnn: RecurrentConfig = instance(RecurrentConfig)
     train: TrainConfig = instance(TrainConfig)
     n_eval_windows: int = integer(minimum=2)
+    n_samples: int = integer(N_SAMPLES, minimum=2)
 
     def __post_init__(self) -> None:
         super().__post_init__()
@@ -138,13 +140,14 @@ class ExperimentConfig(config.ProfileConfig):
 
     @classmethod
     def quick(cls) -> ExperimentConfig:
-        """Tiny widths and ten steps, so every code path runs in seconds."""
+        """Tiny widths, ten steps and ten completions per window, so every code path runs in seconds."""
         return cls(
             trajevae=TrajeVAEConfig(n_frames=60, width=8, latent_dim=4, dct_components=4, heads=2),
             gru=RecurrentConfig(n_frames=60, hidden=8),
             cvae_rnn=RecurrentConfig(n_frames=60, hidden=8, latent_dim=4),
             train=_train_config(steps=10, batch_size=16, checkpoint_every=None),
             n_eval_windows=12,
+            n_samples=10,
         )
 
     @classmethod
@@ -266,12 +269,18 @@ def runs(cfg: ExperimentConfig, data: CompletionData) -> dict[str, Run]:
     }
 
 
-def sweep(name: str, model: nn.Module, windows: Tensor, multimodal: Sequence[np.ndarray]) -> Sweep:
+def sweep(
+    name: str,
+    model: nn.Module,
+    windows: Tensor,
+    multimodal: Sequence[np.ndarray],
+    n_samples: int = N_SAMPLES,
+) -> Sweep:
     """The DLow metrics of run ``name``'s model on ``windows`` ``(N, T, J * 3)`` for each number of given
     trajectories: Figure 6's k for :data:`FIGURE6_RUNS`, Table 1's for the others
-    (:func:`~motionlab.models.trajevae.evaluate.sweep_given_joints`, ``N_SAMPLES`` samples, seed 0)."""
+    (:func:`~motionlab.models.trajevae.evaluate.sweep_given_joints`, ``n_samples`` samples, seed 0)."""
     ks = FIGURE6_KS if name in FIGURE6_RUNS else PAPER_KS
-    return sweep_given_joints(model, windows, ks, N_SAMPLES, 0, multimodal)
+    return sweep_given_joints(model, windows, ks, n_samples, 0, multimodal)
 
 
 def train_all(
@@ -283,7 +292,7 @@ def train_all(
         ``{name: Trained}`` in :data:`START_ORDER`; ``measured`` is the run's sweep ``{k: {metric: (mean,
         ci95)}}`` on ``data.test_windows``.
     """
-    then = partial(sweep, windows=data.test_windows, multimodal=data.multimodal)
+    then = partial(sweep, windows=data.test_windows, multimodal=data.multimodal, n_samples=cfg.n_samples)
     return train_many(runs(cfg, data), then=then, processes=processes)
 
 
@@ -294,7 +303,7 @@ CHAPTER, DEFAULT_RUN = "07_masked_trajectory_completion", RUNGS[-1]
 def measure(cfg: ExperimentConfig, data: CompletionData, name: str, model: nn.Module) -> dict[str, Any]:
     """The training command's measurement of run ``name``: the chapter's :func:`sweep`, DLow metrics per
     number ``k`` of given joint trajectories ``{"k=K": {metric: {"mean", "ci95"}}}``."""
-    table = sweep(name, model, data.test_windows, data.multimodal)
+    table = sweep(name, model, data.test_windows, data.multimodal, cfg.n_samples)
     return {
         "sweep": {
             f"k={k}": {metric: {"mean": mean, "ci95": half} for metric, (mean, half) in row.items()}
