@@ -94,6 +94,26 @@ def test_an_export_keeps_the_references_a_build_loaded_and_replaces_what_it_trai
     assert not (shipped / loaded.path.name).exists()
 
 
+def test_a_partial_export_keeps_what_it_did_not_use_but_older_versions_of_what_it_trained(
+    shipped: Path,
+) -> None:
+    """A build of one chapter (``export --partial``): the run it trained for longer replaces its older
+    version, a reference of another chapter stays although this build did not use it."""
+    other = {**MODEL_CONFIG, "chapter": "another"}
+    train_or_load("tiny_other", other, make_model(), loss_fn, data(), CFG)
+    build = config.checkpoint_dir().parent
+    reference.export(build, shipped, partial=True)  # now tiny_reference (not used) and tiny_other
+    assert sorted(path.stem.rsplit("-", 1)[0] for path in shipped.glob("*.pt")) == [
+        "tiny_other",
+        "tiny_reference",
+    ]
+    (config.checkpoint_dir() / reference.runs_log().name).write_text("")  # the next build: one run, longer
+    train_or_load("tiny_reference", MODEL_CONFIG, make_model(), loss_fn, data(), replace(CFG, steps=80))
+    manifests = reference.export(build, shipped, partial=True)
+    assert sorted((m["name"], m["steps"]) for m in manifests) == [("tiny_other", 60), ("tiny_reference", 80)]
+    assert len(list(shipped.glob("*.pt"))) == 2 and "tiny_other" in (shipped / "README.md").read_text()
+
+
 def test_retrain_ignores_the_references(shipped: Path, monkeypatch: pytest.MonkeyPatch) -> None:
     monkeypatch.setenv("MOTIONLAB_RETRAIN", "1")
     calls: list[int] = []
@@ -147,6 +167,9 @@ def test_levelling_tells_a_flat_end_from_a_falling_one() -> None:
     falling = {"terms": {"loss": [1.0 - i / 100 for i in range(100)]}}
     assert reference.levelling(flat)["levelled"] and not reference.levelling(falling)["levelled"]
     assert reference.levelling({"terms": {"loss": [1.0] * 10}}) is None
+    # a KL weight that ramps up makes the loss rise; the objective it leads to (the negative ELBO) is judged
+    ramped = {"terms": {"loss": [i / 100 for i in range(100)], "objective": flat["terms"]["loss"]}}
+    assert reference.levelling(ramped)["levelled"]
 
 
 def test_the_shipped_reference_models_match_their_manifests_and_fit_in_30_mib() -> None:

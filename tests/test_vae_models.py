@@ -49,8 +49,9 @@ def test_elbo_terms_match_hand_computation():
     assert terms["kl"].item() == pytest.approx(kl.item(), rel=1e-5)
     assert terms["kl_per_dim"].shape == (3,)
     loss = elbo_loss(model, (x, label), 0, {"beta": 0.25})
-    assert set(loss) == {"loss", "recon", "kl"}
+    assert set(loss) == {"loss", "recon", "kl", "objective"}
     assert loss["loss"].item() == pytest.approx(loss["recon"].item() + 0.25 * loss["kl"].item(), rel=1e-6)
+    assert loss["objective"].item() == pytest.approx(loss["recon"].item() + loss["kl"].item(), rel=1e-6)
 
 
 def test_negative_elbo_is_the_model_free_elbo_terms_up_to_the_constant():

@@ -35,6 +35,12 @@ def main(argv: list[str] | None = None) -> int:
     sub = parser.add_subparsers(dest="command", required=True)
     exp = sub.add_parser("export", help="copy a build's used runs into reference/ with manifests")
     exp.add_argument("build", type=Path, help="the build folder of a full-profile course (MOTIONLAB_BUILD)")
+    exp.add_argument(
+        "--partial",
+        action="store_true",
+        help="the build ran some chapters only: keep the references it did not use, but for older "
+        "versions of the runs it trained",
+    )
     sub.add_parser("verify", help="check every reference model against its manifest")
     seeds = sub.add_parser("seeds", help="record the claims of builds trained with base seeds 0, 1, 2, ...")
     seeds.add_argument("builds", nargs="+", type=_seed_build, help="SEED=BUILD, e.g. 1=/tmp/seed1/build")
@@ -46,7 +52,7 @@ def main(argv: list[str] | None = None) -> int:
     args = parser.parse_args(argv)
     try:
         if args.command == "export":
-            manifests = reference.export(args.build.resolve())
+            manifests = reference.export(args.build.resolve(), partial=args.partial)
             print(f"exported {len(manifests)} reference models to {reference.REFERENCE_DIR}")
         elif args.command == "seeds":
             base = seed_claims.load() if args.update else None

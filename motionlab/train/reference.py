@@ -304,10 +304,13 @@ def trained_on() -> dict[str, Any]:
 
 
 def levelling(history: dict[str, Any]) -> dict[str, float | bool] | None:
-    """How much a run's training loss still fell at the end: the fall over the last fifth of the steps as a
-    share of the whole fall (first tenth's mean to last tenth's mean), and whether it is below
-    :data:`LEVELLED_SHARE`. ``None`` for a run too short to tell (under 50 steps)."""
-    losses = [float(v) for v in (history.get("terms") or {}).get("loss", [])]
+    """How much a run's training objective still fell at the end: the fall over the last fifth of the steps
+    as a share of the whole fall (first tenth's mean to last tenth's mean), and whether it is below
+    :data:`LEVELLED_SHARE`. The objective is the loss term ``objective`` where the loss function reports one
+    (a VAE's negative ELBO, whose loss weights the KL by a ramp), else the loss. ``None`` for a run too short
+    to tell (under 50 steps)."""
+    terms = history.get("terms") or {}
+    losses = [float(v) for v in terms.get("objective", terms.get("loss", []))]
     n = len(losses)
     if n < 50:
         return None
@@ -322,14 +325,17 @@ def levelling(history: dict[str, Any]) -> dict[str, float | bool] | None:
     return {"last_fifth_share": round(share, 4), "levelled": bool(abs(share) < LEVELLED_SHARE)}
 
 
-def export(build: Path, out: Path = REFERENCE_DIR) -> list[dict[str, Any]]:
+def export(build: Path, out: Path = REFERENCE_DIR, partial: bool = False) -> list[dict[str, Any]]:
     """Copy the full-profile runs a course build trained (:func:`used_runs`) into ``out`` with a manifest
     each, keep the reference models it loaded as they are, remove the others, write ``out/README.md``;
     return the manifests of all that ``out`` then holds.
 
     A build with ``MOTIONLAB_RETRAIN=1`` trains every run, so every model is exported afresh (``make
     reference``); a build with the reference models in use trains only the runs whose configuration none of
-    them matches, and only those are replaced (``make reference ALL=0``)."""
+    them matches, and only those are replaced (``make reference ALL=0``). A ``partial`` build ran some
+    chapters only (``python -m motionlab.course --only 03``): the references it did not use stay, but for
+    the older versions of the runs it trained (the same name, model and data, another training
+    configuration), which it replaces."""
     cached, loaded = used_runs(build)
     stems = sorted(stem for stem in cached if stem.rsplit("-", 1)[0] not in TRAINED_IN_EVERY_BUILD)
     missing = [stem for stem in stems if not (build / "checkpoints" / f"{stem}.pt").exists()]
@@ -346,9 +352,16 @@ def export(build: Path, out: Path = REFERENCE_DIR) -> list[dict[str, Any]]:
     if len(shipped) < len(manifests):
         raise ReferenceError("two used runs differ only in their data's bits: they cannot share reference/")
     for old in out.glob("*.pt"):
-        if old.stem not in shipped:
-            old.unlink()
-            manifest_path(old).unlink(missing_ok=True)
+        if old.stem in shipped:
+            continue
+        if partial:
+            former = read_manifest(old)
+            if not any(_older_version(former, m) for m in exported):
+                manifests.append(former)
+                continue
+        old.unlink()
+        manifest_path(old).unlink(missing_ok=True)
+    manifests.sort(key=lambda m: m["file"])
     total = sum(m["bytes"] for m in manifests) + sum(
         manifest_path(out / m["file"]).stat().st_size for m in manifests
     )
@@ -358,6 +371,18 @@ def export(build: Path, out: Path = REFERENCE_DIR) -> list[dict[str, Any]]:
         )
     (out / "README.md").write_text(_readme(manifests, total))
     return manifests
+
+
+def _older_version(former: dict[str, Any], new: dict[str, Any]) -> bool:
+    """Whether manifest ``former`` is an earlier training of the run of manifest ``new``: the same name, model
+    and data (up to the data's last bits), another training configuration."""
+    a, b = portable(former.get("config") or {}), portable(new.get("config") or {})
+    return (
+        former.get("name") == new.get("name")
+        and a.get("model") == b.get("model")
+        and a.get("data") == b.get("data")
+        and a.get("train") != b.get("train")
+    )
 
 
 def half_precision(state_dict: dict[str, torch.Tensor]) -> tuple[dict[str, torch.Tensor], dict[str, Any]]:

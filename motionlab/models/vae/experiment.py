@@ -64,7 +64,7 @@ class ExperimentConfig(config.ProfileConfig):
     clip_stride: int = integer(15, minimum=1)
     clip_latent: int = integer(16, minimum=1)
     clip_hidden: int = integer(128, minimum=1)
-    clip_steps: int = integer(600, minimum=1)
+    clip_steps: int = integer(2400, minimum=1)
     batch_size: int = integer(64, minimum=1)
     lr: float = real(2e-3, above=0)
     grad_clip: float = real(1.0, above=0)

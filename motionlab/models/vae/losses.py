@@ -72,7 +72,9 @@ def elbo_loss(
     model: LatentVariableModel, batch: Tensor | tuple[Tensor, Tensor], step: int, coeffs: dict[str, float]
 ) -> dict[str, Tensor]:
     """Loss function for :func:`motionlab.train.train`: ``recon + beta * kl`` (``beta`` from the schedules,
-    default 1).
+    default 1), with its terms and ``objective``, the negative ELBO ``recon + kl``: the loss at the KL
+    weight's final value, the measure whose levelling off says the run has converged (the loss itself rises
+    while ``beta`` ramps up).
 
     ``batch`` is ``x`` for an unconditional model or ``(x, label)`` for a conditional one. For an autoencoder
     the loss is the reconstruction term alone.
@@ -82,7 +84,12 @@ def elbo_loss(
     if not model.variational:
         return {"loss": terms["recon"], "recon": terms["recon"]}
     beta = coeffs.get("beta", 1.0)
-    return {"loss": terms["recon"] + beta * terms["kl"], "recon": terms["recon"], "kl": terms["kl"]}
+    return {
+        "loss": terms["recon"] + beta * terms["kl"],
+        "recon": terms["recon"],
+        "kl": terms["kl"],
+        "objective": (terms["recon"] + terms["kl"]).detach(),
+    }
 
 
 def kl_weight(steps: int, anneal: bool) -> KLAnneal | Constant:
