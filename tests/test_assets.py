@@ -31,3 +31,9 @@ def test_every_report_gets_the_same_assets_linked_from_one_unpacked_copy(tmp_pat
     assert list((first / "@jupyter-widgets").glob("*.woff2"))
     # One copy on disk: the two reports' files are links of the same unpacked file.
     assert os.path.samefile(first / urls["require_js_url"], second / urls["require_js_url"])
+    # A build in the folder of an earlier one: its links are found in place, a file left there is replaced.
+    stray = first / urls["require_js_url"]
+    stray.unlink()
+    stray.write_text("an old copy")
+    assert install_assets(first) == urls and _files(first) == _files(second)
+    assert os.path.samefile(stray, second / urls["require_js_url"])

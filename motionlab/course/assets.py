@@ -169,7 +169,12 @@ def _unpacked(tarball: Path, files: tuple[str, ...]) -> Path:
 
 def _link_or_copy(source: str, destination: str) -> None:
     """A hard link of ``source`` at ``destination`` (the report's assets are never written to), a copy where
-    the two are on different file systems."""
+    the two are on different file systems; a build in the folder of an earlier one finds its links in place,
+    and replaces any other file there."""
+    if os.path.lexists(destination):
+        if os.path.exists(destination) and os.path.samefile(source, destination):
+            return
+        os.unlink(destination)
     try:
         os.link(source, destination)
     except OSError:
