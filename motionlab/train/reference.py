@@ -471,8 +471,8 @@ def _readme(manifests: list[dict[str, Any]], total: int) -> str:
         f"stored as float16, loaded back into float32; the loss history at {HISTORY_POINTS} evenly spaced",
         "steps) and `<name>-<hash>.json` its manifest:",
         "configuration, seed, steps, training time and machine, commit, SHA-256, metrics, and how much its",
-        "loss still fell over its last fifth of steps (as a share of its whole fall; `levelled` below "
-        f"{LEVELLED_SHARE:.0%}).",
+        "loss (a VAE's: its negative ELBO) still fell over its last fifth of steps (as a share of its",
+        f"whole fall; `levelled` below {LEVELLED_SHARE:.0%}).",
         "",
         "Rebuild them all with `make reference` (a course build with `MOTIONLAB_RETRAIN=1` in a fresh",
         "folder, then `python -m motionlab.apps.reference export`), or only those whose configuration",
