@@ -97,8 +97,8 @@ def test_an_export_keeps_the_references_a_build_loaded_and_replaces_what_it_trai
 def test_a_partial_export_keeps_what_it_did_not_use_but_older_versions_of_what_it_trained(
     shipped: Path,
 ) -> None:
-    """A build of one chapter (``export --partial``): the run it trained for longer replaces its older
-    version, a reference of another chapter stays although this build did not use it."""
+    """A build of one chapter (``export --partial --replace tiny_reference``): the run it trained for longer
+    replaces its older version, a reference of another chapter stays although this build did not use it."""
     other = {**MODEL_CONFIG, "chapter": "another"}
     train_or_load("tiny_other", other, make_model(), loss_fn, data(), CFG)
     build = config.checkpoint_dir().parent
@@ -109,7 +109,7 @@ def test_a_partial_export_keeps_what_it_did_not_use_but_older_versions_of_what_i
     ]
     (config.checkpoint_dir() / reference.runs_log().name).write_text("")  # the next build: one run, longer
     train_or_load("tiny_reference", MODEL_CONFIG, make_model(), loss_fn, data(), replace(CFG, steps=80))
-    manifests = reference.export(build, shipped, partial=True)
+    manifests = reference.export(build, shipped, partial=True, replace=("tiny_reference",))
     assert sorted((m["name"], m["steps"]) for m in manifests) == [("tiny_other", 60), ("tiny_reference", 80)]
     assert len(list(shipped.glob("*.pt"))) == 2 and "tiny_other" in (shipped / "README.md").read_text()
 

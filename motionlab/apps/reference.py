@@ -38,8 +38,14 @@ def main(argv: list[str] | None = None) -> int:
     exp.add_argument(
         "--partial",
         action="store_true",
-        help="the build ran some chapters only: keep the references it did not use, but for older "
-        "versions of the runs it trained",
+        help="the build ran some chapters only: keep the references it did not use",
+    )
+    exp.add_argument(
+        "--replace",
+        nargs="+",
+        default=(),
+        metavar="NAME",
+        help="with --partial: runs whose configuration changed; their references the build did not use go",
     )
     sub.add_parser("verify", help="check every reference model against its manifest")
     seeds = sub.add_parser("seeds", help="record the claims of builds trained with base seeds 0, 1, 2, ...")
@@ -52,7 +58,9 @@ def main(argv: list[str] | None = None) -> int:
     args = parser.parse_args(argv)
     try:
         if args.command == "export":
-            manifests = reference.export(args.build.resolve(), partial=args.partial)
+            manifests = reference.export(
+                args.build.resolve(), partial=args.partial, replace=tuple(args.replace)
+            )
             print(f"exported {len(manifests)} reference models to {reference.REFERENCE_DIR}")
         elif args.command == "seeds":
             base = seed_claims.load() if args.update else None

@@ -325,7 +325,9 @@ def levelling(history: dict[str, Any]) -> dict[str, float | bool] | None:
     return {"last_fifth_share": round(share, 4), "levelled": bool(abs(share) < LEVELLED_SHARE)}
 
 
-def export(build: Path, out: Path = REFERENCE_DIR, partial: bool = False) -> list[dict[str, Any]]:
+def export(
+    build: Path, out: Path = REFERENCE_DIR, partial: bool = False, replace: tuple[str, ...] = ()
+) -> list[dict[str, Any]]:
     """Copy the full-profile runs a course build trained (:func:`used_runs`) into ``out`` with a manifest
     each, keep the reference models it loaded as they are, remove the others, write ``out/README.md``;
     return the manifests of all that ``out`` then holds.
@@ -334,8 +336,7 @@ def export(build: Path, out: Path = REFERENCE_DIR, partial: bool = False) -> lis
     reference``); a build with the reference models in use trains only the runs whose configuration none of
     them matches, and only those are replaced (``make reference ALL=0``). A ``partial`` build ran some
     chapters only (``python -m motionlab.course --only 03``): the references it did not use stay, but for
-    the older versions of the runs it trained (the same name, model and data, another training
-    configuration), which it replaces."""
+    those of the runs named in ``replace`` (the runs whose configuration changed: their older versions go)."""
     cached, loaded = used_runs(build)
     stems = sorted(stem for stem in cached if stem.rsplit("-", 1)[0] not in TRAINED_IN_EVERY_BUILD)
     missing = [stem for stem in stems if not (build / "checkpoints" / f"{stem}.pt").exists()]
@@ -354,11 +355,9 @@ def export(build: Path, out: Path = REFERENCE_DIR, partial: bool = False) -> lis
     for old in out.glob("*.pt"):
         if old.stem in shipped:
             continue
-        if partial:
-            former = read_manifest(old)
-            if not any(_older_version(former, m) for m in exported):
-                manifests.append(former)
-                continue
+        if partial and old.stem.rsplit("-", 1)[0] not in replace:
+            manifests.append(read_manifest(old))
+            continue
         old.unlink()
         manifest_path(old).unlink(missing_ok=True)
     manifests.sort(key=lambda m: m["file"])
@@ -371,18 +370,6 @@ def export(build: Path, out: Path = REFERENCE_DIR, partial: bool = False) -> lis
         )
     (out / "README.md").write_text(_readme(manifests, total))
     return manifests
-
-
-def _older_version(former: dict[str, Any], new: dict[str, Any]) -> bool:
-    """Whether manifest ``former`` is an earlier training of the run of manifest ``new``: the same name, model
-    and data (up to the data's last bits), another training configuration."""
-    a, b = portable(former.get("config") or {}), portable(new.get("config") or {})
-    return (
-        former.get("name") == new.get("name")
-        and a.get("model") == b.get("model")
-        and a.get("data") == b.get("data")
-        and a.get("train") != b.get("train")
-    )
 
 
 def half_precision(state_dict: dict[str, torch.Tensor]) -> tuple[dict[str, torch.Tensor], dict[str, Any]]:
