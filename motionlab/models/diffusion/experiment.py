@@ -118,9 +118,9 @@ class ExperimentConfig(config.ProfileConfig):
     @classmethod
     def long(cls) -> ExperimentConfig:
         """A longer, larger run for the training command (``python -m motionlab.apps.training diffusion
-        --config long``): 20 times the full profile's steps (6,000) and a denoiser twice as wide (256,
+        --config long``): 20 times the full profile's steps (12,000) and a denoiser twice as wide (256,
         feed-forward 512, 4 layers); the same sample sets as :meth:`full`."""
-        return cls(model=MDMConfig.course(latent_dim=256, ff_size=512), steps=6_000)
+        return cls(model=MDMConfig.course(latent_dim=256, ff_size=512), steps=12_000)
 
     def train_config(self) -> TrainConfig:
         """Every run's :class:`~motionlab.train.TrainConfig`."""
