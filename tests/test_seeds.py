@@ -96,6 +96,11 @@ def test_the_command_records_the_table_and_refuses_bad_arguments(tmp_path, monke
     with pytest.raises(SystemExit) as exit_info:
         command.main(["seeds", "one=/tmp"])
     assert exit_info.value.code == 2 and "expected SEED=BUILD" in capsys.readouterr().err
+    with pytest.raises(SystemExit) as exit_info:
+        command.main(["export", str(build), "--replace", "mdm"])
+    assert (
+        exit_info.value.code == 2 and "--replace names runs of a --partial build" in capsys.readouterr().err
+    )
 
 
 def test_every_claim_of_the_model_chapters_is_recorded_over_three_seeds() -> None:

@@ -56,6 +56,8 @@ def main(argv: list[str] | None = None) -> int:
         help="replace only the claims of the notebooks these builds ran; keep the rest of the table",
     )
     args = parser.parse_args(argv)
+    if args.command == "export" and args.replace and not args.partial:
+        parser.error("export: --replace names runs of a --partial build (a whole build replaces every run)")
     try:
         if args.command == "export":
             manifests = reference.export(

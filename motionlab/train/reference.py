@@ -348,7 +348,7 @@ def export(
     kept = [read_manifest(out / name) for name in sorted(loaded)]
     out.mkdir(parents=True, exist_ok=True)
     exported = [_export_one(build / "checkpoints" / f"{stem}.pt", out) for stem in stems]
-    manifests = sorted(exported + kept, key=lambda m: m["file"])
+    manifests = exported + kept
     shipped = {Path(m["file"]).stem for m in manifests}
     if len(shipped) < len(manifests):
         raise ReferenceError("two used runs differ only in their data's bits: they cannot share reference/")
