@@ -102,10 +102,10 @@ class ExperimentConfig(config.ProfileConfig):
     window: int = integer(96, minimum=1)
     batch_size: int = integer(32, minimum=1)
     lr: float = real(3e-3, above=0)
-    steps: int = integer(200, minimum=10)  # the schedules need 10 steps
-    representation_steps: int = integer(60, minimum=10)
-    collapse_steps: int = integer(1000, minimum=10)
-    denoiser_steps: int = integer(400, minimum=1)
+    steps: int = integer(800, minimum=10)  # the schedules need 10 steps
+    representation_steps: int = integer(240, minimum=10)
+    collapse_steps: int = integer(2000, minimum=10)
+    denoiser_steps: int = integer(2000, minimum=1)
     denoiser_batch: int = integer(16, minimum=1)
     denoiser_lr: float = real(1e-3, above=0)
     denoiser_copies: int = integer(3, minimum=1)
@@ -149,8 +149,8 @@ class ExperimentConfig(config.ProfileConfig):
     def long(cls) -> ExperimentConfig:
         """A longer, larger run for the training command (``python -m motionlab.apps.training motion_cell
         --config long``): the Motion Cell at :class:`MotionCellConfig`'s own sizes (hidden 128, words of 64),
-        20 times the full profile's steps (6,000; the output heads 1,600; the longer mean-collapse runs
-        10,000); the same denoiser and evaluation as :meth:`full`."""
+        6,000 steps (the output heads 1,600; the longer mean-collapse runs 10,000); the same denoiser and
+        evaluation as :meth:`full`."""
         return cls(
             motion_cell=MotionCellConfig(), steps=6_000, representation_steps=1_600, collapse_steps=10_000
         )
@@ -185,6 +185,7 @@ def prepare_training_data(
         steps=cfg.denoiser_steps,
         batch_size=min(cfg.denoiser_batch, len(pairs)),
         lr=cfg.denoiser_lr,
+        lr_schedule=learning_rate_decay(cfg.denoiser_steps),
         checkpoint_every=None,
     )
     own_codec = codec.copy()
@@ -218,9 +219,11 @@ def prepare_training_data(
 
 
 def learning_rate_decay(steps: int) -> LinearRamp:
-    """The learning-rate factor of every run: 1 for the first 60% of the steps, then linear down to 0.1."""
+    """The learning-rate factor of every run (and of the denoiser): 1 for the first 60% of the steps, linear
+    down to 0.1 by 80%, then held at 0.1, so that the last fifth shows whether the loss has levelled off at
+    the final rate."""
     check_scalar(steps, "steps", "learning_rate_decay", kind=numbers.Integral, minimum=1)
-    return LinearRamp(int(0.6 * steps), steps - int(0.6 * steps), 1.0, 0.1)
+    return LinearRamp(int(0.6 * steps), int(0.8 * steps) - int(0.6 * steps), 1.0, 0.1)
 
 
 def motion_cell_schedules(
