@@ -50,6 +50,8 @@ class ExperimentConfig(config.ProfileConfig):
             variances, towards it).
         clip_length, clip_stride: window length and hop in frames (30 fps).
         clip_latent, clip_hidden, clip_steps: the clip CVAEs' latent size, width and training steps.
+        tiny_steps: training steps of the tiny CVAE the chapter writes in the notebook (its live run; the
+            package's CVAEs train ``clip_steps``).
         batch_size, lr, grad_clip, seed: for every run.
         per_action, n_repeats: evaluation sample sets (clips per action) and how many of them.
     """
@@ -65,6 +67,7 @@ class ExperimentConfig(config.ProfileConfig):
     clip_latent: int = integer(16, minimum=1)
     clip_hidden: int = integer(128, minimum=1)
     clip_steps: int = integer(2400, minimum=1)
+    tiny_steps: int = integer(600, minimum=1)
     batch_size: int = integer(64, minimum=1)
     lr: float = real(2e-3, above=0)
     grad_clip: float = real(1.0, above=0)
@@ -81,6 +84,7 @@ class ExperimentConfig(config.ProfileConfig):
             pose_steps=30,
             clip_hidden=32,
             clip_steps=30,
+            tiny_steps=30,
             per_action=10,
             n_repeats=3,
         )
@@ -88,8 +92,8 @@ class ExperimentConfig(config.ProfileConfig):
     @classmethod
     def long(cls) -> ExperimentConfig:
         """A longer, larger run for the training command (``python -m motionlab.apps.training vae --config
-        long``): 20 times the full profile's steps (16,000 for the pose models, 12,000 for the clip CVAEs) and
-        twice their width (256); data and evaluation as in :meth:`full`."""
+        long``): longer runs (16,000 steps for the pose models, 20 times the full profile's; 12,000 for the clip
+        CVAEs, 5 times) at twice the width (256); data and evaluation as in :meth:`full`."""
         return cls(pose_hidden=256, pose_steps=16_000, clip_hidden=256, clip_steps=12_000)
 
     def pose_model(self, variational: bool = True, prior_var: float = 1.0) -> VAEConfig:
