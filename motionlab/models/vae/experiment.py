@@ -92,8 +92,8 @@ class ExperimentConfig(config.ProfileConfig):
     @classmethod
     def long(cls) -> ExperimentConfig:
         """A longer, larger run for the training command (``python -m motionlab.apps.training vae --config
-        long``): longer runs (16,000 steps for the pose models, 20 times the full profile's; 12,000 for the clip
-        CVAEs, 5 times) at twice the width (256); data and evaluation as in :meth:`full`."""
+        long``): longer runs (16,000 steps for the pose models, 20 times the full profile's; 12,000 for the
+        clip CVAEs, 5 times) at twice the width (256); data and evaluation as in :meth:`full`."""
         return cls(pose_hidden=256, pose_steps=16_000, clip_hidden=256, clip_steps=12_000)
 
     def pose_model(self, variational: bool = True, prior_var: float = 1.0) -> VAEConfig:
