@@ -66,7 +66,7 @@ FULL_PRECISION = ("moglow", "real_moglow", "toy_flow_moons")
 
 #: The flows' tensors that are shipped as float16 all the same: the weights of the LSTMs inside MoGlow's
 #: couplings, half of each MoGlow's bytes; rounded, they moved the held-out NLL of each of chapter 06's four
-#: MoGlows by under 0.001 nats per frame.
+#: MoGlows by at most 0.001 nats per frame.
 FLOW_HALF_TENSORS = re.compile(r"\.lstm\.weight_(ih|hh)_l\d+$")
 
 #: Runs never shipped: the course trains them in every build. Chapter 05's fixed-length Glow is the largest
