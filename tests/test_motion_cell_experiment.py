@@ -105,6 +105,7 @@ def test_learning_rate_decay_and_motion_cell_schedules():
     decay = learning_rate_decay(100)
     assert decay(0) == 1.0 and decay(60) == 1.0 and decay(70) == pytest.approx(0.55)
     assert decay(80) == pytest.approx(0.1) and decay(100) == pytest.approx(0.1)  # held over the last fifth
+    assert learning_rate_decay(1)(0) == 1.0  # the decay never starts before the first step
     schedules = motion_cell_schedules(100, beta=1.0, classifier=1.0, word_drop=0.5)
     beta, classifier, word_drop = schedules["beta"], schedules["classifier"], schedules["word_drop"]
     # §3.5.1: warm-up at 0, annealing 0 -> 1, cool-down at lambda_KL = 1 until the end

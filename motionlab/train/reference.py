@@ -62,7 +62,7 @@ HALF_MIN_ELEMENTS = 512
 #: sums log-determinants and coupling scales over all its layers, and float16 weights in MoGlow's control
 #: encoder and coupling outputs moved its held-out NLL by up to 1,470 nats per frame (chapter 06's comparison
 #: with the Gaussian AR baseline is a difference of about forty).
-FULL_PRECISION = ("moglow", "real_moglow", "toy_flow_moons")
+FLOWS = ("moglow", "real_moglow", "toy_flow_moons")
 
 #: The flows' tensors that are shipped as float16 all the same: the weights of the LSTMs inside MoGlow's
 #: couplings, half of each MoGlow's bytes; rounded, they moved the held-out NLL of each of chapter 06's four
@@ -432,7 +432,7 @@ def _export_one(source: Path, out: Path) -> dict[str, Any]:
     metrics = {str(k): float(v) for k, v in (extra.get("metrics") or {}).items()}
     identity = payload["config"]
     target = out / reference_path(payload["name"], identity).name
-    only = FLOW_HALF_TENSORS if payload["name"] in FULL_PRECISION else None
+    only = FLOW_HALF_TENSORS if payload["name"] in FLOWS else None
     payload["state_dict"], stored = half_precision(payload["state_dict"], only)
     history = extra.get("history") or {}
     extra["history"] = thinned(history, HISTORY_POINTS)
@@ -465,7 +465,7 @@ def _readme(manifests: list[dict[str, Any]], total: int) -> str:
         "The models whose numbers the course reports, loaded by `make course` (the full profile) instead",
         "of trained. Each `<name>-<hash>.pt` is a checkpoint-cache entry (weights, config, loss history,",
         "final metrics; `torch.load(..., weights_only=True)`; weight matrices of 512 numbers or more",
-        f"(of the flows' {', '.join(FULL_PRECISION)}: only the LSTM weights inside MoGlow's couplings)",
+        f"(of the flows' {', '.join(FLOWS)}: only the LSTM weights inside MoGlow's couplings)",
         f"stored as float16, loaded back into float32; the loss history at {HISTORY_POINTS} evenly spaced",
         "steps) and `<name>-<hash>.json` its manifest:",
         "configuration, seed, steps, training time and machine, commit, SHA-256, metrics, and how much its",

@@ -18,7 +18,8 @@ What is ours: the paper's denoiser (§3.1, §4.2, Table 1) is a plain convolutio
 ``Conv1D + ReLU`` down, ``ConvTranspose1D`` layers up, no skip connection), trained for 300 epochs on the
 rest of AMASS with 10 % of the input dimensions corrupted by Gaussian noise N(0, 0.5). Ours uses ELU and
 stride-1 convolutions throughout, adds the skip connection, and is trained on the capture noise of
-:mod:`motionlab.data.noise` (jitter and spikes) for a few hundred steps on the benchmark's validation split.
+:mod:`motionlab.data.noise` (jitter and spikes) on the benchmark's validation split, for the chapter's
+``denoiser_steps`` with the Motion Cell's learning-rate decay (:func:`.experiment.learning_rate_decay`).
 """
 
 from __future__ import annotations

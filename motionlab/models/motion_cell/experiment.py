@@ -223,7 +223,8 @@ def learning_rate_decay(steps: int) -> LinearRamp:
     down to 0.1 by 80%, then held at 0.1, so that the last fifth shows whether the loss has levelled off at
     the final rate."""
     check_scalar(steps, "steps", "learning_rate_decay", kind=numbers.Integral, minimum=1)
-    return LinearRamp(int(0.6 * steps), int(0.8 * steps) - int(0.6 * steps), 1.0, 0.1)
+    start = int(0.6 * steps)
+    return LinearRamp(start, max(int(0.8 * steps) - start, 1), 1.0, 0.1)  # a run of 1 step: factor 1
 
 
 def motion_cell_schedules(

@@ -3,7 +3,7 @@
 Each motion word is decoded from its own latent on its own. Where neighbouring words do not join up, the
 pose *steps* at the word boundary: a clip becomes a staircase with one step every ``l`` frames, its joint
 speed ripples at ``fps / l`` (10 Hz for the paper's ``l = 3`` at 30 fps) and its jerk rises. Chapter 04
-measures this on the samples of its short-trained Motion Cell as decoded, and on its reconstructions of
+measures this on the samples of its Motion Cell as decoded, and on its reconstructions of
 real clips; the paper reports no such artefact.
 
 :func:`smooth_word_boundaries` takes generated pose vectors ``(B, T, 90)`` and
