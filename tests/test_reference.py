@@ -206,14 +206,17 @@ def test_weight_matrices_ship_as_float16_and_load_back_into_float32() -> None:
     )
 
 
-def test_a_flow_ships_only_its_coupling_lstms_in_half_precision() -> None:
-    """MoGlow's likelihood is sensitive to rounding everywhere but in its couplings' LSTM weights."""
-    flow = nn.ModuleDict({"lstm": nn.LSTM(64, 32), "out": nn.Linear(96, 64)})
-    state = {f"flow.layers.2.{key}": value for key, value in flow.state_dict().items()}
-    shipped, stored = reference.half_precision(state, reference.FLOW_HALF_TENSORS)
-    halved = sorted(key for key, value in shipped.items() if value.dtype == torch.float16)
-    assert halved == ["flow.layers.2.lstm.weight_hh_l0", "flow.layers.2.lstm.weight_ih_l0"]
-    assert stored["float16_numbers"] == 128 * 64 + 128 * 32
+def test_a_likelihood_model_ships_only_its_lstm_weights_in_half_precision() -> None:
+    """MoGlow's and the Gaussian baselines' likelihoods are sensitive to rounding everywhere but in their LSTM
+    weights: a coupling's (under a prefix) and a baseline's own (at the top level)."""
+    flow = nn.ModuleDict({"lstm": nn.LSTM(64, 32), "out": nn.Linear(96, 64), "linear": nn.Linear(64, 64)})
+    for prefix in ("flow.layers.2.", ""):
+        state = {f"{prefix}{key}": value for key, value in flow.state_dict().items()}
+        shipped, stored = reference.half_precision(state, reference.LIKELIHOOD_HALF_TENSORS)
+        halved = sorted(key for key, value in shipped.items() if value.dtype == torch.float16)
+        assert halved == [f"{prefix}lstm.weight_hh_l0", f"{prefix}lstm.weight_ih_l0"]
+        assert stored["float16_numbers"] == 128 * 64 + 128 * 32
+    assert {"moglow", "moglow_gaussian_ar", "real_moglow_gaussian_ar"} <= set(reference.LIKELIHOOD_RUNS)
 
 
 def test_a_reference_is_found_by_its_data_shape_not_its_data_bits(

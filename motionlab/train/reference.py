@@ -58,16 +58,18 @@ SIZE_LIMIT = 30_000_000
 #: halves the models' size (the 30 MB limit) and rounds each weight by at most 1/2048 of its magnitude.
 HALF_MIN_ELEMENTS = 512
 
-#: The flows are shipped in float32 but for the tensors :data:`FLOW_HALF_TENSORS` names: a flow's likelihood
-#: sums log-determinants and coupling scales over all its layers, and float16 weights in MoGlow's control
-#: encoder and coupling outputs moved its held-out NLL by up to 1,470 nats per frame (chapter 06's comparison
-#: with the Gaussian AR baseline is a difference of about forty).
-FLOWS = ("moglow", "real_moglow", "toy_flow_moons")
+#: The runs whose held-out likelihood the course reports, shipped in float32 but for the tensors
+#: :data:`LIKELIHOOD_HALF_TENSORS` names: a flow's likelihood sums log-determinants and coupling scales over
+#: all its layers, and a Gaussian baseline's divides by the small deviations it predicts, so rounding moves
+#: them far. Float16 weights in MoGlow's control encoder and coupling outputs moved its held-out NLL by up to
+#: 1,470 nats per frame, and in the Gaussian AR baseline's least-squares predictor (trained 6,000 steps) from
+#: -331.1 to -79.7 on the val split (chapter 06's comparison of the two is a difference of about a hundred).
+LIKELIHOOD_RUNS = ("moglow", "real_moglow", "toy_flow_moons", "moglow_gaussian_ar", "real_moglow_gaussian_ar")
 
-#: The flows' tensors that are shipped as float16 all the same: the weights of the LSTMs inside MoGlow's
-#: couplings, half of each MoGlow's bytes; rounded, they moved the held-out NLL of each of chapter 06's four
-#: MoGlows by at most 0.001 nats per frame.
-FLOW_HALF_TENSORS = re.compile(r"\.lstm\.weight_(ih|hh)_l\d+$")
+#: The likelihood runs' tensors that are shipped as float16 all the same: their LSTMs' weights, half of each
+#: MoGlow's bytes and most of each baseline's; rounded, they moved the held-out NLL of chapter 06's four
+#: MoGlows (trained 20,000 steps) by at most 0.06 nats per frame, and the Gaussian AR's by less than 0.001.
+LIKELIHOOD_HALF_TENSORS = re.compile(r"(^|\.)lstm\.weight_(ih|hh)_l\d+$")
 
 #: Runs never shipped: the course trains them in every build. Chapter 05's fixed-length Glow is the largest
 #: model (5.9 MB as a flow in float32) and trains in about half a minute, in front of the reader.
@@ -384,8 +386,8 @@ def half_precision(
     """The state dict as shipped: float32 tensors of at least :data:`HALF_MIN_ELEMENTS` numbers (the weight
     matrices, nearly all the bytes) stored as float16, the rest (biases, norms, data statistics, noise
     schedules) as they are; and what that did (tensors halved, numbers, the largest rounding relative to
-    its tensor's largest magnitude). ``only``: halve just the tensors whose name it matches (a flow's,
-    :data:`FLOW_HALF_TENSORS`). Loading casts them back to the model's float32."""
+    its tensor's largest magnitude). ``only``: halve just the tensors whose name it matches (a likelihood
+    run's, :data:`LIKELIHOOD_HALF_TENSORS`). Loading casts them back to the model's float32."""
     shipped, halved, numbers, worst = {}, 0, 0, 0.0
     for key, tensor in state_dict.items():
         if (
@@ -432,7 +434,7 @@ def _export_one(source: Path, out: Path) -> dict[str, Any]:
     metrics = {str(k): float(v) for k, v in (extra.get("metrics") or {}).items()}
     identity = payload["config"]
     target = out / reference_path(payload["name"], identity).name
-    only = FLOW_HALF_TENSORS if payload["name"] in FLOWS else None
+    only = LIKELIHOOD_HALF_TENSORS if payload["name"] in LIKELIHOOD_RUNS else None
     payload["state_dict"], stored = half_precision(payload["state_dict"], only)
     history = extra.get("history") or {}
     extra["history"] = thinned(history, HISTORY_POINTS)
@@ -465,7 +467,7 @@ def _readme(manifests: list[dict[str, Any]], total: int) -> str:
         "The models whose numbers the course reports, loaded by `make course` (the full profile) instead",
         "of trained. Each `<name>-<hash>.pt` is a checkpoint-cache entry (weights, config, loss history,",
         "final metrics; `torch.load(..., weights_only=True)`; weight matrices of 512 numbers or more",
-        f"(of the flows' {', '.join(FLOWS)}: only the LSTM weights inside MoGlow's couplings)",
+        f"(of the likelihood models {', '.join(LIKELIHOOD_RUNS)}: only their LSTMs' weights)",
         f"stored as float16, loaded back into float32; the loss history at {HISTORY_POINTS} evenly spaced",
         "steps) and `<name>-<hash>.json` its manifest:",
         "configuration, seed, steps, training time and machine, commit, SHA-256, metrics, and how much its",
