@@ -75,8 +75,17 @@ def test_a_cell_past_its_limit_fails_with_the_limit_in_the_message(tmp_path: Pat
 
 def test_cell_limits_come_from_the_chapter_budget(monkeypatch):
     monkeypatch.setenv("MOTIONLAB_PROFILE", "full")
+    monkeypatch.delenv("MOTIONLAB_RETRAIN", raising=False)
+    monkeypatch.delenv("MOTIONLAB_SEED", raising=False)
     assert course.cell_limits("04_motion_cell").cell_seconds == course.CELL_BUDGET_FACTOR * 240
     assert course.cell_limits("99_extra").cell_seconds == course.DEFAULT_CELL_SECONDS
+    # a build that trains its models (another base seed, RETRAIN) is not held to the loading budgets
+    monkeypatch.setenv("MOTIONLAB_SEED", "1")
+    assert course.cell_limits("06_moglow").cell_seconds == course.TRAINING_CELL_SECONDS
+    monkeypatch.delenv("MOTIONLAB_SEED")
+    monkeypatch.setenv("MOTIONLAB_RETRAIN", "1")
+    assert course.cell_limits("06_moglow").cell_seconds == course.TRAINING_CELL_SECONDS
+    monkeypatch.delenv("MOTIONLAB_RETRAIN")
     monkeypatch.setenv("MOTIONLAB_PROFILE", "quick")
     assert course.cell_limits("01_rotation_geometry").cell_seconds == course.CELL_BUDGET_FACTOR * 20
     with pytest.raises(ValueError, match="CellLimits: cell_seconds must be greater than 0, got 0"):

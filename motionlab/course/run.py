@@ -93,6 +93,11 @@ CELL_BUDGET_FACTOR = 3.0
 #: Cell limit of a chapter without a budget (e.g. a notebook a user adds), in seconds.
 DEFAULT_CELL_SECONDS = 600.0
 
+#: Cell limit of a full-profile build that trains its models (``RETRAIN``, another base seed), in seconds: the
+#: chapters' budgets are for loading the reference models, and one cell may train a whole family (chapter 06's
+#: four MoGlows of 20,000 steps, two at a time, take about half an hour on two cores).
+TRAINING_CELL_SECONDS = 4 * 3600.0
+
 #: How long a kernel may take to start a request or to send a finished cell's reply (seconds); see
 #: :class:`~motionlab.course.kernel.CellLimits`.
 ANSWER_SECONDS = 30.0
@@ -136,11 +141,20 @@ def budget_seconds(name: str) -> float | None:
     return pair[1] if config.is_quick() else pair[0]
 
 
+def loads_references() -> bool:
+    """Whether the build loads the shipped reference models rather than training: the full profile with base
+    seed 0 and no ``RETRAIN``."""
+    return reference.in_use() and config.base_seed() == 0
+
+
 def cell_limits(name: str) -> CellLimits:
     """The time limits for the cells of chapter ``name`` in the active profile (:data:`CELL_BUDGET_FACTOR`
-    times its budget)."""
+    times its budget), or :data:`TRAINING_CELL_SECONDS` in a full-profile build that trains its models."""
     budget = budget_seconds(name)
-    cell_seconds = DEFAULT_CELL_SECONDS if budget is None else CELL_BUDGET_FACTOR * budget
+    if not config.is_quick() and not loads_references():
+        cell_seconds = TRAINING_CELL_SECONDS
+    else:
+        cell_seconds = DEFAULT_CELL_SECONDS if budget is None else CELL_BUDGET_FACTOR * budget
     return CellLimits(cell_seconds=cell_seconds, answer_seconds=ANSWER_SECONDS)
 
 
@@ -246,7 +260,7 @@ def parallel() -> int:
         return 1
     text = os.environ.get("MOTIONLAB_PARALLEL", "").strip()
     if not text:
-        return PARALLEL if reference.in_use() and config.base_seed() == 0 else 1
+        return PARALLEL if loads_references() else 1
     if not text.isdigit() or int(text) < 1:
         raise ValueError(f"MOTIONLAB_PARALLEL must be an integer >= 1, got {text!r}")
     return int(text)
