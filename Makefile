@@ -39,7 +39,7 @@ ALL ?= 1
 
 reference: $(STAMP)
 	rm -rf build/reference-build
-	MOTIONLAB_BUILD=build/reference-build MOTIONLAB_PROFILE=full MOTIONLAB_RETRAIN=$(ALL) \
+	MOTIONLAB_BUILD=build/reference-build MOTIONLAB_PROFILE=full MOTIONLAB_RETRAIN=$(ALL) MOTIONLAB_REFERENCE_BUILD=1 \
 		$(BIN)/python -m motionlab.course.logs reference -- $(BIN)/python -m motionlab.course; \
 		status=$$?; $(BIN)/python -m motionlab.apps.reference export build/reference-build && exit $$status
 

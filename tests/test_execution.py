@@ -86,6 +86,15 @@ def test_cell_limits_come_from_the_chapter_budget(monkeypatch):
     monkeypatch.setenv("MOTIONLAB_RETRAIN", "1")
     assert course.cell_limits("06_moglow").cell_seconds == course.TRAINING_CELL_SECONDS
     monkeypatch.delenv("MOTIONLAB_RETRAIN")
+    # nor is `make reference ALL=0`, which trains the runs whose configuration changed
+    monkeypatch.setenv("MOTIONLAB_REFERENCE_BUILD", "1")
+    assert course.cell_limits("06_moglow").cell_seconds == course.TRAINING_CELL_SECONDS
+    monkeypatch.delenv("MOTIONLAB_PARALLEL", raising=False)
+    assert course.parallel() == 1
+    monkeypatch.setenv("MOTIONLAB_REFERENCE_BUILD", "yes")
+    with pytest.raises(ValueError, match="MOTIONLAB_REFERENCE_BUILD must be 1 or 0, got 'yes'"):
+        course.loads_references()
+    monkeypatch.delenv("MOTIONLAB_REFERENCE_BUILD")
     monkeypatch.setenv("MOTIONLAB_PROFILE", "quick")
     assert course.cell_limits("01_rotation_geometry").cell_seconds == course.CELL_BUDGET_FACTOR * 20
     with pytest.raises(ValueError, match="CellLimits: cell_seconds must be greater than 0, got 0"):

@@ -45,7 +45,7 @@ def test_train_all_trains_then_loads_every_run(tmp_path, monkeypatch):
     windows = MoGlowFeatures(
         torch.randn(8, 12, 64, generator=generator), torch.randn(8, 12, 3, generator=generator)
     )
-    data = PreparedData(windows, windows, fit_scalers(windows))
+    data = PreparedData(windows, windows, fit_scalers(windows), windows)
     named = experiment.runs(cfg, data)
     assert pickle.loads(pickle.dumps(named["MoGlow p=0.5"])).model == cfg.moglow(0.5)
     assert not any(run.is_cached() for run in named.values())
@@ -65,3 +65,41 @@ def test_train_all_trains_then_loads_every_run(tmp_path, monkeypatch):
         assert again[name].result.loaded_from_cache
         for key, value in trained.model.state_dict().items():
             assert torch.equal(value, again[name].model.state_dict()[key])
+
+
+def test_runs_validate_on_the_val_windows_without_changing_the_weights(tmp_path, monkeypatch):
+    """With validation windows a run records its held-out curve every ``val_every`` steps; the trained
+    weights are those of the same run without validation, bit for bit (MoGlow's dropout and noise draw from
+    the random state a validation pass must leave alone)."""
+    monkeypatch.setenv("MOTIONLAB_BUILD", str(tmp_path))
+    cfg = dataclasses.replace(
+        experiment.ExperimentConfig.quick(),
+        dropout_rates=(0.5,),
+        unscaled_rates=(),
+        moglow_train_steps=6,
+        batch_size=4,
+        validations=3,
+    )
+    generator = torch.Generator().manual_seed(0)
+    windows = MoGlowFeatures(
+        torch.randn(8, 12, 64, generator=generator), torch.randn(8, 12, 3, generator=generator)
+    )
+    held_out = MoGlowFeatures(windows.pose[:3] + 0.1, windows.control[:3])
+    run = experiment.runs(cfg, PreparedData(windows, windows, fit_scalers(windows), held_out))["MoGlow p=0.5"]
+    assert run.train_config.val_every == 2 and run.val_batches is not None
+    validated, result = run.train(progress=False)
+    assert result.history.val_step == [2, 4, 6] and len(result.history.val_terms["loss"]) == 3
+
+    without_val = experiment.runs(cfg, PreparedData(windows, windows, fit_scalers(windows)))["MoGlow p=0.5"]
+    with pytest.raises(ValueError, match=r"no validation windows \(data.val is None\)"):
+        without_val.val_batches(validated)  # what training it would call first
+    plain_run = dataclasses.replace(
+        run, train_config=dataclasses.replace(run.train_config, val_every=None), val_batches=None
+    )
+    plain, plain_result = plain_run.train(progress=False)
+    assert plain_result.history.val_step == []
+    for key, value in validated.state_dict().items():
+        assert torch.equal(value, plain.state_dict()[key]), key
+
+    with pytest.raises(ValueError, match="give both val_batches and train_config.val_every"):
+        dataclasses.replace(run, val_batches=None)

@@ -71,7 +71,7 @@ def test_the_full_profile_loads_the_reference_instead_of_training(shipped: Path)
         and manifest["sha256"] == reference.sha256(result.path)
     )
     assert manifest["trained_on"]["torch"] == str(torch.__version__)
-    assert set(manifest["levelling"]) == {"last_fifth_share", "levelled"}
+    assert set(manifest["levelling"]) == {"measure", "last_fifth_share", "levelled"}
     assert "tiny_reference" in (shipped / "README.md").read_text()
 
 
@@ -170,6 +170,24 @@ def test_levelling_tells_a_flat_end_from_a_falling_one() -> None:
     # a KL weight that ramps up makes the loss rise; the objective it leads to (the negative ELBO) is judged
     ramped = {"terms": {"loss": [i / 100 for i in range(100)], "objective": flat["terms"]["loss"]}}
     assert reference.levelling(ramped)["levelled"]
+    assert reference.levelling(flat)["measure"] == "training"
+
+
+def test_levelling_judges_the_held_out_curve_where_the_run_validated() -> None:
+    """A training loss still falling with a held-out loss that levelled off (or rose: past its best) is
+    levelled; a held-out curve still falling is not, whatever the training loss does."""
+    falling = [1.0 - i / 100 for i in range(100)]
+    flat = [1.0 / (1 + i) for i in range(4)] + [0.2] * 16
+    rising = [1.0 / (1 + i) for i in range(4)] + [0.2 + i / 100 for i in range(16)]
+    still = [1.0 - i / 40 for i in range(20)]
+    for held_out, levelled in ((flat, True), (rising, True), (still, False)):
+        judged = reference.levelling({"terms": {"loss": falling}, "val_terms": {"loss": held_out}})
+        assert judged["measure"] == "held-out" and judged["levelled"] is levelled, (held_out, judged)
+    # too few passes to judge: the training loss is
+    few = reference.levelling({"terms": {"loss": falling}, "val_terms": {"loss": flat[:5]}})
+    assert few["measure"] == "training" and not few["levelled"]
+    # a training loss that rises the same way is not levelled (its curve is the thing optimised)
+    assert not reference.levelling({"terms": {"loss": [0.2 + i / 100 for i in range(100)]}})["levelled"]
 
 
 def test_the_shipped_reference_models_match_their_manifests_and_fit_in_30_mb() -> None:

@@ -141,10 +141,18 @@ def budget_seconds(name: str) -> float | None:
     return pair[1] if config.is_quick() else pair[0]
 
 
+#: Set to 1 by ``make reference``: the build makes reference models, so it may train any of them (with
+#: ``ALL=0`` those whose configuration changed), which :func:`loads_references` must not count on.
+REFERENCE_BUILD_VARIABLE = "MOTIONLAB_REFERENCE_BUILD"
+
+
 def loads_references() -> bool:
     """Whether the build loads the shipped reference models rather than training: the full profile with base
-    seed 0 and no ``RETRAIN``."""
-    return reference.in_use() and config.base_seed() == 0
+    seed 0, no ``RETRAIN``, and not a build of the reference models (:data:`REFERENCE_BUILD_VARIABLE`)."""
+    text = os.environ.get(REFERENCE_BUILD_VARIABLE, "0").strip() or "0"
+    if text not in ("0", "1"):
+        raise ValueError(f"{REFERENCE_BUILD_VARIABLE} must be 1 or 0, got {text!r}")
+    return reference.in_use() and config.base_seed() == 0 and text == "0"
 
 
 def cell_limits(name: str) -> CellLimits:

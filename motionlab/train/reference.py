@@ -78,9 +78,12 @@ TRAINED_IN_EVERY_BUILD = ("fixed_length_glow",)
 #: The shipped loss history keeps this many evenly spaced steps (:func:`thinned`): enough for its curve.
 HISTORY_POINTS = 120
 
-#: A run "levelled off" when its training loss fell by less than this share of its whole fall over the
-#: last fifth of its steps (:func:`levelling`).
+#: A run "levelled off" when its held-out loss (or, for a run that does not validate, its training loss)
+#: fell by less than this share of its whole fall over the last fifth of its steps (:func:`levelling`).
 LEVELLED_SHARE = 0.05
+
+#: A run's held-out curve is judged when it has at least this many validation passes.
+MIN_VALIDATIONS = 10
 
 
 class ReferenceError(RuntimeError):
@@ -229,7 +232,8 @@ def provenance(result: Any, seconds: float | None = None, command: str = "make c
     where = manifest.get("trained_on") or {}
     lev = manifest.get("levelling") or {}
     tail = (
-        f"; over its last fifth of steps its loss fell a further {lev['last_fifth_share']:.1%} of its fall"
+        f"; over its last fifth of steps its {_MEASURED[lev.get('measure', 'training')]} fell a further "
+        f"{lev['last_fifth_share']:.1%} of its fall"
         if "last_fifth_share" in lev
         else ""
     )
@@ -311,26 +315,45 @@ def trained_on() -> dict[str, Any]:
     }
 
 
-def levelling(history: dict[str, Any]) -> dict[str, float | bool] | None:
-    """How much a run's training objective still fell at the end: the fall over the last fifth of the steps
-    as a share of the whole fall (first tenth's mean to last tenth's mean), and whether it is below
-    :data:`LEVELLED_SHARE`. The objective is the loss term ``objective`` where the loss function reports one
-    (a VAE's negative ELBO, whose loss weights the KL by a ramp), else the loss. ``None`` for a run too short
-    to tell (under 50 steps)."""
-    terms = history.get("terms") or {}
-    losses = [float(v) for v in terms.get("objective", terms.get("loss", []))]
-    n = len(losses)
-    if n < 50:
+#: How :func:`levelling`'s ``measure`` reads in a sentence.
+_MEASURED = {"held-out": "held-out loss", "training": "training loss"}
+
+
+def levelling(history: dict[str, Any]) -> dict[str, Any] | None:
+    """How much a run's objective still fell at the end: the fall over the last fifth of the curve as a share
+    of its whole fall (first tenth's mean to last tenth's mean), and whether it levelled off.
+
+    The curve is the held-out one (``measure`` ``"held-out"``) when the run validated at least
+    :data:`MIN_VALIDATIONS` times, else the training objective (``"training"``): the loss term
+    ``objective`` where the loss function reports one (a VAE's negative ELBO, whose loss weights the KL by
+    a ramp), else the loss. A held-out curve levelled off when its share is below :data:`LEVELLED_SHARE`,
+    also when it rose (the run has passed its best: training longer would not help it); a training curve
+    when the share is that small either way. ``None`` for a run too short to tell (under 50 steps).
+    """
+
+    def objective(terms: dict[str, Any]) -> list[float]:
+        return [float(v) for v in terms.get("objective", terms.get("loss", []))]
+
+    held_out = objective(history.get("val_terms") or {})
+    validated = len(held_out) >= MIN_VALIDATIONS
+    curve = held_out if validated else objective(history.get("terms") or {})
+    if not validated and len(curve) < 50:
         return None
 
     def mean(part: list[float]) -> float:
         return sum(part) / len(part)
 
+    n = len(curve)
     tenth, fifth = max(n // 10, 1), max(n // 5, 1)
-    whole = mean(losses[:tenth]) - mean(losses[-tenth:])
-    last = mean(losses[-fifth - tenth : -fifth]) - mean(losses[-tenth:])
+    whole = mean(curve[:tenth]) - mean(curve[-tenth:])
+    last = mean(curve[-fifth - tenth : -fifth]) - mean(curve[-tenth:])
     share = last / whole if whole > 0 else math.inf
-    return {"last_fifth_share": round(share, 4), "levelled": bool(abs(share) < LEVELLED_SHARE)}
+    levelled = share < LEVELLED_SHARE if validated else abs(share) < LEVELLED_SHARE
+    return {
+        "measure": "held-out" if validated else "training",
+        "last_fifth_share": round(share, 4),
+        "levelled": bool(levelled),
+    }
 
 
 def export(
@@ -471,8 +494,11 @@ def _readme(manifests: list[dict[str, Any]], total: int) -> str:
         f"stored as float16, loaded back into float32; the loss history at {HISTORY_POINTS} evenly spaced",
         "steps) and `<name>-<hash>.json` its manifest:",
         "configuration, seed, steps, training time and machine, commit, SHA-256, metrics, and how much its",
-        "loss (a VAE's: its negative ELBO) still fell over its last fifth of steps (as a share of its",
-        f"whole fall; `levelled` below {LEVELLED_SHARE:.0%}).",
+        "loss still fell over its last fifth of steps, as a share of its whole fall (`levelled` below",
+        f"{LEVELLED_SHARE:.0%}): its held-out loss where the run validated (on the benchmark's val split,",
+        "a pass every 1/40 of the run; a held-out curve that rises at the end has passed its best and counts",
+        "as levelled), else its training loss (a VAE's: its negative ELBO; levelled when it moved under",
+        f"{LEVELLED_SHARE:.0%} either way).",
         "",
         "Rebuild them all with `make reference` (a course build with `MOTIONLAB_RETRAIN=1` in a fresh",
         "folder, then `python -m motionlab.apps.reference export`), or only those whose configuration",
@@ -484,15 +510,17 @@ def _readme(manifests: list[dict[str, Any]], total: int) -> str:
         "",
         f"{len(manifests)} models, {total / 1e6:.1f} MB in all, trained on: {'; '.join(machines)}.",
         "",
-        "| model | file | size (kB) | seed | steps | training (s) | loss fall in last fifth | levelled |",
-        "|---|---|---|---|---|---|---|---|",
+        "| model | file | size (kB) | seed | steps | training (s) | loss | fall in last fifth | levelled |",
+        "|---|---|---|---|---|---|---|---|---|",
     ]
     for m in sorted(manifests, key=lambda m: m["file"]):
         lev = m.get("levelling") or {}
         share = f"{lev['last_fifth_share']:.1%}" if "last_fifth_share" in lev else "-"
+        measure = lev.get("measure", "training") if lev else "-"
         lines.append(
             f"| {m['name']} | {m['file']} | {m['bytes'] / 1000:.0f} | {m['seed']} | {m['steps']} | "
-            f"{m['train_seconds']} | {share} | {'yes' if lev.get('levelled') else 'no' if lev else '-'} |"
+            f"{m['train_seconds']} | {measure} | {share} | "
+            f"{'yes' if lev.get('levelled') else 'no' if lev else '-'} |"
         )
     return "\n".join(lines) + "\n"
 

@@ -61,6 +61,10 @@ class Run:
         data: what defines the training data (fingerprints, window length, ...): the cache key's data part.
         initialize: ``initialize(model)``, a data-dependent initialisation of the built model before it
             trains (``None``: none); a model loaded from the cache has its result in its weights.
+        val_batches: ``val_batches(model) -> BatchSource``, held-out batches the run validates on every
+            ``train_config.val_every`` steps (``None``: it does not validate). A validation pass leaves the
+            weights as they are (no gradients, random state restored); its curve is what tells whether the
+            run has levelled off (:func:`~motionlab.train.reference.levelling`).
     """
 
     name: str
@@ -71,6 +75,7 @@ class Run:
     train_config: TrainConfig
     data: Any = None
     initialize: Callable[[nn.Module], Any] | None = None
+    val_batches: Callable[[nn.Module], BatchSource] | None = None
 
     def __post_init__(self) -> None:
         if not isinstance(self.name, str) or not self.name:
@@ -82,6 +87,12 @@ class Run:
         for field in ("build", "loss", "batches"):
             if not callable(getattr(self, field)):
                 raise TypeError(f"Run {self.name!r}: {field} must be callable, got {getattr(self, field)!r}")
+        if (self.val_batches is None) != (self.train_config.val_every is None):
+            raise ValueError(
+                f"Run {self.name!r}: give both val_batches and train_config.val_every, or neither "
+                f"(val_batches {'set' if self.val_batches else 'None'}, "
+                f"val_every {self.train_config.val_every})"
+            )
 
     def is_cached(self) -> bool:
         """Whether :meth:`train` would load the model from the checkpoint cache instead of training it."""
@@ -104,6 +115,7 @@ class Run:
             self.batches(model),
             self.train_config,
             data_config=self.data,
+            val_data=None if self.val_batches is None else self.val_batches(model),
             progress=progress,
         )
         return model, result

@@ -158,29 +158,38 @@ def sequence_windows(features: MoGlowFeatures, length: int, stride: int, first: 
 
 
 class PreparedData(NamedTuple):
-    """Standardised training windows (augmented), held-out test windows, and the scalers.
+    """Standardised training windows (augmented), held-out test windows, the scalers, and validation windows.
 
-    ``train``/``test``: windows ``(M, length, ·)`` (the test windows are not augmented).
+    ``train``/``test``/``val``: windows ``(M, length, ·)`` (the test and validation windows are not
+    augmented); ``val`` is ``None`` where there is no validation split (real motion capture).
     """
 
     train: MoGlowFeatures
     test: MoGlowFeatures
     scalers: Scalers
+    val: MoGlowFeatures | None = None
 
 
 def prepare_data(benchmark: Benchmark, cfg: MoGlowDataConfig, length: int, stride: int) -> PreparedData:
     """Windows of ``length`` frames (every ``stride``) from the benchmark's clips of ``cfg.actions``.
 
     The scalers are fitted on the augmented training clips; frame 0 of every clip (no control) is skipped.
-    The benchmark's validation split is not used: nothing here is tuned on held-out data during training.
+    The validation windows (the benchmark's val split) give the runs their held-out curve; nothing is tuned
+    on them.
     """
     train = clip_features(benchmark.train, cfg, augment=True)
     scalers = fit_scalers(train)
-    test = standardize(clip_features(benchmark.test, cfg, augment=False), scalers)
+
+    def held_out(clips: MotionSet) -> MoGlowFeatures:
+        return sequence_windows(
+            standardize(clip_features(clips, cfg, augment=False), scalers), length, stride
+        )
+
     return PreparedData(
         sequence_windows(standardize(train, scalers), length, stride),
-        sequence_windows(test, length, stride),
+        held_out(benchmark.test),
         scalers,
+        held_out(benchmark.val),
     )
 
 

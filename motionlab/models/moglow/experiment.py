@@ -66,6 +66,8 @@ class ExperimentConfig(config.ProfileConfig):
             (AdamW; the baseline's LSTM trains faster).
         batch_size, grad_clip, final_lr_factor: shared by both: windows per batch, gradient-norm clip, and
             the factor the learning rate decays to, linearly, by the last step.
+        validations: passes over the validation windows in a run, evenly spaced: its held-out curve, on
+            which the reference models' levelling is judged (a pass leaves the weights as they are).
         glow_steps_per_level, glow_hidden, glow_train_steps: the fixed-length Glow of :mod:`.fixed_length`
             (chapter 05 trains it, this chapter compares with it).
         n_commands: spliced command sequences in the control test (:func:`~.evaluate.control_test`), each
@@ -93,6 +95,7 @@ class ExperimentConfig(config.ProfileConfig):
     batch_size: int = integer(32, minimum=1)
     grad_clip: float = real(5.0, above=0)
     final_lr_factor: float = real(0.05, minimum=0)
+    validations: int = integer(40, minimum=1)
     glow_steps_per_level: int = integer(4, minimum=1)
     glow_hidden: int = integer(64, minimum=1)
     glow_train_steps: int = integer(300, minimum=1)
@@ -161,6 +164,7 @@ class ExperimentConfig(config.ProfileConfig):
             lr=lr,
             grad_clip=self.grad_clip,
             lr_schedule=PiecewiseLinear(((0, 1.0), (steps, self.final_lr_factor))),
+            val_every=max(steps // self.validations, 1),
         )
 
     def moglow_train(self) -> TrainConfig:
@@ -204,6 +208,13 @@ def training_batches(data: PreparedData, model: nn.Module) -> TensorBatches:
     return TensorBatches((data.train.pose, data.train.control))
 
 
+def validation_batches(data: PreparedData, model: nn.Module) -> TensorBatches:
+    """The validation windows (poses and controls), every one in its order, for the run's held-out curve."""
+    if data.val is None:
+        raise ValueError("validation_batches: the prepared data has no validation windows (data.val is None)")
+    return TensorBatches((data.val.pose, data.val.control), shuffle=False, drop_last=False)
+
+
 def autoregressive_run(
     name: str,
     model_class: type[MoGlow] | type[GaussianAR],
@@ -213,7 +224,8 @@ def autoregressive_run(
     data_identity: dict[str, Any],
 ) -> Run:
     """The :class:`~motionlab.train.run.Run` of MoGlow or of the Gaussian baseline on the chapter's windows
-    (``data_identity``, what defines them, is the cache key's data part)."""
+    (``data_identity``, what defines them, is the cache key's data part); it validates on ``data.val`` every
+    ``train_config.val_every`` steps when that is set."""
     return Run(
         name,
         model_cfg,
@@ -223,6 +235,7 @@ def autoregressive_run(
         train_config,
         data_identity,
         partial(fit_predictor, data),
+        None if train_config.val_every is None else partial(validation_batches, data),
     )
 
 
