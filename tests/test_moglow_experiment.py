@@ -78,7 +78,6 @@ def test_runs_validate_on_the_val_windows_without_changing_the_weights(tmp_path,
         unscaled_rates=(),
         moglow_train_steps=6,
         batch_size=4,
-        validations=3,
     )
     generator = torch.Generator().manual_seed(0)
     windows = MoGlowFeatures(
@@ -86,9 +85,9 @@ def test_runs_validate_on_the_val_windows_without_changing_the_weights(tmp_path,
     )
     held_out = MoGlowFeatures(windows.pose[:3] + 0.1, windows.control[:3])
     run = experiment.runs(cfg, PreparedData(windows, windows, fit_scalers(windows), held_out))["MoGlow p=0.5"]
-    assert run.train_config.val_every == 2 and run.val_batches is not None
+    assert run.train_config.val_every == 1 and run.val_batches is not None  # 6 steps: every step
     validated, result = run.train(progress=False)
-    assert result.history.val_step == [2, 4, 6] and len(result.history.val_terms["loss"]) == 3
+    assert result.history.val_step == [1, 2, 3, 4, 5, 6] and len(result.history.val_terms["loss"]) == 6
 
     without_val = experiment.runs(cfg, PreparedData(windows, windows, fit_scalers(windows)))["MoGlow p=0.5"]
     with pytest.raises(ValueError, match=r"no validation windows \(data.val is None\)"):

@@ -26,6 +26,7 @@ from motionlab.train import (
     run_identity,
     train,
     train_or_load,
+    validation_every,
 )
 from motionlab.train.state import ResumeFile
 
@@ -161,6 +162,27 @@ def test_validation_does_not_change_the_trained_weights() -> None:
     cfg = replace(CFG, val_every=2)
     train(validated, loss_fn, TensorBatches(data()), cfg, val_data=TensorBatches(data(32)), progress=False)
     assert_bitwise_equal(weights(plain), weights(validated))
+
+
+def test_every_validation_pass_draws_the_same_noise() -> None:
+    """A loss that draws from torch's global generator (a VAE's latent, a diffusion step) sees the same draws
+    in every validation pass, so the held-out curve moves with the weights only; training's draws go on."""
+
+    def noisy_loss(model, batch, step, coeffs):
+        out = loss_fn(model, batch, step, coeffs)
+        return {"loss": out["loss"], "noise": torch.rand(())}
+
+    result = train(
+        make_model(),
+        noisy_loss,
+        TensorBatches(data()),
+        replace(CFG, val_every=2),
+        val_data=TensorBatches(data(32)),
+        progress=False,
+    )
+    passes, drawn = result.history.val_terms["noise"], result.history.terms["noise"]
+    assert len(passes) > 2 and len(set(passes)) == 1, passes
+    assert len(set(drawn)) == len(drawn), drawn
 
 
 def test_gradient_clipping_bounds_the_norm_the_optimiser_sees() -> None:
@@ -561,3 +583,9 @@ def test_unusable_resume_files_are_ignored_with_a_warning(tmp_path: Path) -> Non
         result = train_or_load("tiny", MODEL_CONFIG, model, loss_fn, TensorBatches(data()), CFG)
     assert result.resumed_from_step is None
     assert_bitwise_equal(weights(reference), weights(model))
+
+
+def test_validation_every_spreads_the_passes_over_the_run() -> None:
+    assert validation_every(20_000) == 500 and validation_every(6) == 1 and validation_every(100, 10) == 10
+    with pytest.raises(ValueError, match="validation_every: steps must be an integer >= 1, got 0"):
+        validation_every(0)

@@ -25,7 +25,7 @@ from motionlab.train.history import History
 from motionlab.train.loop import NonFiniteLossError, TrainResult, loss_terms, train
 from motionlab.train.plot import plot_history
 from motionlab.train.schedules import Constant, KLAnneal, LinearRamp, PiecewiseLinear, Schedule
-from motionlab.train.train_config import TrainConfig
+from motionlab.train.train_config import VALIDATIONS, TrainConfig, validation_every
 
 __all__ = [
     "build_seeded",
@@ -39,6 +39,7 @@ __all__ = [
     "TensorBatches",
     "TrainConfig",
     "TrainResult",
+    "VALIDATIONS",
     "is_cached",
     "loss_terms",
     "plot_history",
@@ -46,4 +47,5 @@ __all__ = [
     "run_identity",
     "train",
     "train_or_load",
+    "validation_every",
 ]

@@ -269,6 +269,8 @@ class _Trainer:
         sums: dict[str, float] = {}
         count = 0
         with rng_isolated(), torch.no_grad():
+            # every pass draws the same noise (a VAE's latent, a diffusion step): passes differ by the weights
+            torch.manual_seed(epoch_seed(self.cfg.seed, 0, VALIDATION_STREAM))
             self.model.eval()
             try:
                 for batch in epoch_batches(

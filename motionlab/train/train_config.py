@@ -24,6 +24,20 @@ def _check_schedule(name: str, schedule: Any) -> None:
         )
 
 
+#: Validation passes over a run that validates (:func:`validation_every`): enough points for its held-out
+#: curve and for :func:`~motionlab.train.reference.levelling`'s tenths and fifths.
+VALIDATIONS = 40
+
+
+def validation_every(steps: int, passes: int = VALIDATIONS) -> int:
+    """The ``val_every`` that spreads ``passes`` validation passes evenly over a run of ``steps`` (every step
+    for a run shorter than ``passes``)."""
+    for value, name in ((steps, "steps"), (passes, "passes")):
+        if isinstance(value, bool) or not isinstance(value, int) or value < 1:
+            raise ValueError(f"validation_every: {name} must be an integer >= 1, got {value!r}")
+    return max(steps // passes, 1)
+
+
 def schedule_config(schedule: Schedule) -> dict[str, Any]:
     """A schedule as a hashable dict: its class name and its fields."""
     return {"kind": type(schedule).__name__, **config_dict(schedule)}

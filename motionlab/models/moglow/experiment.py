@@ -29,7 +29,7 @@ from motionlab.models.moglow.data import (
 from motionlab.models.moglow.evaluate import control_test, run_control_test
 from motionlab.models.moglow.losses import held_out_nll_per_window, nll_per_frame_loss
 from motionlab.models.moglow.model import MoGlow, MoGlowConfig
-from motionlab.train import PiecewiseLinear, TensorBatches, TrainConfig, build_seeded
+from motionlab.train import PiecewiseLinear, TensorBatches, TrainConfig, build_seeded, validation_every
 from motionlab.train.many import Trained, train_many
 from motionlab.train.run import Run, given
 from motionlab.validation import instance, integer, real, tuple_of
@@ -66,8 +66,6 @@ class ExperimentConfig(config.ProfileConfig):
             (AdamW; the baseline's LSTM trains faster).
         batch_size, grad_clip, final_lr_factor: shared by both: windows per batch, gradient-norm clip, and
             the factor the learning rate decays to, linearly, by the last step.
-        validations: passes over the validation windows in a run, evenly spaced: its held-out curve, on
-            which the reference models' levelling is judged (a pass leaves the weights as they are).
         glow_steps_per_level, glow_hidden, glow_train_steps: the fixed-length Glow of :mod:`.fixed_length`
             (chapter 05 trains it, this chapter compares with it).
         n_commands: spliced command sequences in the control test (:func:`~.evaluate.control_test`), each
@@ -95,7 +93,6 @@ class ExperimentConfig(config.ProfileConfig):
     batch_size: int = integer(32, minimum=1)
     grad_clip: float = real(5.0, above=0)
     final_lr_factor: float = real(0.05, minimum=0)
-    validations: int = integer(40, minimum=1)
     glow_steps_per_level: int = integer(4, minimum=1)
     glow_hidden: int = integer(64, minimum=1)
     glow_train_steps: int = integer(300, minimum=1)
@@ -164,7 +161,7 @@ class ExperimentConfig(config.ProfileConfig):
             lr=lr,
             grad_clip=self.grad_clip,
             lr_schedule=PiecewiseLinear(((0, 1.0), (steps, self.final_lr_factor))),
-            val_every=max(steps // self.validations, 1),
+            val_every=validation_every(steps),  # the held-out curve: 40 passes over the validation windows
         )
 
     def moglow_train(self) -> TrainConfig:
