@@ -1,5 +1,5 @@
-"""Chapter 11's experiment: its two runs, the ablation's zero weights, the config's limits and
-``with_steps`` (the training command's quick run of it is in ``test_train_cli.py``)."""
+"""Chapter 11's experiment: its two runs, the ablation's zero weights, their validation on the val clips,
+the config's limits and ``with_steps`` (the training command's quick run of it: ``test_train_cli.py``)."""
 
 from dataclasses import replace
 
@@ -13,23 +13,38 @@ from motionlab.models.diffusion.experiment import (
     ChapterData,
     ExperimentConfig,
     runs,
+    variant_runs,
     with_steps,
 )
+from motionlab.models.diffusion.losses import diffusion_objective
 from motionlab.models.diffusion.model import MDMConfig
+from motionlab.train.batches import epoch_seed
+from motionlab.train.loop import VALIDATION_STREAM
 
 
-def toy_data(cfg: ExperimentConfig) -> ChapterData:
-    """Random clips of the config's shape (the runs are only built, never trained, here)."""
+def toy_clips(cfg: ExperimentConfig, n: int, generator: torch.Generator) -> MDMData:
+    """``n`` random clips of the config's shape."""
     model = cfg.model
-    n = 12
-    train = MDMData(
-        torch.randn(n, model.n_frames, model.n_features),
+    return MDMData(
+        torch.randn(n, model.n_frames, model.n_features, generator=generator),
         torch.arange(n) % model.n_actions,
         torch.zeros(n, dtype=torch.int64),
         torch.zeros(n, dtype=torch.int64),
         cfg.frame_stride,
     )
-    return ChapterData(train, evaluator=None, train_features=torch.zeros(1), fps=30.0, real_skating=0.0)
+
+
+def toy_data(cfg: ExperimentConfig) -> ChapterData:
+    """12 random training clips and 5 validation clips of the config's shape (no evaluator)."""
+    generator = torch.Generator().manual_seed(0)
+    return ChapterData(
+        toy_clips(cfg, 12, generator),
+        toy_clips(cfg, 5, generator),
+        evaluator=None,
+        train_features=torch.zeros(1),
+        fps=30.0,
+        real_skating=0.0,
+    )
 
 
 def test_the_runs_are_mdm_and_its_ablation_without_the_geometric_losses():
@@ -52,6 +67,40 @@ def test_the_runs_are_mdm_and_its_ablation_without_the_geometric_losses():
     )
     assert {run.name for run in built.values()} == set(VARIANTS)
     assert built["mdm"].train_config.steps == cfg.steps == 4
+
+
+def test_runs_validate_on_the_val_clips_without_changing_the_weights(tmp_path, monkeypatch):
+    """Both runs validate on ``data.val`` every ``val_every`` steps, every clip once (the last batch short),
+    standardised by the model's training statistics; the trained weights are those of the same run without
+    validation, bit for bit (the diffusion steps, the noise, dropout and the null condition draw from the
+    random state a validation pass must leave alone)."""
+    monkeypatch.setenv("MOTIONLAB_BUILD", str(tmp_path))
+    cfg = replace(ExperimentConfig.quick(), steps=6, batch_size=4)
+    data = toy_data(cfg)
+    built = runs(cfg, data)
+    assert all(run.train_config == cfg.train_config(validate=True) for run in built.values())
+    run = built["mdm"]
+    assert run.train_config.val_every == 1  # 6 steps: every step
+    validated, result = run.train(progress=False)
+    assert result.history.val_step == [1, 2, 3, 4, 5, 6]
+    assert set(result.history.val_terms) == {"loss", "simple", "position", "velocity", "foot_contact"}
+
+    batches = list(run.val_batches(validated)(0, torch.Generator(), cfg.batch_size))
+    assert [len(action) for _, action in batches] == [4, 1]
+    assert torch.equal(torch.cat([features for features, _ in batches]), data.val.features)
+    torch.manual_seed(epoch_seed(cfg.seed, 0, VALIDATION_STREAM))  # the draws of every validation pass
+    with torch.no_grad():
+        last = [diffusion_objective(validated, batch, cfg.steps, {})["loss"].item() for batch in batches]
+    assert result.history.val_terms["loss"][-1] == pytest.approx(sum(last) / len(last), rel=1e-6)
+
+    plain_run = variant_runs(cfg, data.train)["mdm"]  # no val clips: no validation
+    assert plain_run.train_config.val_every is None and plain_run.val_batches is None
+    plain, plain_result = plain_run.train(progress=False)
+    assert plain_result.history.val_step == []
+    for key, value in validated.state_dict().items():
+        assert torch.equal(value, plain.state_dict()[key]), key
+    with pytest.raises(ValueError, match="give both val_batches and train_config.val_every"):
+        replace(run, val_batches=None)
 
 
 def test_the_full_profile_is_the_course_model():

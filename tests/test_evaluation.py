@@ -9,7 +9,7 @@ from motionlab.data.synthetic import generate
 from motionlab.evaluation import EVAL_FEATURES, body_frame_features, hip_heading
 from motionlab.evaluation.benchmark import Benchmark, labels_of, real_reference, sample_metrics
 from motionlab.evaluation.classifiers import ClassifierConfig, MotionClassifier
-from motionlab.evaluation.evaluator import EvaluatorConfig, load_evaluator
+from motionlab.evaluation.evaluator import EvaluatorConfig, evaluator_run, load_evaluator
 from motionlab.metrics import mean_ci
 
 
@@ -136,6 +136,64 @@ def test_evaluator_learns_actions_and_is_cached(clips):
         )
     with pytest.raises(KeyError, match="heads"):
         evaluator.features_and_probs(held_out.positions, "style")
+
+
+def test_evaluator_validates_on_held_out_clips_without_changing_the_weights(clips):
+    """Given held-out clips, the run validates every ``val_every`` steps on random windows of every clip
+    once, in order, standardised by the training clips' statistics, the same windows in every pass; the
+    trained weights are those of the run without validation, bit for bit."""
+    cfg = EvaluatorConfig(kind="gru", steps=6, batch_size=8, hidden=8, feature_dim=4)
+    val = generate(seed=4, n_per_mode=1, split="val")  # 12 clips: batches of 8 and 4
+    run = evaluator_run(
+        clips.positions, labels_of(clips), cfg, val_positions=val.positions, val_labels=labels_of(val)
+    )
+    assert run.train_config.val_every == 1  # 6 steps: every step
+    validated, result = load_evaluator(
+        clips.positions,
+        labels_of(clips),
+        cfg,
+        progress=False,
+        val_positions=val.positions,
+        val_labels=labels_of(val),
+    )
+    assert result.history.val_step == [1, 2, 3, 4, 5, 6]
+    assert set(result.history.val_terms) == {"loss", "ce_action", "ce_mode", "ce_body"}
+
+    def windows():
+        return list(run.val_batches(validated)(0, torch.Generator().manual_seed(1), cfg.batch_size))
+
+    first, again = windows(), windows()
+    assert [len(labels["action"]) for _, labels in first] == [8, 4]
+    for (window, labels), (same_window, same_labels) in zip(first, again):
+        assert torch.equal(window, same_window) and labels.keys() == same_labels.keys()
+    for head, value in labels_of(val).items():
+        assert torch.equal(torch.cat([labels[head] for _, labels in first]), torch.as_tensor(value))
+    inputs, window = validated.inputs(val.positions[:1])[0], first[0][0][0]  # clip 0 and its window
+    assert any(torch.equal(inputs[s : s + len(window)], window) for s in range(len(inputs) - len(window) + 1))
+
+    plain, plain_result = load_evaluator(clips.positions, labels_of(clips), cfg, progress=False)
+    assert plain_result.history.val_step == [] and not plain_result.loaded_from_cache
+    for key, value in validated.state_dict().items():
+        assert torch.equal(value, plain.state_dict()[key]), key
+
+    with pytest.raises(ValueError, match="give both val_positions and val_labels"):
+        evaluator_run(clips.positions, labels_of(clips), cfg, val_positions=val.positions)
+    with pytest.raises(ValueError, match=r"val_labels has heads \['action'\]"):
+        evaluator_run(
+            clips.positions,
+            labels_of(clips),
+            cfg,
+            val_positions=val.positions,
+            val_labels={"action": val.action},
+        )
+    with pytest.raises(ValueError, match=r"val_labels\['action'\] must lie in \[0, 6\)"):
+        evaluator_run(
+            clips.positions,
+            {"action": clips.action},
+            cfg,
+            val_positions=val.positions,
+            val_labels={"action": val.action + 6},
+        )
 
 
 def test_evaluator_rejects_mismatched_labels(clips):

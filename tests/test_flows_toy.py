@@ -13,7 +13,8 @@ from motionlab.models.flows import (
     train_toy_flow,
     two_moons,
 )
-from motionlab.train import TensorBatches, TrainConfig, train
+from motionlab.models.flows.toy import TOY_POINTS, TOY_VAL_POINTS
+from motionlab.train import TensorBatches, TrainConfig, build_seeded, train
 
 
 def test_two_moons_is_seeded_and_standardised():
@@ -100,3 +101,25 @@ def test_the_chapters_toy_flow_trains_once_then_loads(monkeypatch, tmp_path):
     assert cached.loaded_from_cache
     points = two_moons(8, seed=1)
     assert torch.equal(again.log_prob(points), flow.log_prob(points))
+
+
+def test_the_toy_flow_validates_on_fresh_moons_without_changing_the_weights(monkeypatch, tmp_path):
+    """The chapter's toy flow validates every ``val_every`` steps on its own draw of moons (seed 2, not the
+    training points nor the chapter's test points); its weights are those of the same training without
+    validation, bit for bit."""
+    monkeypatch.setenv("MOTIONLAB_BUILD", str(tmp_path))
+    flow, result = train_toy_flow(hidden=4, steps=3)
+    assert result.history.val_step == [1, 2, 3]
+    val_points = two_moons(TOY_VAL_POINTS, seed=2)
+    with torch.no_grad():
+        final_nll = float(-flow.log_prob(val_points).mean())  # 4 full batches: their mean is the mean
+    assert result.history.val_terms["nll"][-1] == pytest.approx(final_nll, rel=1e-5)
+
+    plain_cfg = TrainConfig(steps=3, batch_size=256, lr=5e-3, grad_clip=5.0)
+    plain = build_seeded(lambda: ToyFlow(ToyFlowConfig(steps=6, hidden=4)), plain_cfg.seed)
+    plain_result = train(
+        plain, toy_nll_loss, TensorBatches((two_moons(TOY_POINTS, seed=0),)), plain_cfg, progress=False
+    )
+    assert plain_result.history.val_step == []
+    for key, value in flow.state_dict().items():
+        assert torch.equal(value, plain.state_dict()[key]), key

@@ -128,6 +128,24 @@ def test_window_batches_are_random_windows_reproducible_by_generator():
         next(source(0, torch.Generator(), 13))
 
 
+def test_window_batches_in_order_keep_every_clip():
+    """``shuffle=False, drop_last=False`` (validation): every clip once, in its order, the last batch short;
+    the window starts come from the generator, so a fixed one gives the same windows every time."""
+    poses = codec().encode(features())
+    data = clips()
+    source = WindowBatches(poses, data.action, data.body, length=9, shuffle=False, drop_last=False)
+    a = list(source(0, torch.Generator().manual_seed(1), 5))
+    b = list(source(0, torch.Generator().manual_seed(1), 5))
+    assert [len(x.action) for x in a] == [5, 5, 2] and a[-1].poses.shape == (2, 9, 90)
+    assert torch.equal(torch.cat([x.action for x in a]), torch.as_tensor(data.action))
+    assert torch.equal(torch.cat([x.body for x in a]), torch.as_tensor(data.body))
+    for x, y in zip(a, b):
+        assert all(torch.equal(u, v) for u, v in zip(x, y))
+    assert len(list(source(0, torch.Generator(), 13))) == 1  # fewer clips than a batch: one short batch
+    with pytest.raises(TypeError, match="shuffle must be a bool"):
+        WindowBatches(poses, data.action, data.body, length=9, shuffle=0)
+
+
 def test_pose_vectors_hold_unit_quaternions():
     norms = codec().split(codec().encode(features()))[0].norm(dim=-1)
     assert math.isclose(float(norms.min()), 1.0, abs_tol=1e-5) and math.isclose(

@@ -1,6 +1,7 @@
 """The chapter's experiment: configs per profile, the named runs (same budget for every Table 2 model),
 schedules, data helpers."""
 
+import dataclasses
 import math
 import pickle
 
@@ -8,26 +9,37 @@ import pytest
 import torch
 from test_motion_cell_common import clips, codec, features
 
-from motionlab.models.motion_cell.data import WindowBatches, cut_windows
-from motionlab.models.motion_cell.denoise import PreparedData
+from motionlab.data.synthetic import generate
+from motionlab.models.motion_cell.data import WindowBatch, WindowBatches, cut_windows
+from motionlab.models.motion_cell.denoise import VAL_CAPTURE_SEED, PreparedData, noisy_features
 from motionlab.models.motion_cell.evaluate import rotation_error_degrees
 from motionlab.models.motion_cell.experiment import (
     TABLE,
     ExperimentConfig,
     learning_rate_decay,
     motion_cell_schedules,
+    prepare_training_data,
     runs,
     uses_classifier,
 )
+from motionlab.train import validation_every
 from motionlab.train.run import Run
 
 
-def _runs() -> dict[str, Run]:
-    """The runs of the quick profile on stand-in data (a few short clips, not denoised)."""
-    cfg = ExperimentConfig.quick()
+def _prepared(cfg: ExperimentConfig, with_val: bool = True) -> PreparedData:
+    """Stand-in prepared data (a few short clips, not denoised); the validation windows are five of the clips,
+    moved a little (``None`` without ``with_val``)."""
     poses = codec().encode(features())
     batches = WindowBatches(poses, clips().action, clips().body, length=cfg.window)
-    return runs(cfg, PreparedData(codec(), poses, batches, "fingerprint", None, None, {}))
+    val = WindowBatches(
+        poses[:5] + 0.01, clips().action[:5], clips().body[:5], cfg.window, shuffle=False, drop_last=False
+    )
+    return PreparedData(codec(), poses, batches, "fingerprint", None, None, {}, val if with_val else None)
+
+
+def _runs() -> dict[str, Run]:
+    """The runs of the quick profile on stand-in data."""
+    return runs(ExperimentConfig.quick(), _prepared(ExperimentConfig.quick()))
 
 
 def test_quick_full_and_current_profiles():
@@ -140,3 +152,51 @@ def test_cut_windows_and_rotation_error():
 def test_only_the_variants_with_a_classifier_loss_need_the_evaluator():
     needing = {name for name, run in _runs().items() if uses_classifier(run.train_config)}
     assert needing == {"mcell", "mcell_long", "nl", "sl"}
+
+
+def test_every_run_validates_40_times_on_the_validation_windows():
+    for name, run in _runs().items():
+        assert run.train_config.val_every == validation_every(run.train_config.steps), name
+        assert run.val_batches(None) is run.val_batches.args[0].val, name
+
+
+def test_runs_validate_on_the_val_windows_without_changing_the_weights(tmp_path, monkeypatch):
+    """With validation windows a run records its held-out curve every ``val_every`` steps; the trained
+    weights are those of the same run without validation, bit for bit (the Motion Cell's latent samples and
+    word dropping draw from the random state a validation pass must leave alone)."""
+    monkeypatch.setenv("MOTIONLAB_BUILD", str(tmp_path))
+    cfg = dataclasses.replace(ExperimentConfig.quick(), steps=10, batch_size=4)
+    run = runs(cfg, _prepared(cfg))["nc"]
+    assert run.train_config.val_every == 1 and run.val_batches is not None  # 10 steps: every step
+    validated, result = run.train(progress=False)
+    assert result.history.val_step == list(range(1, 11)) and len(result.history.val_terms["loss"]) == 10
+
+    without_val = runs(cfg, _prepared(cfg, with_val=False))["nc"]
+    with pytest.raises(ValueError, match=r"no validation windows \(data.val is None\)"):
+        without_val.val_batches(validated)  # what training it would call first
+    plain_run = dataclasses.replace(
+        run, train_config=dataclasses.replace(run.train_config, val_every=None), val_batches=None
+    )
+    plain, plain_result = plain_run.train(progress=False)
+    assert plain_result.history.val_step == []
+    for key, value in validated.state_dict().items():
+        assert torch.equal(value, plain.state_dict()[key]), key
+
+
+def test_prepared_data_validates_the_denoiser_and_carries_denoised_validation_windows(tmp_path, monkeypatch):
+    """The denoiser validates every ``val_every`` steps on the captured training split against its clean
+    clips (held out: it trains on the validation split); the models' validation windows are the validation
+    clips captured with their own noise, denoised, in order, every clip."""
+    monkeypatch.setenv("MOTIONLAB_BUILD", str(tmp_path))
+    cfg = ExperimentConfig.quick()
+    train, val = clips(), generate(seed=1, n_per_mode=1, seconds=1.0)
+    data = prepare_training_data(train, val, cfg, progress=False)
+    history = data.denoiser_result.history
+    assert history.val_step == list(range(1, cfg.denoiser_steps + 1)) and "pose" in history.val_terms
+    captured = data.codec.encode(noisy_features(val.rotations, val.positions, VAL_CAPTURE_SEED))
+    assert torch.equal(data.val.poses, data.denoiser.denoise(captured))
+    assert not data.val.shuffle and not data.val.drop_last and data.val.length == cfg.window
+    batches = list(data.val(0, torch.Generator().manual_seed(0), 5))
+    assert [len(b.action) for b in batches] == [5, 5, 2] and all(isinstance(b, WindowBatch) for b in batches)
+    assert torch.equal(torch.cat([b.action for b in batches]), torch.as_tensor(val.action))
+    assert torch.equal(torch.cat([b.body for b in batches]), torch.as_tensor(val.body))

@@ -33,6 +33,7 @@ from motionlab.models.trajevae.experiment import (
     runs,
     schedule_check,
     train_all,
+    validation_batches,
 )
 from motionlab.models.trajevae.masks import first_joints
 from motionlab.models.trajevae.model import TrajeVAE
@@ -114,7 +115,15 @@ def _tiny_experiment(clips):
         n_eval_windows=3,
     )
     windows = completion_windows(positions[:3])
-    data = CompletionData(positions, rotations, windows, np.zeros(3, dtype=int), multimodal_futures(windows))
+    data = CompletionData(
+        positions,
+        rotations,
+        windows,
+        np.zeros(3, dtype=int),
+        multimodal_futures(windows),
+        positions[3:],
+        rotations[3:],
+    )
     return cfg, data
 
 
@@ -126,6 +135,39 @@ def test_runs_are_the_ladder_and_the_baselines_longest_first(clips):
     assert chapter_runs["+ masked future poses"].model == cfg.trajevae
     assert chapter_runs["GRU"].model == cfg.gru and chapter_runs["CVAE-RNN"].model == cfg.cvae_rnn
     assert not chapter_runs["Base"].model.learnable_prior and not chapter_runs["Base"].model.use_dct
+
+
+def test_runs_validate_on_the_val_clips_without_changing_the_weights(clips):
+    """Every run validates on all of the data's validation clips, in order, unturned even when the run
+    augments, with masks as in training that every pass draws alike; the trained weights are those of the same
+    run without validation, bit for bit (the yaw, the masks and the latent noise draw from the random state a
+    validation pass must leave alone)."""
+    cfg, data = _tiny_experiment(clips)
+    cfg = dataclasses.replace(cfg, train=dataclasses.replace(cfg.train, steps=4, batch_size=2, val_every=1))
+    run = runs(cfg, data)["+ masked future poses"]
+    assert run.model.augment and run.train_config.val_every == 1 and run.val_batches is not None
+    source = run.val_batches(None)
+    batches = list(source(0, torch.Generator().manual_seed(1), 2))  # 3 clips: a batch of 2, then of 1
+    assert [windows.shape[0] for windows, _ in batches] == [2, 1]
+    assert torch.equal(torch.cat([windows for windows, _ in batches]), completion_windows(data.val_positions))
+    again = list(source(0, torch.Generator().manual_seed(1), 2))
+    assert all(torch.equal(mask, same) for (_, mask), (_, same) in zip(batches, again))
+    assert batches[0][1].shape == (2, 22) and batches[1][1].shape == (1, 22)
+    assert validation_batches(cfg.gru, data.val_positions, data.val_rotations).keep_probability == (
+        cfg.gru.keep_probability
+    )
+
+    validated, result = run.train(progress=False)
+    assert result.history.val_step == [1, 2, 3, 4] and len(result.history.val_terms["loss"]) == 4
+    assert set(result.history.val_terms) == set(result.history.terms)
+    plain_run = dataclasses.replace(
+        run, train_config=dataclasses.replace(run.train_config, val_every=None), val_batches=None
+    )
+    plain, plain_result = plain_run.train(progress=False)
+    assert plain_result.history.val_step == []
+    for key, value in validated.state_dict().items():
+        assert torch.equal(value, plain.state_dict()[key]), key
+    assert ExperimentConfig.quick().train.val_every == 1 and ExperimentConfig.full().train.val_every == 7
 
 
 def test_train_all_trains_each_run_once_and_sweeps_it_as_in_process(clips):
@@ -165,7 +207,7 @@ def test_experiment_config_profiles_and_model_dispatch(monkeypatch):
     quick = ExperimentConfig.quick()
     clips = torch.zeros(1, 60, 22, 3), torch.zeros(1, 60, 22, 4)
     run = {
-        kind: completion_run(f"trajevae_{kind}", getattr(quick, kind), quick.train, *clips)
+        kind: completion_run(f"trajevae_{kind}", getattr(quick, kind), quick.train, *clips, clips)
         for kind in ("trajevae", "gru", "cvae_rnn")
     }
     assert isinstance(run["trajevae"].build(0), TrajeVAE)

@@ -5,12 +5,17 @@ from __future__ import annotations
 
 import math
 import pickle
+from dataclasses import replace
 
 import numpy as np
 import pytest
 import torch
 
+from motionlab.data.datasets import motion_windows
+from motionlab.data.representations import representation
 from motionlab.data.synthetic import generate
+from motionlab.evaluation.benchmark import load_benchmark
+from motionlab.models.vae.data import pose_features
 from motionlab.models.vae.evaluate import latent_summary, plausibility
 from motionlab.models.vae.experiment import ExperimentConfig, runs
 from motionlab.models.vae.losses import kl_weight
@@ -108,3 +113,36 @@ def test_a_run_trains_into_the_cache_and_loads_the_same_weights(tmp_path, monkey
         assert key == other and torch.equal(value, loaded)
     x, label = cfg.clips.training_inputs()
     assert x.shape[1:] == (cfg.clip_length, 67) and label.shape == x.shape[:1]
+
+
+@pytest.mark.parametrize("name", ["pose_vae", "cvae"])
+def test_runs_validate_on_the_val_split_without_changing_the_weights(name, tmp_path, monkeypatch):
+    """A run validates on the benchmark's val split, prepared like its training data (the training data's
+    statistics), every ``val_every`` steps; its weights are those of the same run without validation, bit for
+    bit (the latent draws come from the random state a validation pass must leave alone)."""
+    monkeypatch.setenv("MOTIONLAB_BUILD", str(tmp_path))
+    cfg = ExperimentConfig(pose_every=20, pose_hidden=8, pose_steps=4, clip_hidden=8, clip_steps=4)
+    run = runs(cfg, n_actions=6)[name]
+    assert run.train_config.val_every == 1 and run.val_batches is not None  # 4 steps: every step
+    data = cfg.clips if name == "cvae" else cfg.poses
+    x, label = data.validation_inputs()
+    val = load_benchmark().val
+    if name == "cvae":
+        standardizer = data.load().codec.standardizer
+        expected = motion_windows(val, representation("moglow"), cfg.clip_length, cfg.clip_stride)
+        assert torch.allclose(x, standardizer.transform(expected.features))
+        assert torch.equal(label, expected.action)
+    else:
+        expected = pose_features(val, every=cfg.pose_every)
+        assert label is None and torch.equal(x, data.load().standardizer.transform(expected))
+    batches = list(run.val_batches(None)(0, torch.Generator(), cfg.batch_size))
+    served = torch.cat([batch[0] if name == "cvae" else batch for batch in batches])
+    assert torch.equal(served, x)  # every sample, in its order, the last batch short
+
+    validated, result = run.train(progress=False)
+    assert result.history.val_step == [1, 2, 3, 4] and len(result.history.val_terms["objective"]) == 4
+    plain_run = replace(run, train_config=replace(run.train_config, val_every=None), val_batches=None)
+    plain, plain_result = plain_run.train(progress=False)
+    assert plain_result.history.val_step == []
+    for key, value in validated.state_dict().items():
+        assert torch.equal(value, plain.state_dict()[key]), key

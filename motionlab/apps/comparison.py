@@ -228,6 +228,7 @@ def trajevae_methods(benchmark: Benchmark, test: CommonTest) -> dict[str, Method
         cfg.train,
         decimate(benchmark.train.positions),
         decimate(benchmark.train.rotations),
+        (decimate(benchmark.val.positions), decimate(benchmark.val.rotations)),
     )
     model, result = run.train(progress=False)
     model.eval()
@@ -296,8 +297,8 @@ MDM_SAMPLE_STEPS = 10
 def diffusion_runs(benchmark: Benchmark) -> dict[str, Run]:
     """Chapter 11's run ``"mdm"`` (its settings, the benchmark's training clips) ``{"mdm": Run}``."""
     cfg = diffusion.ExperimentConfig.current()
-    train = prepare_mdm(benchmark.train, cfg.frame_stride)
-    return {diffusion.DEFAULT_RUN: diffusion.variant_runs(cfg, train)[diffusion.DEFAULT_RUN]}
+    train, val = (prepare_mdm(split, cfg.frame_stride) for split in (benchmark.train, benchmark.val))
+    return {diffusion.DEFAULT_RUN: diffusion.variant_runs(cfg, train, val)[diffusion.DEFAULT_RUN]}
 
 
 def diffusion_methods(benchmark: Benchmark, test: CommonTest) -> dict[str, Method]:

@@ -47,9 +47,17 @@ def labels_of(data: MotionSet) -> dict[str, np.ndarray]:
 
 
 def benchmark_evaluator(kind: Literal["conv", "gru"] = "gru", progress: bool | None = None) -> Evaluator:
-    """The frozen evaluation classifier of ``kind`` trained on the benchmark's training split (cached)."""
-    train = load_benchmark().train
-    evaluator, _ = load_evaluator(train.positions, labels_of(train), kind=kind, progress=progress)
+    """The frozen evaluation classifier of ``kind`` trained on the benchmark's training split, validated on
+    its val split (cached)."""
+    train, val, _ = load_benchmark()
+    evaluator, _ = load_evaluator(
+        train.positions,
+        labels_of(train),
+        kind=kind,
+        progress=progress,
+        val_positions=val.positions,
+        val_labels=labels_of(val),
+    )
     return evaluator
 
 
@@ -57,8 +65,17 @@ def evaluator_runs(kinds: tuple[Literal["conv", "gru"], ...] = ("gru", "conv")) 
     """``{kind: Run}``: the training runs of the benchmark's evaluators (:func:`benchmark_evaluator` loads
     them from the cache). A chapter that measures with them trains them beside its own runs
     (``train_many(..., alongside=evaluator_runs())``), so a fresh build pays for them on the worker cores."""
-    train = load_benchmark().train
-    return {kind: evaluator_run(train.positions, labels_of(train), kind=kind) for kind in kinds}
+    train, val, _ = load_benchmark()
+    return {
+        kind: evaluator_run(
+            train.positions,
+            labels_of(train),
+            kind=kind,
+            val_positions=val.positions,
+            val_labels=labels_of(val),
+        )
+        for kind in kinds
+    }
 
 
 def sample_metrics(

@@ -1,8 +1,9 @@
 """The frozen evaluation classifiers every chapter measures its samples with.
 
 :func:`load_evaluator` trains a :class:`~motionlab.evaluation.classifiers.MotionClassifier` on the training
-split of the synthetic data set (through the one training loop, so it is cached and trained once), and
-wraps it with its input standardisation in an :class:`Evaluator` that takes global joint positions::
+split of the synthetic data set (through the one training loop, so it is cached and trained once; given
+held-out clips, it validates on them as it trains), and wraps it with its input standardisation in an
+:class:`Evaluator` that takes global joint positions::
 
     evaluator = load_evaluator(motion_set, split.train, kind="gru")
     probs = evaluator.probs(generated_positions, head="action")     # (N, 6)
@@ -25,7 +26,7 @@ from motionlab import config
 from motionlab.data.datasets import Standardizer
 from motionlab.evaluation.classifiers import HEADS, ClassifierConfig, MotionClassifier
 from motionlab.evaluation.inputs import EVAL_FEATURES, body_frame_features
-from motionlab.train import TrainConfig, TrainResult
+from motionlab.train import TrainConfig, TrainResult, validation_every
 from motionlab.train.run import Run, given
 from motionlab.validation import Checked, choice, integer, real
 
@@ -51,9 +52,10 @@ class ClassifierTraining(Checked):
     feature_dim: int = integer(30, minimum=1)
     seed: int = config.seed_field()
 
-    def training(self, n_items: int) -> TrainConfig:
+    def training(self, n_items: int, validate: bool = False) -> TrainConfig:
         """The classifier's :class:`~motionlab.train.TrainConfig` on ``n_items`` training items (a batch
-        holds at most all of them)."""
+        holds at most all of them); ``validate``: it validates 40 times
+        (:func:`~motionlab.train.validation_every`)."""
         return TrainConfig(
             steps=self.steps,
             batch_size=min(self.batch_size, n_items),
@@ -61,6 +63,7 @@ class ClassifierTraining(Checked):
             grad_clip=1.0,
             seed=self.seed,
             checkpoint_every=None,
+            val_every=validation_every(self.steps) if validate else None,
         )
 
 
@@ -162,16 +165,19 @@ class Evaluator(nn.Module):
         return float((predicted == labels).double().mean())
 
 
-def _crop_batches(inputs: Tensor, labels: dict[str, Tensor], min_crop: int):
-    """A batch source of random windows: every batch has one random length in ``[min_crop, T]``."""
+def _crop_batches(inputs: Tensor, labels: dict[str, Tensor], min_crop: int, held_out: bool = False):
+    """A batch source of random windows of the clips ``inputs`` ``(N, T, F)``, with their ``labels``
+    ``{head: (N,)}``: every batch has one random length in ``[min_crop, T]`` and a random start per clip.
+    In training order (shuffled, the final short batch dropped); ``held_out``: every clip once in its order,
+    the final short batch kept (validation: the generator alone fixes the windows)."""
     n, n_frames = inputs.shape[:2]
 
     def batches(epoch: int, generator: torch.Generator, batch_size: int):
-        order = torch.randperm(n, generator=generator)
-        for begin in range(0, n - batch_size + 1, batch_size):
+        order = torch.arange(n) if held_out else torch.randperm(n, generator=generator)
+        for begin in range(0, n if held_out else n - batch_size + 1, batch_size):
             index = order[begin : begin + batch_size]
             length = int(torch.randint(min(min_crop, n_frames), n_frames + 1, (1,), generator=generator))
-            start = torch.randint(0, n_frames - length + 1, (batch_size,), generator=generator)
+            start = torch.randint(0, n_frames - length + 1, (len(index),), generator=generator)
             frames = start[:, None] + torch.arange(length)
             window = inputs[index[:, None], frames]
             yield window, {name: value[index] for name, value in labels.items()}
@@ -195,12 +201,13 @@ def data_fingerprint(positions: np.ndarray | Tensor) -> str:
 
 
 def _training_tensors(
-    positions: np.ndarray | Tensor, labels: dict[str, np.ndarray | Tensor]
+    positions: np.ndarray | Tensor, labels: dict[str, np.ndarray | Tensor], what: str = "labels"
 ) -> tuple[Tensor, dict[str, Tensor]]:
-    """The training clips as float32 and the labels as int64 tensors, checked against each other."""
+    """The training (or validation) clips as float32 and the labels as int64 tensors, checked against each
+    other (``what``: the labels' name in the errors)."""
     unknown = set(labels) - set(HEADS)
     if unknown:
-        raise ValueError(f"load_evaluator: unknown label heads {sorted(unknown)}; use {HEADS}")
+        raise ValueError(f"load_evaluator: unknown label heads {sorted(unknown)} in {what}; use {HEADS}")
     positions = torch.as_tensor(np.asarray(positions), dtype=torch.float32)
     label_tensors = {
         name: torch.as_tensor(np.asarray(value), dtype=torch.int64) for name, value in labels.items()
@@ -208,20 +215,21 @@ def _training_tensors(
     for name, value in label_tensors.items():
         if value.shape != positions.shape[:1]:
             raise ValueError(
-                f"load_evaluator: labels[{name!r}] has shape {tuple(value.shape)}, expected "
+                f"load_evaluator: {what}[{name!r}] has shape {tuple(value.shape)}, expected "
                 f"({positions.shape[0]},)"
             )
     return positions, label_tensors
 
 
 def _training_identity(
-    positions: Tensor, labels: dict[str, Tensor], cfg: EvaluatorConfig
+    positions: Tensor, labels: dict[str, Tensor], cfg: EvaluatorConfig, validate: bool = False
 ) -> tuple[str, dict[str, Any], TrainConfig, dict[str, Any]]:
     """What names an evaluator's training run in the checkpoint cache: its name, model config, training
-    config and data config (computed without building the model, so without touching the global RNG)."""
+    config (``validate``: with validation) and data config (computed without building the model, so without
+    touching the global RNG)."""
     classes = {name: int(value.max()) + 1 for name, value in labels.items()}
     classifier_cfg = ClassifierConfig(cfg.kind, EVAL_FEATURES, classes, cfg.hidden, cfg.feature_dim)
-    train_cfg = cfg.training(positions.shape[0])
+    train_cfg = cfg.training(positions.shape[0], validate)
     data_config = {
         "positions": data_fingerprint(positions),
         "labels": {k: data_fingerprint(v.numpy()) for k, v in labels.items()},
@@ -241,8 +249,42 @@ def build_evaluator(classifier: ClassifierConfig, positions: Tensor, seed: int) 
     return Evaluator(MotionClassifier(classifier), standardizer)
 
 
-def _evaluator_batches(positions: Tensor, labels: dict[str, Tensor], min_crop: int, model: Evaluator):
-    return _crop_batches(model.standardizer.transform(body_frame_features(positions)), labels, min_crop)
+def _evaluator_batches(
+    positions: Tensor, labels: dict[str, Tensor], min_crop: int, model: Evaluator, held_out: bool = False
+):
+    """Random windows (:func:`_crop_batches`) of the clips ``positions`` ``(N, T, 22, 3)``, standardised by
+    ``model``'s standardiser (fitted on the training clips); ``held_out``: in validation order."""
+    inputs = model.standardizer.transform(body_frame_features(positions))
+    return _crop_batches(inputs, labels, min_crop, held_out)
+
+
+def _validation_tensors(
+    val_positions: np.ndarray | Tensor | None,
+    val_labels: dict[str, np.ndarray | Tensor] | None,
+    classes: dict[str, int],
+) -> tuple[Tensor, dict[str, Tensor]] | None:
+    """The validation clips and labels as tensors (``None`` when neither is given), checked against the
+    classifier's heads and their ``classes``."""
+    if (val_positions is None) != (val_labels is None):
+        raise ValueError("evaluator_run: give both val_positions and val_labels, or neither")
+    if val_positions is None:
+        return None
+    positions, labels = _training_tensors(val_positions, val_labels, "val_labels")
+    if positions.dim() != 4 or not len(positions):
+        raise ValueError(
+            f"evaluator_run: val_positions must be a non-empty (M, T, 22, 3), got {tuple(positions.shape)}"
+        )
+    if set(labels) != set(classes):
+        raise ValueError(
+            f"evaluator_run: val_labels has heads {sorted(labels)}, the training labels {sorted(classes)}"
+        )
+    for name, value in labels.items():
+        if int(value.min()) < 0 or int(value.max()) >= classes[name]:
+            raise ValueError(
+                f"evaluator_run: val_labels[{name!r}] must lie in [0, {classes[name]}) (the training "
+                f"labels' classes), got [{int(value.min())}, {int(value.max())}]"
+            )
+    return positions, labels
 
 
 def evaluator_run(
@@ -250,13 +292,23 @@ def evaluator_run(
     labels: dict[str, np.ndarray | Tensor],
     cfg: EvaluatorConfig | None = None,
     kind: Literal["conv", "gru"] = "gru",
+    *,
+    val_positions: np.ndarray | Tensor | None = None,
+    val_labels: dict[str, np.ndarray | Tensor] | None = None,
 ) -> Run:
     """The :class:`~motionlab.train.run.Run` that trains an evaluation classifier on training clips
     ``positions`` ``(N, T, 22, 3)`` with ``labels`` ``{"action": (N,), "mode": (N,), "body": (N,)}`` (any
-    subset of these heads); ``cfg``: by default :func:`default_evaluator_config` of ``kind``."""
+    subset of these heads); ``cfg``: by default :func:`default_evaluator_config` of ``kind``.
+
+    Given held-out clips ``val_positions`` ``(M, T, 22, 3)`` with ``val_labels`` (the same heads), the run
+    validates on them 40 times (:func:`~motionlab.train.validation_every`): random windows as in training,
+    standardised with the training clips' statistics, every clip once, the same windows in every pass.
+    """
     cfg = default_evaluator_config(kind) if cfg is None else cfg
     positions, label_tensors = _training_tensors(positions, labels)
-    name, model_config, train_cfg, data_config = _training_identity(positions, label_tensors, cfg)
+    validate = val_positions is not None or val_labels is not None
+    name, model_config, train_cfg, data_config = _training_identity(positions, label_tensors, cfg, validate)
+    val = _validation_tensors(val_positions, val_labels, model_config["classifier"].classes)
     return Run(
         name,
         model_config,
@@ -265,6 +317,7 @@ def evaluator_run(
         partial(_evaluator_batches, positions, label_tensors, cfg.min_crop),
         train_cfg,
         data_config,
+        val_batches=None if val is None else partial(_evaluator_batches, *val, cfg.min_crop, held_out=True),
     )
 
 
@@ -274,6 +327,9 @@ def load_evaluator(
     cfg: EvaluatorConfig | None = None,
     kind: Literal["conv", "gru"] = "gru",
     progress: bool | None = None,
+    *,
+    val_positions: np.ndarray | Tensor | None = None,
+    val_labels: dict[str, np.ndarray | Tensor] | None = None,
 ) -> tuple[Evaluator, TrainResult]:
     """Train (or load from the cache) an evaluation classifier on training clips (:func:`evaluator_run`).
 
@@ -282,10 +338,13 @@ def load_evaluator(
         labels: ``{"action": (N,), "mode": (N,), "body": (N,)}`` integer labels (any subset of these heads).
         cfg: the settings; by default :func:`default_evaluator_config` of ``kind``.
         progress: show a progress bar (default: in the full profile only).
+        val_positions, val_labels: held-out clips ``(M, T, 22, 3)`` and their labels (the same heads) the
+            run validates on (the result's ``history.val_terms``); by default it does not validate.
 
     Returns:
         The frozen :class:`Evaluator` (eval mode, no gradients needed) and the training result.
     """
-    evaluator, result = evaluator_run(positions, labels, cfg, kind).train(progress)
+    run = evaluator_run(positions, labels, cfg, kind, val_positions=val_positions, val_labels=val_labels)
+    evaluator, result = run.train(progress)
     evaluator.requires_grad_(False)
     return evaluator.eval(), result

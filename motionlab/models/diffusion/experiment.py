@@ -5,7 +5,8 @@ the fast sampler and the sample sets); :data:`VARIANTS` lists the two runs as ch
 ``"mdm"``, MDM with its geometric losses at the repository's action-to-motion weights (1, 1, 1), and
 ``"mdm_no_geometry"``, the same model with :math:`\lambda_\text{pos} = \lambda_\text{vel} =
 \lambda_\text{foot} = 0` (the paper's ablation of the geometric losses). :func:`runs` gives one
-:class:`~motionlab.train.run.Run` per variant (:func:`diffusion_run`), :func:`train_all` trains them on both
+:class:`~motionlab.train.run.Run` per variant (:func:`diffusion_run`), each validating on the benchmark's val
+split (prepared as the training clips) 40 times (its held-out curve), :func:`train_all` trains them on both
 cores and :func:`measure` measures a trained model: sample sets drawn per action with the fast sampler
 (DDIM on a respaced schedule, with classifier-free guidance), turned into joint positions at 30 fps and
 measured with the benchmark's protocol (:func:`~motionlab.evaluation.benchmark.sample_metrics` with the
@@ -32,7 +33,7 @@ from motionlab.models.diffusion.data import MDMData, prepare, to_positions
 from motionlab.models.diffusion.losses import diffusion_objective
 from motionlab.models.diffusion.model import MDM, MDMConfig
 from motionlab.models.diffusion.sampling import GUIDANCE_SCALE, sample
-from motionlab.train import TensorBatches, TrainConfig
+from motionlab.train import TensorBatches, TrainConfig, validation_every
 from motionlab.train.many import Trained, train_many
 from motionlab.train.run import Run, given
 from motionlab.validation import check_choice, instance, integer, real
@@ -122,8 +123,10 @@ class ExperimentConfig(config.ProfileConfig):
         feed-forward 512, 4 layers); the same sample sets as :meth:`full`."""
         return cls(model=MDMConfig.course(latent_dim=256, ff_size=512), steps=12_000)
 
-    def train_config(self) -> TrainConfig:
-        """Every run's :class:`~motionlab.train.TrainConfig`."""
+    def train_config(self, validate: bool = False) -> TrainConfig:
+        """Every run's :class:`~motionlab.train.TrainConfig`; ``validate``: it validates 40 times
+        (:func:`~motionlab.train.validation_every`), as the runs on the benchmark do (:func:`variant_runs`);
+        the runs on real motion capture (:mod:`.real_experiment`) have no val split."""
         return TrainConfig(
             steps=self.steps,
             batch_size=self.batch_size,
@@ -132,6 +135,7 @@ class ExperimentConfig(config.ProfileConfig):
             seed=self.seed,
             checkpoint_every=None,
             log_every=20,
+            val_every=validation_every(self.steps) if validate else None,
         )
 
 
@@ -147,15 +151,29 @@ def training_batches(data: MDMData, model: nn.Module) -> TensorBatches:
     return data.batches()
 
 
-def diffusion_run(name: str, cfg: MDMConfig, train_config: TrainConfig, data: MDMData) -> Run:
+def validation_batches(val: MDMData, model: nn.Module) -> TensorBatches:
+    """Batches ``(features (B, T, F), action (B,))`` of the validation clips, every one once in its order,
+    for the run's held-out curve (the loss standardises them with the model's standardiser, fitted on the
+    training clips)."""
+    return TensorBatches((val.features, val.action), shuffle=False, drop_last=False)
+
+
+def diffusion_run(
+    name: str, cfg: MDMConfig, train_config: TrainConfig, data: MDMData, val: MDMData | None = None
+) -> Run:
     """A variant's :class:`~motionlab.train.run.Run`, cached as ``name``: MDM of ``cfg`` (seeded by
     ``train_config.seed``) on shuffled batches of ``data`` (its fingerprints and frame stride are the cache
-    key's data part)."""
-    shape = tuple(data.features.shape[1:])
-    if shape != (cfg.n_frames, cfg.n_features):
+    key's data part); it validates on the clips ``val`` (prepared as ``data``) every
+    ``train_config.val_every`` steps when given (give both or neither)."""
+    for what, clips in (("data", data), ("val", val)):
+        if clips is not None and tuple(clips.features.shape[1:]) != (cfg.n_frames, cfg.n_features):
+            raise ValueError(
+                f"diffusion_run: the config expects clips of {cfg.n_frames} frames x {cfg.n_features} "
+                f"features, the {what} has {tuple(clips.features.shape[1:])}"
+            )
+    if val is not None and val.frame_stride != data.frame_stride:
         raise ValueError(
-            f"diffusion_run: the config expects clips of {cfg.n_frames} frames x {cfg.n_features} features, "
-            f"the data has {shape}"
+            f"diffusion_run: the val clips have frame_stride {val.frame_stride}, the data {data.frame_stride}"
         )
     return Run(
         name,
@@ -169,6 +187,7 @@ def diffusion_run(name: str, cfg: MDMConfig, train_config: TrainConfig, data: MD
             "action": data_fingerprint(data.action.float()),
             "frame_stride": data.frame_stride,
         },
+        val_batches=None if val is None else partial(validation_batches, val),
     )
 
 
@@ -177,7 +196,8 @@ class ChapterData:
     """What the runs train on and are measured with.
 
     Attributes:
-        train: the prepared training clips.
+        train: the prepared training clips; val: the benchmark's val split prepared the same way (the runs'
+            held-out curve).
         evaluator: the benchmark's frozen GRU evaluator; train_features: its features of the training clips
             ``(N, D)`` (FID's reference).
         fps: the benchmark's frame rate (30), of the positions the sample sets are measured in.
@@ -185,6 +205,7 @@ class ChapterData:
     """
 
     train: MDMData
+    val: MDMData
     evaluator: Evaluator
     train_features: Tensor
     fps: float
@@ -192,8 +213,8 @@ class ChapterData:
 
 
 def load_data(cfg: ExperimentConfig) -> ChapterData:
-    """The benchmark's training clips prepared at ``cfg.frame_stride``, the GRU evaluator and its reference
-    features, and the test clips' foot skating."""
+    """The benchmark's training and val clips prepared at ``cfg.frame_stride``, the GRU evaluator and its
+    reference features, and the test clips' foot skating."""
     if not isinstance(cfg, ExperimentConfig):
         raise TypeError(f"load_data: cfg must be an ExperimentConfig, got {type(cfg).__name__}")
     benchmark = load_benchmark()
@@ -201,6 +222,7 @@ def load_data(cfg: ExperimentConfig) -> ChapterData:
     fps = float(benchmark.train.fps)
     return ChapterData(
         prepare(benchmark.train, cfg.frame_stride),
+        prepare(benchmark.val, cfg.frame_stride),
         evaluator,
         evaluator.features(benchmark.train.positions),
         fps,
@@ -208,21 +230,25 @@ def load_data(cfg: ExperimentConfig) -> ChapterData:
     )
 
 
-def variant_runs(cfg: ExperimentConfig, train: MDMData) -> dict[str, Run]:
+def variant_runs(cfg: ExperimentConfig, train: MDMData, val: MDMData | None = None) -> dict[str, Run]:
     """Both variants' runs ``{name: Run}`` on the prepared training clips ``train``, in :data:`VARIANTS`'
-    order."""
+    order, validating on the prepared val clips ``val`` (``None``: they do not validate, and their cache
+    key is not the chapter's runs')."""
     if train.frame_stride != cfg.frame_stride:
         raise ValueError(
             f"variant_runs: the data was prepared with frame_stride {train.frame_stride}, the config has "
             f"{cfg.frame_stride}"
         )
-    training = cfg.train_config()
-    return {name: diffusion_run(name, variant_config(name, cfg.model), training, train) for name in VARIANTS}
+    training = cfg.train_config(validate=val is not None)
+    return {
+        name: diffusion_run(name, variant_config(name, cfg.model), training, train, val) for name in VARIANTS
+    }
 
 
 def runs(cfg: ExperimentConfig, data: ChapterData) -> dict[str, Run]:
-    """Both variants' runs ``{name: Run}`` in :data:`VARIANTS`' order (:func:`variant_runs`)."""
-    return variant_runs(cfg, data.train)
+    """Both variants' runs ``{name: Run}`` in :data:`VARIANTS`' order (:func:`variant_runs`), validating on
+    ``data.val``."""
+    return variant_runs(cfg, data.train, data.val)
 
 
 def generate_positions(

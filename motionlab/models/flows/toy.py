@@ -21,7 +21,14 @@ from motionlab import config
 from motionlab.models.flows.base import FlowSequence
 from motionlab.models.flows.glow import GlowStep
 from motionlab.models.flows.prior import StandardNormal, check_temperature
-from motionlab.train import TensorBatches, TrainConfig, TrainResult, build_seeded, train_or_load
+from motionlab.train import (
+    TensorBatches,
+    TrainConfig,
+    TrainResult,
+    build_seeded,
+    train_or_load,
+    validation_every,
+)
 from motionlab.validation import Checked, check_scalar, check_tensor, integer
 
 #: Centre and scale that bring the two moons of :func:`two_moons` to roughly zero mean and unit spread.
@@ -89,17 +96,25 @@ def toy_nll_loss(model: ToyFlow, batch: Tensor, step: int, coeffs: dict[str, flo
 #: The training points of :func:`train_toy_flow`: ``two_moons(TOY_POINTS, seed=0)``.
 TOY_POINTS = 4096
 
+#: The validation points of :func:`train_toy_flow` (its held-out curve): ``two_moons(TOY_VAL_POINTS,
+#: seed=2)``, a fresh draw from the training points' distribution (seed 1 is chapter 05's test set).
+TOY_VAL_POINTS = 1024
+
 
 def train_toy_flow(hidden: int | None = None, steps: int | None = None) -> tuple[ToyFlow, TrainResult]:
     """Chapter 05's toy flow (6 Glow steps, coupling networks of ``hidden`` units) trained for ``steps``
     Adam steps on :data:`TOY_POINTS` two-moons points, or loaded from the cache. ``None`` takes the active
     profile's size (quick: 16 units, 40 steps; full: 64 units, 600 steps). The initial weights depend on the
-    training seed alone (:func:`~motionlab.train.build_seeded`), not on what ran before. Returns the model
-    (in ``eval()`` mode) and its training result."""
+    training seed alone (:func:`~motionlab.train.build_seeded`), not on what ran before. It validates 40
+    times (:func:`~motionlab.train.validation_every`) on :data:`TOY_VAL_POINTS` other points, all of them in
+    their order (a pass leaves the weights as they are). Returns the model (in ``eval()`` mode) and its
+    training result."""
     hidden = config.choose(quick=16, full=64) if hidden is None else hidden
     steps = config.choose(quick=40, full=600) if steps is None else steps
     cfg = ToyFlowConfig(steps=6, hidden=hidden)
-    train_cfg = TrainConfig(steps=steps, batch_size=256, lr=5e-3, grad_clip=5.0)
+    train_cfg = TrainConfig(
+        steps=steps, batch_size=256, lr=5e-3, grad_clip=5.0, val_every=validation_every(steps)
+    )
     toy = build_seeded(lambda: ToyFlow(cfg), train_cfg.seed)
     result = train_or_load(
         "toy_flow_moons",
@@ -109,6 +124,7 @@ def train_toy_flow(hidden: int | None = None, steps: int | None = None) -> tuple
         TensorBatches((two_moons(TOY_POINTS, seed=0),)),
         train_cfg,
         data_config={"data": "two_moons", "n": TOY_POINTS, "noise": 0.06, "seed": 0},
+        val_data=TensorBatches((two_moons(TOY_VAL_POINTS, seed=2),), shuffle=False, drop_last=False),
     )
     return toy, result
 

@@ -162,10 +162,19 @@ class WindowBatches:
     Args:
         poses: pose vectors of the clips ``(N, T, 90)``; action, body: ``(N,)`` integer attributes.
         length: frames per window (at most ``T``).
+        shuffle: visit the clips in a random order (``False``: in their stored order; validation).
+        drop_last: drop the final short batch (the default, so every step sees ``batch_size`` windows;
+            ``False``: every clip gives a window, validation).
     """
 
     def __init__(
-        self, poses: Tensor, action: Tensor | np.ndarray, body: Tensor | np.ndarray, length: int
+        self,
+        poses: Tensor,
+        action: Tensor | np.ndarray,
+        body: Tensor | np.ndarray,
+        length: int,
+        shuffle: bool = True,
+        drop_last: bool = True,
     ) -> None:
         check_tensor(poses, "poses", "WindowBatches", ndim=3)
         self.poses = poses
@@ -179,18 +188,23 @@ class WindowBatches:
         self.length = check_scalar(
             length, "length", "WindowBatches", kind=numbers.Integral, minimum=1, maximum=poses.shape[1]
         )
+        for name, value in (("shuffle", shuffle), ("drop_last", drop_last)):
+            if not isinstance(value, bool):
+                raise TypeError(f"WindowBatches: {name} must be a bool, got {value!r}")
+        self.shuffle, self.drop_last = shuffle, drop_last
 
     def __len__(self) -> int:
         return int(self.poses.shape[0])
 
     def __call__(self, epoch: int, generator: torch.Generator, batch_size: int) -> Iterator[WindowBatch]:
         n, n_frames = self.poses.shape[:2]
-        if n < batch_size:
+        if self.drop_last and n < batch_size:
             raise ValueError(f"WindowBatches: {n} clips cannot fill a batch of {batch_size}")
-        order = torch.randperm(n, generator=generator)
-        for begin in range(0, n - batch_size + 1, batch_size):
+        order = torch.randperm(n, generator=generator) if self.shuffle else torch.arange(n)
+        stop = n - n % batch_size if self.drop_last else n
+        for begin in range(0, stop, batch_size):
             index = order[begin : begin + batch_size]
-            start = torch.randint(0, n_frames - self.length + 1, (batch_size,), generator=generator)
+            start = torch.randint(0, n_frames - self.length + 1, (len(index),), generator=generator)
             yield WindowBatch(
                 gather_windows(self.poses, index, start, self.length), self.action[index], self.body[index]
             )

@@ -5,7 +5,8 @@ Real capture is noisy (jitter on every frame, spikes where markers were lost). O
 clean, so the chapter plays the whole story: the training split is "captured" through the noise model
 of :mod:`motionlab.data.noise`, a denoiser is trained on *other* clips whose clean version we know (the
 validation split, with fresh noise), and the denoised training split is what every model learns from
-(:func:`~.experiment.prepare_training_data`).
+(:func:`~.experiment.prepare_training_data`); the validation split, captured with its own noise and denoised
+alike, is what the models validate on.
 
 The autoencoder reads pose vectors ``(B, T, 90)`` as 90 channels over time: two conv layers down to a
 bottleneck and two back up, every layer keeping the frame count (kernel ``k``, padding ``k // 2``). Its
@@ -60,9 +61,10 @@ CHUNK = 256
 #: (8 s per step against 0.5 s). The denoised clips have the same fingerprint on one and on two threads.
 DENOISER_THREADS = 1
 
-#: Seeds of the capture noise on the training split and of the denoiser's noisy copies of the validation
-#: split.
-CAPTURE_SEED, DENOISER_DATA_SEED = 1, 2
+#: Seeds of the capture noise on the training split, of the denoiser's noisy copies of the validation
+#: split, and of the capture of the validation split the models validate on (its own noise, as if captured
+#: like the training split).
+CAPTURE_SEED, DENOISER_DATA_SEED, VAL_CAPTURE_SEED = 1, 2, 3
 
 
 @dataclass(frozen=True)
@@ -168,7 +170,7 @@ def denoiser_loss(cfg: LossConfig) -> LossFn:
 
 
 class PreparedData(NamedTuple):
-    """The training data every model sees, and what the denoiser did to get it.
+    """The training data every model sees, what the denoiser did to get it, and the validation windows.
 
     Attributes:
         codec: pose-vector codec (root statistics of the captured training split, skeletons).
@@ -178,6 +180,10 @@ class PreparedData(NamedTuple):
         denoiser: the trained denoiser; denoiser_result: its training result.
         errors: mean joint-rotation error (degrees) against the clean clips, ``"captured"`` and
             ``"denoised"``.
+        val: windows of the validation split, captured, denoised and encoded like the training split
+            (``shuffle=False, drop_last=False``: every clip in its order, one window each, its start drawn
+            from the loop's validation stream, so the same in every pass); the runs' held-out curve.
+            ``None``: no validation windows.
     """
 
     codec: PoseCodec
@@ -187,3 +193,4 @@ class PreparedData(NamedTuple):
     denoiser: nn.Module
     denoiser_result: TrainResult
     errors: dict[str, float]
+    val: WindowBatches | None = None

@@ -33,6 +33,7 @@ from motionlab.models.motion_cell.denoise import (
     CAPTURE_SEED,
     DENOISER_DATA_SEED,
     DENOISER_THREADS,
+    VAL_CAPTURE_SEED,
     DenoiserConfig,
     DenoisingAutoencoder,
     PreparedData,
@@ -50,6 +51,7 @@ from motionlab.train import (
     TrainConfig,
     build_seeded,
     train_or_load,
+    validation_every,
 )
 from motionlab.train.many import Trained, train_many, train_meanwhile
 from motionlab.train.run import Run
@@ -162,6 +164,11 @@ def prepare_training_data(
     """Capture the training split with noise, train the denoiser on the validation split (or load it from
     the checkpoint cache), and denoise the capture.
 
+    The denoiser validates on the captured training split against its clean clips, a split it never trains
+    on, all windows in order. The models' validation windows (:attr:`PreparedData.val`) are the
+    validation split captured with its own noise (:data:`~.denoise.VAL_CAPTURE_SEED`), denoised by the same
+    denoiser and encoded by the same codec (fitted on the captured training split, not refitted).
+
     Args:
         train, val: the benchmark's training and validation splits (clean clips).
         cfg: the chapter's :class:`ExperimentConfig` (the denoiser, its training, the window).
@@ -169,6 +176,8 @@ def prepare_training_data(
     """
     captured = noisy_features(train.rotations, train.positions, CAPTURE_SEED)
     codec = PoseCodec(train.offsets, train.parents.tolist()).fit(captured)
+    captured_poses = codec.encode(captured)
+    clean = codec.encode(motion_cell_features(train.rotations, train.positions))
     clean_val = codec.encode(motion_cell_features(val.rotations, val.positions))
     rng = np.random.default_rng(DENOISER_DATA_SEED)
     noisy_val = torch.cat(
@@ -187,6 +196,7 @@ def prepare_training_data(
         lr=cfg.denoiser_lr,
         lr_schedule=learning_rate_decay(cfg.denoiser_steps),
         checkpoint_every=None,
+        val_every=validation_every(cfg.denoiser_steps),
     )
     own_codec = codec.copy()
     with config.threads(DENOISER_THREADS):
@@ -198,6 +208,11 @@ def prepare_training_data(
             denoiser_loss(loss_cfg),
             pairs,
             train_cfg,
+            val_data=TensorBatches(
+                (cut_windows(captured_poses, cfg.window), cut_windows(clean, cfg.window)),
+                shuffle=False,
+                drop_last=False,
+            ),
             data_config={
                 "val": data_fingerprint(noisy_val.numpy()),
                 "codec": data_fingerprint(captured.numpy()),
@@ -205,16 +220,27 @@ def prepare_training_data(
             },
             progress=progress,
         )
-    captured_poses = codec.encode(captured)
     denoised = denoiser.denoise(captured_poses)
-    clean = codec.encode(motion_cell_features(train.rotations, train.positions))
     errors = {
         "captured": rotation_error_degrees(codec, captured_poses, clean),
         "denoised": rotation_error_degrees(codec, denoised, clean),
     }
     batches = WindowBatches(denoised, train.action, train.body, cfg.window)
+    val_denoised = denoiser.denoise(
+        codec.encode(noisy_features(val.rotations, val.positions, VAL_CAPTURE_SEED))
+    )
+    val_batches = WindowBatches(
+        val_denoised, val.action, val.body, cfg.window, shuffle=False, drop_last=False
+    )
     return PreparedData(
-        codec, captured_poses, batches, data_fingerprint(denoised.numpy()), denoiser, result, errors
+        codec,
+        captured_poses,
+        batches,
+        data_fingerprint(denoised.numpy()),
+        denoiser,
+        result,
+        errors,
+        val_batches,
     )
 
 
@@ -287,6 +313,14 @@ def _windows(data: PreparedData, model: nn.Module) -> WindowBatches:
     return data.batches
 
 
+def validation_batches(data: PreparedData, model: nn.Module) -> WindowBatches:
+    """The validation windows (one per validation clip, every clip in its order, the last batch kept), for a
+    run's held-out curve; each batch is a :class:`~.data.WindowBatch` like the training ones."""
+    if data.val is None:
+        raise ValueError("validation_batches: the prepared data has no validation windows (data.val is None)")
+    return data.val
+
+
 def motion_cell_run(
     name: str,
     model: MotionCellConfig | BaselineConfig,
@@ -295,7 +329,8 @@ def motion_cell_run(
     data: PreparedData,
 ) -> Run:
     """The :class:`~motionlab.train.run.Run` of a Motion Cell (or ablation, or output head) or a baseline on
-    the denoised training data (its fingerprint and the window length are the cache key's data part)."""
+    the denoised training data (its fingerprint and the window length are the cache key's data part); it
+    validates on ``data.val`` every ``train_config.val_every`` steps when that is set."""
     return Run(
         name,
         {"model": model, "loss": loss},
@@ -304,6 +339,7 @@ def motion_cell_run(
         partial(_windows, data),
         train_config,
         {"poses": data.fingerprint, "window": data.batches.length},
+        val_batches=None if train_config.val_every is None else partial(validation_batches, data),
     )
 
 
@@ -324,6 +360,7 @@ def runs(cfg: ExperimentConfig, data: ChapterData | PreparedData) -> dict[str, R
             schedules=schedules,
             lr_schedule=learning_rate_decay(steps),
             checkpoint_every=None,
+            val_every=validation_every(steps),  # the held-out curve: 40 passes over the validation windows
         )
         return motion_cell_run(f"mcell_{name}", model, loss, train, prepared)
 

@@ -120,12 +120,18 @@ class CompletionBatches(Checked):
             (the yaw augmentation turns the root orientation too).
         augment: turn every clip about the vertical axis by an angle uniform in ``[-pi, pi)``.
         keep_probability: chance that a joint's trajectory is given.
+        shuffle: draw the clips' order from ``generator`` (the default); ``False`` keeps the stored order
+            (validation).
+        drop_last: drop the final short batch (the default, so every step sees ``batch_size`` clips);
+            ``False`` serves every clip (validation).
     """
 
     positions: Tensor
     rotations: Tensor
     augment: bool = flag()
     keep_probability: float = real(KEEP_PROBABILITY, minimum=0, maximum=1)
+    shuffle: bool = flag(True)
+    drop_last: bool = flag(True)
 
     def __post_init__(self) -> None:
         super().__post_init__()
@@ -145,21 +151,27 @@ class CompletionBatches(Checked):
     ) -> Iterator[tuple[Tensor, Tensor]]:
         n = len(self)
         check_scalar(
-            batch_size, "batch_size", "CompletionBatches", kind=numbers.Integral, minimum=1, maximum=n
+            batch_size,
+            "batch_size",
+            "CompletionBatches",
+            kind=numbers.Integral,
+            minimum=1,
+            maximum=n if self.drop_last else None,
         )
-        order = torch.randperm(n, generator=generator)
-        for begin in range(0, n - n % batch_size, batch_size):
+        order = torch.randperm(n, generator=generator) if self.shuffle else torch.arange(n)
+        for begin in range(0, n - n % batch_size if self.drop_last else n, batch_size):
             index = order[begin : begin + batch_size]
             positions = self.positions[index]
             if self.augment:
                 positions, _ = random_yaw(positions, self.rotations[index], generator)
-            mask = sample_joint_masks(batch_size, generator, positions.shape[-2], self.keep_probability)
+            mask = sample_joint_masks(len(index), generator, positions.shape[-2], self.keep_probability)
             yield to_trajevae(positions), mask
 
 
 @dataclass(frozen=True, eq=False)
 class CompletionData:
-    """The chapter's data at :data:`FPS`: training clips and the test windows every model is measured on.
+    """The chapter's data at :data:`FPS`: training clips, the test windows every model is measured on and the
+    validation clips the runs' held-out curves are measured on.
 
     Attributes:
         train_positions: training clips ``(N, T, J, 3)``, global positions in metres (float32).
@@ -168,6 +180,8 @@ class CompletionData:
         test_action: the action label of each test window ``(M,)``.
         multimodal: DLow's multimodal ground truth of each test window, futures ``(M_i, T - 1, J * 3)``
             (:func:`motionlab.models.trajevae.evaluate.multimodal_futures`).
+        val_positions: validation clips ``(V, T, J, 3)``, like ``train_positions``; val_rotations: their
+            local quaternions ``(V, T, J, 4)``.
     """
 
     train_positions: Tensor
@@ -175,3 +189,5 @@ class CompletionData:
     test_windows: Tensor
     test_action: np.ndarray
     multimodal: Sequence[np.ndarray]
+    val_positions: Tensor
+    val_rotations: Tensor

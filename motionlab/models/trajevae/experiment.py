@@ -7,8 +7,9 @@
   frames, one encoder ``q(z | Y)`` pulled towards ``N(0, I)``, no augmentation), **+ DCT**, **+ learnable
   prior** (posterior ``q_pose(z | X)`` and prior ``p_traj(z | Y)``), **+ augmentation** (random yaw),
   **+ masked future poses** (the posterior sees ``X ⊙ (1 - M)``), which is the full TrajeVAE.
-* :func:`completion_run` is one training run (a :class:`~motionlab.train.run.Run`); :func:`runs` names the
-  chapter's seven: the five rungs and the GRU and CVAE-RNN baselines.
+* :func:`completion_run` is one training run (a :class:`~motionlab.train.run.Run`), which validates on the
+  benchmark's val clips (:func:`validation_batches`); :func:`runs` names the chapter's seven: the five rungs
+  and the GRU and CVAE-RNN baselines.
 * :func:`train_all` trains them on both cores and sweeps every model over the number of given trajectories
   in a worker as soon as it is trained (:func:`sweep`), so the sweeps fill the core that the last training
   leaves idle. A sweep loads its model from the checkpoint cache and is seeded by its arguments alone, so the
@@ -55,7 +56,7 @@ from motionlab.models.trajevae.evaluate import (
 from motionlab.models.trajevae.losses import cvae_rnn_loss, gru_loss, trajevae_loss
 from motionlab.models.trajevae.masks import first_joints
 from motionlab.models.trajevae.model import TrajeVAE, TrajeVAEConfig
-from motionlab.train import PiecewiseLinear, TrainConfig
+from motionlab.train import PiecewiseLinear, TrainConfig, validation_every
 from motionlab.train.loop import LossFn
 from motionlab.train.many import Trained, train_many
 from motionlab.train.run import Run
@@ -97,7 +98,8 @@ FIGURE6_RUNS: tuple[str, ...] = ("+ masked future poses", "GRU")
 
 
 def _train_config(steps: int, batch_size: int, checkpoint_every: int | None) -> TrainConfig:
-    """The chapter's one schedule: AdamW at 2e-3, a warm-up over the first eighth, then a linear decay."""
+    """The chapter's one schedule: AdamW at 2e-3, a warm-up over the first eighth, then a linear decay; 40
+    validation passes spread over it (:func:`~motionlab.train.validation_every`)."""
     return TrainConfig(
         steps=steps,
         batch_size=batch_size,
@@ -105,6 +107,7 @@ def _train_config(steps: int, batch_size: int, checkpoint_every: int | None) -> 
         grad_clip=None,
         lr_schedule=PiecewiseLinear(((0, 0.05), (steps // 8, 1.0), (steps, 0.05))),
         checkpoint_every=checkpoint_every,
+        val_every=validation_every(steps),  # the held-out curve: passes over the validation clips
     )
 
 
@@ -115,7 +118,7 @@ class ExperimentConfig(config.ProfileConfig):
     Attributes:
         trajevae: the full TrajeVAE, the last rung of the ablation ladder (:func:`ladder` builds the others).
         gru: the deterministic GRU baseline; cvae_rnn: the CVAE-RNN baseline.
-        train: the schedule every model trains with.
+        train: the schedule every model trains with (and validates with, on the val split's clips).
         n_eval_windows: test windows the metrics average over; n_samples: completions drawn per window and
             number of given trajectories (``N_SAMPLES``, DLow's 50).
     """
@@ -214,18 +217,46 @@ def _batches(batches: CompletionBatches, model: nn.Module) -> CompletionBatches:
     return batches
 
 
+def validation_batches(model: ModelConfig, positions: Tensor, rotations: Tensor) -> CompletionBatches:
+    """The validation batch source of a run of config ``model``: the clips ``positions`` ``(V, T, J, 3)``
+    (``rotations`` ``(V, T, J, 4)``) all served in their order, the last batch possibly short, each with a
+    joint mask drawn as in training (``model.keep_probability``; the loop seeds the generator identically
+    every pass, so every pass sees the same masks) and never turned by the yaw augmentation."""
+    return CompletionBatches(
+        positions, rotations, False, model.keep_probability, shuffle=False, drop_last=False
+    )
+
+
 def completion_run(
-    name: str, model: ModelConfig, train_config: TrainConfig, positions: Tensor, rotations: Tensor
+    name: str,
+    model: ModelConfig,
+    train_config: TrainConfig,
+    positions: Tensor,
+    rotations: Tensor,
+    val_clips: tuple[Tensor, Tensor] | None = None,
 ) -> Run:
     """The :class:`~motionlab.train.run.Run` of a completion model of config ``model`` on the training clips
     ``positions`` ``(N, T, J, 3)`` and ``rotations`` ``(N, T, J, 4)`` at the chapter's frame rate
     (:func:`~motionlab.models.trajevae.data.decimate`): masked batches (and, if the config says so, the yaw
-    augmentation); the clips' fingerprint and the frame step are the cache key's data part."""
+    augmentation); the clips' fingerprint and the frame step are the cache key's data part.
+
+    When ``train_config.val_every`` is set the run validates every ``val_every`` steps on
+    :func:`validation_batches` of ``val_clips``, the validation clips ``(positions (V, T, J, 3), rotations
+    (V, T, J, 4))`` at the same frame rate (the benchmark's val split: :func:`load_data`'s
+    ``val_positions``, ``val_rotations``)."""
     if not isinstance(model, (TrajeVAEConfig, RecurrentConfig)):
         raise TypeError(
             f"completion_run: model must be a TrajeVAEConfig or RecurrentConfig, got {type(model).__name__}"
         )
     batches = CompletionBatches(positions, rotations, model.augment, model.keep_probability)
+    val_batches = None
+    if train_config.val_every is not None:
+        if val_clips is None:
+            raise ValueError(
+                f"completion_run {name!r}: train_config validates every {train_config.val_every} steps, "
+                "give it val_clips (positions, rotations) to validate on"
+            )
+        val_batches = partial(_batches, validation_batches(model, *val_clips))
     return Run(
         name,
         model,
@@ -234,12 +265,14 @@ def completion_run(
         partial(_batches, batches),
         train_config,
         {"clips": data_fingerprint(batches.positions), "frame_step": FRAME_STEP},
+        val_batches=val_batches,
     )
 
 
 def load_data(cfg: ExperimentConfig) -> CompletionData:
-    """The benchmark at the chapter's frame rate: its training clips and ``cfg.n_eval_windows`` test windows
-    spread evenly over the test split (so over all style modes), with their multimodal ground truth."""
+    """The benchmark at the chapter's frame rate: its training clips, ``cfg.n_eval_windows`` test windows
+    spread evenly over the test split (so over all style modes), with their multimodal ground truth, and its
+    validation clips (all of them)."""
     if not isinstance(cfg, ExperimentConfig):
         raise TypeError(f"load_data: cfg must be an ExperimentConfig, got {type(cfg).__name__}")
     bench = load_benchmark()
@@ -252,18 +285,21 @@ def load_data(cfg: ExperimentConfig) -> CompletionData:
         test_windows=test_windows,
         test_action=bench.test.action[pick.numpy()],
         multimodal=multimodal_futures(test_windows),
+        val_positions=decimate(bench.val.positions),
+        val_rotations=decimate(bench.val.rotations),
     )
 
 
 def runs(cfg: ExperimentConfig, data: CompletionData) -> dict[str, Run]:
     """The chapter's seven runs ``{name: run}`` in :data:`START_ORDER`: the rungs of :func:`ladder` (named by
-    :data:`RUNGS`), ``"GRU"`` and ``"CVAE-RNN"``."""
+    :data:`RUNGS`), ``"GRU"`` and ``"CVAE-RNN"``, each validating on ``data``'s validation clips."""
     if not isinstance(cfg, ExperimentConfig):
         raise TypeError(f"runs: cfg must be an ExperimentConfig, got {type(cfg).__name__}")
     models: dict[str, ModelConfig] = {**ladder(cfg.trajevae), "GRU": cfg.gru, "CVAE-RNN": cfg.cvae_rnn}
+    val_clips = data.val_positions, data.val_rotations
     return {
         name: completion_run(
-            CACHE_NAMES[name], models[name], cfg.train, data.train_positions, data.train_rotations
+            CACHE_NAMES[name], models[name], cfg.train, data.train_positions, data.train_rotations, val_clips
         )
         for name in START_ORDER
     }
@@ -343,7 +379,8 @@ def schedule_check(
     train = _train_config(steps, cfg.train.batch_size, cfg.train.checkpoint_every)
     model_cfg = replace(cfg.trajevae, reconstruction=reconstruction)
     name = f"trajevae_schedule_{reconstruction}_{steps}"
-    run = completion_run(name, model_cfg, train, data.train_positions, data.train_rotations)
+    val_clips = data.val_positions, data.val_rotations
+    run = completion_run(name, model_cfg, train, data.train_positions, data.train_rotations, val_clips)
     model, result = run.train(progress=False)
     four = first_joints(4)
     start, trajectories = completion_task(data.test_windows, four)

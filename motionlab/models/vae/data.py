@@ -9,7 +9,8 @@
 
 :class:`BenchmarkPoses` and :class:`BenchmarkClips` name the chapter's two data sets on the course benchmark
 (small and picklable, so a training run in a worker process builds its data itself); ``load()`` builds them
-once per process.
+once per process, and so does ``validation_inputs()`` the benchmark's validation split, prepared like the
+training data, on which the runs draw their held-out curve.
 """
 
 from __future__ import annotations
@@ -135,6 +136,14 @@ def _benchmark_poses(every: int, profile: str) -> PoseSplits:
 
 
 @functools.cache
+def _benchmark_val_poses(every: int, profile: str) -> Tensor:
+    """:meth:`BenchmarkPoses.validation_inputs`' poses ``(V, 64)``: the benchmark's validation clips taken as
+    :func:`_benchmark_poses` takes the test clips (the training poses' standardizer), cached per process."""
+    poses = pose_features(load_benchmark().val, every=every)
+    return _benchmark_poses(every, profile).standardizer.transform(poses)
+
+
+@functools.cache
 def _benchmark_clips(length: int, stride: int, profile: str) -> ClipSplits:
     """:meth:`BenchmarkClips.load`, cached per process; ``profile`` only keys the cache."""
     benchmark = load_benchmark()
@@ -142,12 +151,23 @@ def _benchmark_clips(length: int, stride: int, profile: str) -> ClipSplits:
     return ClipSplits(codec, train, test)
 
 
+@functools.cache
+def _benchmark_val_clips(length: int, stride: int, profile: str) -> WindowDataset:
+    """:meth:`BenchmarkClips.validation_inputs`' windows ``(V, length, 67)``: the benchmark's validation clips
+    cut and standardised as :func:`clip_windows` does the test clips (the training windows' standardizer),
+    cached per process."""
+    standardizer = _benchmark_clips(length, stride, profile).codec.standardizer
+    return motion_windows(
+        load_benchmark().val, representation("moglow"), length, stride, standardizer=standardizer
+    )
+
+
 @dataclass(frozen=True)
 class BenchmarkPoses(Checked):
-    """Poses of the course benchmark: every ``every``-th frame of its train and test clips
+    """Poses of the course benchmark: every ``every``-th frame of its train, test and validation clips
     (:func:`pose_features`).
 
-    The unconditional pose models train on :meth:`training_inputs`.
+    The unconditional pose models train on :meth:`training_inputs` and validate on :meth:`validation_inputs`.
     """
 
     every: int = integer(minimum=1)
@@ -160,13 +180,18 @@ class BenchmarkPoses(Checked):
         """``(x, None)``: the standardised training poses ``(N, 64)``, no labels."""
         return self.load().train, None
 
+    def validation_inputs(self) -> tuple[Tensor, None]:
+        """``(x, None)``: the benchmark's validation poses ``(V, 64)``, taken and standardised like the
+        training poses (their statistics, not refitted), no labels. Built once per process and profile."""
+        return _benchmark_val_poses(self.every, config.profile()), None
+
 
 @dataclass(frozen=True)
 class BenchmarkClips(Checked):
     """Windows of the course benchmark's clips: ``length`` frames every ``stride`` frames
     (:func:`clip_windows`).
 
-    The clip CVAEs train on :meth:`training_inputs`.
+    The clip CVAEs train on :meth:`training_inputs` and validate on :meth:`validation_inputs`.
     """
 
     length: int = integer(minimum=1)
@@ -180,3 +205,10 @@ class BenchmarkClips(Checked):
         """``(x, action)``: standardised training windows ``(W, length, 67)`` and their actions ``(W,)``."""
         train = self.load().train
         return train.features, train.action
+
+    def validation_inputs(self) -> tuple[Tensor, Tensor]:
+        """``(x, action)``: the benchmark's validation windows ``(V, length, 67)``, cut and standardised like
+        the training windows (their statistics, not refitted), and their actions ``(V,)``. Built once per
+        process and profile."""
+        val = _benchmark_val_clips(self.length, self.stride, config.profile())
+        return val.features, val.action

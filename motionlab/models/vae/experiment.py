@@ -30,7 +30,7 @@ from motionlab.models.vae.data import CLIP_FEATURES, POSE_FEATURES, BenchmarkCli
 from motionlab.models.vae.evaluate import sample_clip_metrics
 from motionlab.models.vae.losses import elbo_loss, elbo_terms, kl_weight
 from motionlab.models.vae.model import MLPVAE, VAEConfig
-from motionlab.train import TensorBatches, TrainConfig, build_seeded
+from motionlab.train import TensorBatches, TrainConfig, build_seeded, validation_every
 from motionlab.train.many import Trained, train_many
 from motionlab.train.run import Run, given
 from motionlab.validation import check_scalar, integer, real
@@ -126,7 +126,8 @@ class ExperimentConfig(config.ProfileConfig):
         )
 
     def train_config(self, steps: int, anneal: bool) -> TrainConfig:
-        """AdamW for ``steps`` steps; the KL weight ramps up over the first half (``anneal``) or stays 1."""
+        """AdamW for ``steps`` steps; the KL weight ramps up over the first half (``anneal``) or stays 1; 40
+        validation passes (:func:`~motionlab.train.validation_every`) over the run."""
         return TrainConfig(
             steps=steps,
             batch_size=self.batch_size,
@@ -134,6 +135,7 @@ class ExperimentConfig(config.ProfileConfig):
             grad_clip=self.grad_clip,
             seed=self.seed,
             schedules={"beta": kl_weight(steps, anneal)},
+            val_every=validation_every(steps),  # the held-out curve: 40 passes over the validation data
         )
 
     @property
@@ -153,12 +155,20 @@ def training_batches(data: BenchmarkPoses | BenchmarkClips, model: nn.Module) ->
     return TensorBatches((x,) if label is None else (x, label))
 
 
+def validation_batches(data: BenchmarkPoses | BenchmarkClips, model: nn.Module) -> TensorBatches:
+    """The validation batches of a run on ``data``: its validation inputs (the benchmark's val split, prepared
+    like the training inputs), every one in its order, with the actions for the clip CVAEs."""
+    x, label = data.validation_inputs()
+    return TensorBatches((x,) if label is None else (x, label), shuffle=False, drop_last=False)
+
+
 def vae_run(
     name: str, model: VAEConfig, train_config: TrainConfig, data: BenchmarkPoses | BenchmarkClips
 ) -> Run:
     """The :class:`~motionlab.train.run.Run` of an :class:`MLPVAE` of config ``model`` on ``data`` (built
     where the run trains; its fingerprint is the cache key's data part), its weights drawn from
-    ``train_config.seed``."""
+    ``train_config.seed``; it validates on ``data``'s validation inputs every ``train_config.val_every`` steps
+    when that is set."""
     x, label = data.training_inputs()
     return Run(
         name,
@@ -168,6 +178,7 @@ def vae_run(
         partial(training_batches, data),
         train_config,
         {"x": data_fingerprint(x), "label": None if label is None else data_fingerprint(label.float())},
+        val_batches=None if train_config.val_every is None else partial(validation_batches, data),
     )
 
 
