@@ -27,7 +27,10 @@ def test_prepare_layout_and_origin(clips):
         data.body, torch.as_tensor(clips.body)
     )
     every_third = prepare(clips, frame_stride=3, floor_clearance=data.floor_clearance)
-    assert torch.equal(every_third.features, data.features[:, ::3])
+    assert torch.equal(every_third.features, data.features[:, ::3]) and every_third.val is None
+    with_val = prepare(clips, frame_stride=3, val=clips)  # validation clips: prepared alike
+    assert torch.equal(with_val.val.features, every_third.features) and with_val.val.val is None
+    assert with_val.val.floor_clearance == with_val.floor_clearance == data.floor_clearance
 
 
 def test_face_forward_turns_every_clip_to_heading_zero(clips):

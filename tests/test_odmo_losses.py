@@ -113,6 +113,24 @@ def test_balanced_batches_hold_every_class_equally_and_reuse_no_clip():
     assert all(torch.equal(a[0], b[0]) for a, b in zip(batches, again))
 
 
+def test_balanced_batches_for_validation_deal_every_clip_in_order():
+    """``shuffle=False, drop_last=False`` (validation): each class's clips in their stored order, a last
+    smaller balanced batch when at least 2 clips of the smallest class remain, the same batches whatever the
+    generator."""
+    labels = torch.tensor([0, 1] * 5 + [1])  # 5 clips of class 0, 6 of class 1
+    features = torch.arange(11.0)[:, None, None]
+    source = BalancedBatches(features, labels, 2, shuffle=False, drop_last=False)
+    batches = list(source(0, torch.Generator().manual_seed(0), 6))
+    assert [x.flatten().tolist() for x, _ in batches] == [[0, 2, 4, 1, 3, 5], [6, 8, 7, 9]]
+    assert [y.tolist() for _, y in batches] == [[0, 0, 0, 1, 1, 1], [0, 0, 1, 1]]
+    again = list(source(3, torch.Generator().manual_seed(1), 6))
+    assert all(torch.equal(a[0], b[0]) for a, b in zip(batches, again))
+    assert len(list(source(0, torch.Generator(), 4))) == 2  # 2 per class: the last clip of class 0 is alone
+    assert len(list(BalancedBatches(features, labels, 2, shuffle=False)(0, torch.Generator(), 6))) == 1
+    with pytest.raises(TypeError, match="BalancedBatches: drop_last must be a bool"):
+        BalancedBatches(features, labels, 2, drop_last=0)
+
+
 def test_balanced_batches_reject_bad_sizes():
     source = BalancedBatches(torch.zeros(8, 1, 1), torch.tensor([0, 1] * 4), 2)
     with pytest.raises(ValueError, match="multiple"):

@@ -22,10 +22,14 @@ from motionlab.models.odmo.data import ODMOData
 from motionlab.models.odmo.experiment import (
     VARIANTS,
     ExperimentConfig,
+    RealExperimentConfig,
     chapter_model,
     measure_variant,
+    odmo_run,
+    real_runs,
     runs,
     train_all,
+    validation_batches,
 )
 from motionlab.models.odmo.model import ODMO, ODMOConfig
 from motionlab.models.odmo.modes import discover_modes
@@ -59,17 +63,22 @@ EXPERIMENT = ExperimentConfig(
 )
 
 
-@pytest.fixture(scope="module")
-def data() -> ODMOData:
-    gen = torch.Generator().manual_seed(0)
-    n = 40
+def tiny_clips(n: int, gen: torch.Generator, val: ODMOData | None = None) -> ODMOData:
+    """``n`` random clips of the tiny skeleton, of the 2 actions in turn, 2 modes each."""
     features = torch.randn(n, CFG.n_frames, CFG.feature_dim, generator=gen) * 0.1
     features[..., 2:6:3] -= 0.5  # the two non-root joints hang below the root
     features[..., -3:] = torch.cumsum(torch.rand(n, CFG.n_frames, 3, generator=gen) * 0.2, dim=1)
     features[:, 0, -3:] = 0.0
     action = torch.arange(n) % 2
     mode = 2 * action + (torch.arange(n) // 2) % 2
-    return ODMOData(features, action, mode, torch.zeros(n, dtype=torch.int64), STRIDE, 0.05)
+    return ODMOData(features, action, mode, torch.zeros(n, dtype=torch.int64), STRIDE, 0.05, val)
+
+
+@pytest.fixture(scope="module")
+def data() -> ODMOData:
+    """40 training clips with 10 validation clips."""
+    gen = torch.Generator().manual_seed(0)
+    return tiny_clips(40, gen, val=tiny_clips(10, gen))
 
 
 @pytest.fixture(scope="module")
@@ -252,6 +261,52 @@ def test_experiment_config_profiles_and_runs(data, monkeypatch):
         ExperimentConfig(homogeneity=("odmo",))
     with pytest.raises(TypeError, match="ExperimentConfig: steps must be an integer"):
         ExperimentConfig(steps=2.5)
+
+
+def test_runs_validate_on_the_val_clips_without_changing_the_weights(data, tmp_path, monkeypatch):
+    """A run validates every ``val_every`` steps on class-balanced batches of the validation clips, each
+    class's in their stored order, every clip once (5 per class, batches of 3 per class: one full batch and
+    one of the last 2 per class); the trained weights are those of the same run without validation, bit for
+    bit (the codes' noise, the teacher forcing and the pairs draw from the random state a validation pass
+    must leave alone)."""
+    monkeypatch.setenv("MOTIONLAB_BUILD", str(tmp_path))
+    monkeypatch.setenv("MOTIONLAB_PROFILE", "quick")  # the benchmark it compares the data with
+    cfg = dataclasses.replace(EXPERIMENT, steps=6, batch_size=6)
+    run = runs(cfg, data)["ODMO"]
+    assert run.train_config.val_every == 1 and run.val_batches is not None  # 6 steps: every step
+    batches = list(run.val_batches(ODMO(CFG))(0, torch.Generator(), cfg.batch_size))
+    assert [y.tolist() for _, y in batches] == [[0, 0, 0, 1, 1, 1], [0, 0, 1, 1]]
+    assert torch.equal(torch.cat([x for x, _ in batches]), data.val.features[[0, 2, 4, 1, 3, 5, 6, 8, 7, 9]])
+    validated, result = run.train(progress=False)
+    assert result.history.val_step == [1, 2, 3, 4, 5, 6] and len(result.history.val_terms["loss"]) == 6
+    assert set(result.history.val_terms) == {
+        "loss",
+        "motion",
+        "trajectory",
+        "consistency",
+        "contrastive",
+        "prior",
+    }
+
+    plain_run = dataclasses.replace(
+        run, train_config=dataclasses.replace(run.train_config, val_every=None), val_batches=None
+    )
+    plain, plain_result = plain_run.train(progress=False)
+    assert plain_result.history.val_step == []
+    for key, value in validated.state_dict().items():
+        assert torch.equal(value, plain.state_dict()[key]), key
+
+    without_val = dataclasses.replace(data, val=None)
+    with pytest.raises(ValueError, match=r"no validation clips \(data.val is None\)"):
+        validation_batches(without_val, validated)
+    with pytest.raises(ValueError, match="odmo_run: odmo validates, but the data has no validation clips"):
+        odmo_run("odmo", CFG, run.train_config, without_val)
+    with pytest.raises(ValueError, match="odmo_run: odmo validates, but the data has no validation clips"):
+        runs(cfg, without_val)
+    # real motion capture has no validation split: its runs do not validate
+    real_cfg = RealExperimentConfig(model=CFG, frame_stride=STRIDE, window=CFG.n_frames * STRIDE, steps=6)
+    assert real_cfg.train_config().val_every is None
+    assert real_runs(real_cfg, without_val)["ODMO"].val_batches is None
 
 
 def test_train_all_trains_in_workers_and_measures_like_in_process(data, tmp_path, monkeypatch):

@@ -164,6 +164,28 @@ def test_validation_does_not_change_the_trained_weights() -> None:
     assert_bitwise_equal(weights(plain), weights(validated))
 
 
+def test_validation_judges_the_objective_the_run_ends_with() -> None:
+    """Every pass of a run of known length sees its schedules' last values (KL weight, teacher forcing), so
+    the held-out curve moves with the weights only; training sees each step's."""
+    seen: list[tuple[float, bool]] = []
+
+    def recording_loss(model, batch, step, coeffs):
+        seen.append((coeffs["beta"], model.training))
+        return loss_fn(model, batch, step, coeffs)
+
+    cfg = replace(CFG, steps=12, val_every=5, schedules={"beta": LinearRamp(0, 10, 0.0, 1.0)})
+    train(
+        make_model(),
+        recording_loss,
+        TensorBatches(data()),
+        cfg,
+        val_data=TensorBatches(data(32)),
+        progress=False,
+    )
+    assert {beta for beta, training in seen if not training} == {1.0}
+    assert sorted({beta for beta, training in seen if training})[:2] == [0.0, 0.1]
+
+
 def test_every_validation_pass_draws_the_same_noise() -> None:
     """A loss that draws from torch's global generator (a VAE's latent, a diffusion step) sees the same draws
     in every validation pass, so the held-out curve moves with the weights only; training's draws go on."""

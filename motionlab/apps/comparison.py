@@ -260,7 +260,7 @@ def odmo_methods(benchmark: Benchmark, test: CommonTest) -> dict[str, Method]:
     """Chapter 08's ODMO with mode-preserving sampling, given each test clip's action and end point (its
     root's last position, in the clip's own start frame)."""
     cfg = odmo.ExperimentConfig.current()
-    train_data = prepare(benchmark.train, cfg.frame_stride)
+    train_data = prepare(benchmark.train, cfg.frame_stride, val=benchmark.val)
     model, result = odmo.runs(cfg, train_data)["ODMO"].train(progress=False)
     model.eval()
     sampler = ODMOSampler.from_data(model, train_data, kind="modes")

@@ -265,7 +265,10 @@ class _Trainer:
 
     def validate(self) -> None:
         step = self.position.step
-        coeffs = self.coefficients(step)
+        # the objective the run ends with (its schedules' last values: KL weight, teacher forcing, ...), so
+        # that the held-out curve moves with the weights only (a run of unknown length: the current values)
+        last = self.total_steps()
+        coeffs = self.coefficients(step if last is None else last - 1)
         sums: dict[str, float] = {}
         count = 0
         with rng_isolated(), torch.no_grad():

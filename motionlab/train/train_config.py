@@ -57,7 +57,8 @@ class TrainConfig(Checked):
         grad_clip: the global gradient L2 norm is clipped to this value (``None``: no clipping).
         schedules: name -> schedule; at step ``s`` the loss function receives ``{name: schedule(s)}``.
         lr_schedule: optional factor on ``lr`` per step (e.g. a warm-up ``LinearRamp(0, 200, 0.0, 1.0)``).
-        val_every: validate every this many steps (and always at the end, when validation data is given).
+        val_every: validate every this many steps (and always at the end, when validation data is given),
+            each pass with the schedules at their last values (the objective the run ends with).
         log_every: the progress bar shows term means over this many steps.
         checkpoint_every: write the resumable state every this many steps (``None``: only on interruption).
         seed: seeds the global RNGs at the start and the order of the batches of every epoch.

@@ -18,7 +18,8 @@ real clips back at their true height to 3 mm on average.
 
 Training batches are class-balanced (:class:`BalancedBatches`): every batch holds the same number of clips
 of every action, which the contrastive term's pairs need
-(:func:`~motionlab.models.odmo.losses.balanced_pairs`).
+(:func:`~motionlab.models.odmo.losses.balanced_pairs`); so do the validation batches, each class's clips in
+their stored order.
 """
 
 from __future__ import annotations
@@ -48,6 +49,9 @@ class ODMOData:
             type (mode and body are for evaluation only: the model never sees them).
         frame_stride: frames of the 30 fps data per model frame.
         floor_clearance: mean height (metres) of the lowest joint in the first frame of the training clips.
+        val: validation clips prepared as these (the same frame stride and floor clearance), on which the
+            chapter's runs validate; ``None``: none (real motion capture, or clips that are validation clips
+            themselves).
     """
 
     features: Tensor
@@ -56,6 +60,7 @@ class ODMOData:
     body: Tensor
     frame_stride: int
     floor_clearance: float
+    val: ODMOData | None = None
 
     @property
     def end_point(self) -> Tensor:
@@ -84,9 +89,12 @@ def lowest_first_joint(features: Tensor) -> Tensor:
     return features[:, 0, :-3].unflatten(-1, (-1, 3))[..., 2].min(dim=-1).values
 
 
-def prepare(data: MotionSet, frame_stride: int = 3, floor_clearance: float | None = None) -> ODMOData:
+def prepare(
+    data: MotionSet, frame_stride: int = 3, floor_clearance: float | None = None, val: MotionSet | None = None
+) -> ODMOData:
     """ODMO features of a motion set (see the module notes); ``floor_clearance`` defaults to this set's
-    own."""
+    own. ``val``: validation clips, prepared alike (the same frame stride, this set's floor clearance) as the
+    result's ``val``."""
     check_scalar(frame_stride, "frame_stride", "prepare", kind=numbers.Integral, minimum=1)
     if floor_clearance is not None:
         check_scalar(floor_clearance, "floor_clearance", "prepare")
@@ -106,6 +114,7 @@ def prepare(data: MotionSet, frame_stride: int = 3, floor_clearance: float | Non
         torch.as_tensor(data.body, dtype=torch.int64),
         frame_stride,
         float(floor_clearance),
+        None if val is None else prepare(val, frame_stride, float(floor_clearance)),
     )
 
 
@@ -152,9 +161,20 @@ class BalancedBatches:
 
     Every batch has ``batch_size / n_classes`` clips of each class. An epoch shuffles each class's clips and
     deals them out; it ends when the smallest class runs out (so every clip is used once at most).
+
+    Args:
+        features: clips ``(N, T, F)``; labels: their classes ``(N,)``, every one of the ``n_classes`` with
+            at least 2 clips.
+        shuffle: deal each class's clips in a random order (``False``: in their stored order; validation).
+        drop_last: end the epoch with the last full batch (the default, so every step sees ``batch_size``
+            clips; ``False``: then one smaller balanced batch of the smallest class's remaining clips, and as
+            many of every other class, when at least 2 remain for a same-class pair; validation: with
+            equally many clips of every class, every clip once).
     """
 
-    def __init__(self, features: Tensor, labels: Tensor, n_classes: int) -> None:
+    def __init__(
+        self, features: Tensor, labels: Tensor, n_classes: int, shuffle: bool = True, drop_last: bool = True
+    ) -> None:
         where = "BalancedBatches"
         check_tensor(features, "features", where, min_leading=1)
         check_tensor(labels, "labels", where, ndim=1, floating=False)
@@ -169,6 +189,10 @@ class BalancedBatches:
                 f"{where}: every one of the {n_classes} classes needs at least 2 clips, "
                 f"got counts {counts.tolist()}"
             )
+        for name, value in (("shuffle", shuffle), ("drop_last", drop_last)):
+            if not isinstance(value, bool):
+                raise TypeError(f"{where}: {name} must be a bool, got {value!r}")
+        self.shuffle, self.drop_last = shuffle, drop_last
         self.features = features
         self.labels = labels
         self.n_classes = n_classes
@@ -188,12 +212,21 @@ class BalancedBatches:
         self, epoch: int, generator: torch.Generator, batch_size: int
     ) -> Iterator[tuple[Tensor, Tensor]]:
         k = self.per_class(batch_size)
-        shuffled = [m[torch.randperm(m.numel(), generator=generator)] for m in self.members]
-        n_batches = min(m.numel() for m in shuffled) // k
-        if n_batches == 0:
+        members = (
+            [m[torch.randperm(m.numel(), generator=generator)] for m in self.members]
+            if self.shuffle
+            else self.members
+        )
+        smallest = min(m.numel() for m in members)
+        per_class = [k] * (smallest // k)  # clips of each class in each batch
+        if not self.drop_last and smallest % k >= 2:
+            per_class.append(smallest % k)
+        if not per_class:
             raise ValueError(f"BalancedBatches: the smallest class has fewer than {k} clips for one batch")
-        for b in range(n_batches):
-            index = torch.cat([m[b * k : (b + 1) * k] for m in shuffled])
+        start = 0
+        for size in per_class:
+            index = torch.cat([m[start : start + size] for m in members])
+            start += size
             yield self.features[index], self.labels[index]
 
 

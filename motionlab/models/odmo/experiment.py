@@ -39,7 +39,7 @@ from motionlab.models.odmo.losses import joint_objective
 from motionlab.models.odmo.model import ODMO, ODMOConfig
 from motionlab.models.odmo.modes import K_VALUES
 from motionlab.models.odmo.sampling import ODMOSampler, encode_clips
-from motionlab.train import LinearRamp, TrainConfig
+from motionlab.train import LinearRamp, TrainConfig, validation_every
 from motionlab.train.many import Trained, train_many
 from motionlab.train.run import Run, given
 from motionlab.validation import check_choice, instance, integer, real, tuple_of
@@ -164,7 +164,8 @@ class ExperimentConfig(config.ProfileConfig):
         return cls(model=chapter_model(trajectory_hidden=128, motion_hidden=128), steps=6_000)
 
     def train_config(self) -> TrainConfig:
-        """Every variant's :class:`~motionlab.train.TrainConfig`, with the teacher-forcing schedule."""
+        """Every variant's :class:`~motionlab.train.TrainConfig`, with the teacher-forcing schedule and 40
+        validation passes over the benchmark's validation clips (the held-out curve)."""
         ramp = LinearRamp(start=0, length=self.steps, begin=1.0, end=self.teacher_forcing_end)
         return TrainConfig(
             steps=self.steps,
@@ -175,6 +176,7 @@ class ExperimentConfig(config.ProfileConfig):
             schedules={"teacher_forcing": ramp},
             checkpoint_every=None,
             log_every=20,
+            val_every=validation_every(self.steps),
         )
 
 
@@ -190,16 +192,36 @@ def balanced_batches(data: ODMOData, model: nn.Module) -> BalancedBatches:
     return BalancedBatches(data.features, data.action, model.cfg.n_classes)
 
 
+def validation_batches(data: ODMOData, model: nn.Module) -> BalancedBatches:
+    """Class-balanced batches of the validation clips ``data.val`` (each class's clips in their stored order,
+    the last batch smaller where the clips do not fill it), for the run's held-out curve."""
+    if data.val is None:
+        raise ValueError("validation_batches: the data has no validation clips (data.val is None)")
+    return BalancedBatches(
+        data.val.features, data.val.action, model.cfg.n_classes, shuffle=False, drop_last=False
+    )
+
+
 def odmo_run(name: str, cfg: ODMOConfig, train_config: TrainConfig, data: ODMOData) -> Run:
     """A variant's :class:`~motionlab.train.run.Run`, cached as ``name``: ODMO of ``cfg`` (seeded by
     ``train_config.seed``) on class-balanced batches of ``data`` (its fingerprints and frame stride are the
-    cache key's data part)."""
+    cache key's data part); it validates on ``data.val`` every ``train_config.val_every`` steps when that is
+    set."""
+    expected = (cfg.n_frames, cfg.feature_dim)
     shape = tuple(data.features.shape[1:])
-    if shape != (cfg.n_frames, cfg.feature_dim):
+    if shape != expected:
         raise ValueError(
             f"odmo_run: the config expects clips of {cfg.n_frames} frames x {cfg.feature_dim} features, the "
             f"data has {shape}"
         )
+    if train_config.val_every is not None:
+        if data.val is None:
+            raise ValueError(f"odmo_run: {name} validates, but the data has no validation clips (data.val)")
+        if tuple(data.val.features.shape[1:]) != expected:
+            raise ValueError(
+                f"odmo_run: the config expects clips of {cfg.n_frames} frames x {cfg.feature_dim} features, "
+                f"the validation clips have {tuple(data.val.features.shape[1:])}"
+            )
     return Run(
         name,
         cfg,
@@ -212,12 +234,18 @@ def odmo_run(name: str, cfg: ODMOConfig, train_config: TrainConfig, data: ODMODa
             "action": data_fingerprint(data.action.float()),
             "frame_stride": data.frame_stride,
         },
+        None,
+        None if train_config.val_every is None else partial(validation_batches, data),
     )
 
 
 def runs(cfg: ExperimentConfig, data: ODMOData | ChapterData) -> dict[str, Run]:
     """Every variant's run, by variant name, in the order to start them: ``-L_es`` last, because its
-    measurement is the shortest (one table row), so the other core waits least at the end."""
+    measurement is the shortest (one table row), so the other core waits least at the end.
+
+    Each run validates on ``data``'s validation clips (``prepare(benchmark.train, stride,
+    val=benchmark.val)``).
+    """
     data = data.train if isinstance(data, ChapterData) else data
     if data.frame_stride != cfg.frame_stride:
         raise ValueError(
@@ -313,17 +341,19 @@ CHAPTER, DEFAULT_RUN = "08_contrastive_mode_discovery", "ODMO"
 
 @dataclass(frozen=True)
 class ChapterData:
-    """What the chapter's runs train on and are measured with: the prepared training clips ``train`` and the
-    benchmark's evaluator ``reference`` (:class:`~.evaluate.Reference`)."""
+    """What the chapter's runs train on and are measured with: the prepared training clips ``train`` (with
+    the validation clips as ``train.val``) and the benchmark's evaluator ``reference``
+    (:class:`~.evaluate.Reference`)."""
 
     train: ODMOData
     reference: Reference
 
 
 def load_data(cfg: ExperimentConfig) -> ChapterData:
-    """The benchmark's training clips prepared at ``cfg.frame_stride`` and the GRU evaluator's reference."""
+    """The benchmark's training clips (and its validation clips) prepared at ``cfg.frame_stride``, and the
+    GRU evaluator's reference."""
     benchmark = load_benchmark()
-    train = prepare(benchmark.train, cfg.frame_stride)
+    train = prepare(benchmark.train, cfg.frame_stride, val=benchmark.val)
     evaluator = benchmark_evaluator("gru", progress=False)
     return ChapterData(
         train, Reference.build(evaluator, benchmark.train, benchmark.val, train.floor_clearance)
@@ -391,6 +421,11 @@ class RealExperimentConfig(ExperimentConfig):
                 f"RealExperimentConfig: the model's {self.model.n_frames} frames x frame_stride "
                 f"{self.frame_stride} must equal the window of {self.window} frames"
             )
+
+    def train_config(self) -> TrainConfig:
+        """:class:`ExperimentConfig`'s :class:`~motionlab.train.TrainConfig` without validation: the real
+        clips have no validation split."""
+        return replace(super().train_config(), val_every=None)
 
     @classmethod
     def quick(cls) -> RealExperimentConfig:
