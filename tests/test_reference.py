@@ -180,9 +180,13 @@ def test_levelling_judges_the_held_out_curve_where_the_run_validated() -> None:
     flat = [1.0 / (1 + i) for i in range(4)] + [0.2] * 16
     rising = [1.0 / (1 + i) for i in range(4)] + [0.2 + i / 100 for i in range(16)]
     still = [1.0 - i / 40 for i in range(20)]
-    for held_out, levelled in ((flat, True), (rising, True), (still, False)):
+    # never improved on held-out data: training longer will not help
+    worse = [1.0 + i / 40 for i in range(20)]
+    for held_out, levelled in ((flat, True), (rising, True), (still, False), (worse, True)):
         judged = reference.levelling({"terms": {"loss": falling}, "val_terms": {"loss": held_out}})
         assert judged["measure"] == "held-out" and judged["levelled"] is levelled, (held_out, judged)
+    never_fell = reference.levelling({"terms": {"loss": falling}, "val_terms": {"loss": worse}})
+    assert never_fell["last_fifth_share"] < 0
     # too few passes to judge: the training loss is
     few = reference.levelling({"terms": {"loss": falling}, "val_terms": {"loss": flat[:5]}})
     assert few["measure"] == "training" and not few["levelled"]

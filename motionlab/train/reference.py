@@ -327,8 +327,10 @@ def levelling(history: dict[str, Any]) -> dict[str, Any] | None:
     :data:`MIN_VALIDATIONS` times, else the training objective (``"training"``): the loss term
     ``objective`` where the loss function reports one (a VAE's negative ELBO, whose loss weights the KL by
     a ramp), else the loss. A held-out curve levelled off when its share is below :data:`LEVELLED_SHARE`,
-    also when it rose (the run has passed its best: training longer would not help it); a training curve
-    when the share is that small either way. ``None`` for a run too short to tell (under 50 steps).
+    also when it rose (the run has passed its best, or its held-out measure never improved: training longer
+    would not help it; the share is then negative, its fall over the last fifth over the size of its whole
+    change); a training curve when the share is that small either way, and a training curve that rose
+    overall did not. ``None`` for a run too short to tell (under 50 steps).
     """
 
     def objective(terms: dict[str, Any]) -> list[float]:
@@ -347,8 +349,12 @@ def levelling(history: dict[str, Any]) -> dict[str, Any] | None:
     tenth, fifth = max(n // 10, 1), max(n // 5, 1)
     whole = mean(curve[:tenth]) - mean(curve[-tenth:])
     last = mean(curve[-fifth - tenth : -fifth]) - mean(curve[-tenth:])
-    share = last / whole if whole > 0 else math.inf
-    levelled = share < LEVELLED_SHARE if validated else abs(share) < LEVELLED_SHARE
+    if validated:
+        share = last / abs(whole) if whole != 0 else math.inf
+        levelled = share < LEVELLED_SHARE
+    else:
+        share = last / whole if whole > 0 else math.inf
+        levelled = abs(share) < LEVELLED_SHARE
     return {
         "measure": "held-out" if validated else "training",
         "last_fifth_share": round(share, 4),
@@ -496,9 +502,9 @@ def _readme(manifests: list[dict[str, Any]], total: int) -> str:
         "configuration, seed, steps, training time and machine, commit, SHA-256, metrics, and how much its",
         "loss still fell over its last fifth of steps, as a share of its whole fall (`levelled` below",
         f"{LEVELLED_SHARE:.0%}): its held-out loss where the run validated (on the benchmark's val split,",
-        "a pass every 1/40 of the run; a held-out curve that rises at the end has passed its best and counts",
-        "as levelled), else its training loss (a VAE's: its negative ELBO; levelled when it moved under",
-        f"{LEVELLED_SHARE:.0%} either way).",
+        "a pass every 1/40 of the run; a held-out curve that rises at the end, or never fell, has passed its",
+        "best and counts as levelled: its share is negative), else its training loss (a VAE's: its negative",
+        f"ELBO; levelled when it moved under {LEVELLED_SHARE:.0%} either way).",
         "",
         "Rebuild them all with `make reference` (a course build with `MOTIONLAB_RETRAIN=1` in a fresh",
         "folder, then `python -m motionlab.apps.reference export`), or only those whose configuration",
