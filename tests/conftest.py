@@ -1,7 +1,9 @@
 """Settings of the unit tests: one torch thread, property tests that do not depend on the
 machine's speed, and the shared fixtures (the notebooks' settings: ``conftest.py`` at the top)."""
 
+import dataclasses
 import os
+from collections.abc import Callable
 
 import pytest
 import torch
@@ -37,3 +39,21 @@ def tiny_batch():
     from test_motion_cell_common import batch
 
     return batch()
+
+
+@pytest.fixture
+def check_validation_leaves_weights() -> Callable[..., None]:
+    """``check(run, validated)``: train :class:`~motionlab.train.run.Run` ``run`` again without validation and
+    assert that ``validated``, the model its validating ``run.train()`` gave, has bit for bit the same weights
+    (a validation pass must leave the training alone)."""
+
+    def check(run, validated: torch.nn.Module) -> None:
+        plain_run = dataclasses.replace(
+            run, train_config=dataclasses.replace(run.train_config, val_every=None), val_batches=None
+        )
+        plain, plain_result = plain_run.train(progress=False)
+        assert plain_result.history.val_step == []
+        for key, value in validated.state_dict().items():
+            assert torch.equal(value, plain.state_dict()[key]), key
+
+    return check
