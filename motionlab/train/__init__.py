@@ -15,8 +15,9 @@ Modules: :mod:`~motionlab.train.schedules` (schedules), :mod:`~motionlab.train.t
 :mod:`~motionlab.train.cache` (:func:`train_or_load`), :mod:`~motionlab.train.history` and
 :mod:`~motionlab.train.plot` (records and the figure), :mod:`~motionlab.train.runtime` (device, mixed
 precision and data-parallel processes of a run), :mod:`~motionlab.train.run` (:class:`~.run.Run`, the one
-description of a training run: its model, loss, batches, training config and cache key) and
-:mod:`~motionlab.train.many` (training several runs on both cores).
+description of a training run: its model, loss, batches, training config and cache key),
+:mod:`~motionlab.train.many` (training several runs on both cores) and :mod:`~motionlab.train.live` (a run's
+first steps trained in front of the reader, drawn over its reference model's record).
 """
 
 from motionlab.train.batches import TensorBatches
