@@ -44,13 +44,14 @@ reference: $(STAMP)
 		status=$$?; $(BIN)/python -m motionlab.apps.reference export build/reference-build && exit $$status
 
 # The formatter and the linter (ruff, settings in pyproject.toml) first, then the tests and notebooks; the
-# log ends with the 25 slowest tests (--durations), so a test that grows slow shows itself. The two pytest
-# workers fill both cores, so the notebooks train and measure in their own process (MOTIONLAB_PROCESSES=1)
-# instead of starting worker processes of their own.
+# log ends with the 25 slowest tests (--durations), so a test that grows slow shows itself. The notebooks train
+# and measure in their own process (MOTIONLAB_PROCESSES=1) instead of starting worker processes of their own;
+# three pytest workers keep both cores busy while one of them waits (for a kernel to start or to time out, a
+# browser, a subprocess): 158 s of pytest against 167 s with two, one run after the other.
 test: $(STAMP)
 	MOTIONLAB_PROFILE=quick MOTIONLAB_PROCESSES=1 $(BIN)/python -m motionlab.course.logs test -- sh -c '\
 		$(BIN)/ruff format --check . && $(BIN)/ruff check . && $(BIN)/lint-imports && \
-		$(BIN)/python -m pytest -n 2 --dist loadscope --durations=25 \
+		$(BIN)/python -m pytest -n 3 --dist loadscope --durations=25 \
 			--nbval-sanitize-with tests/nbval_sanitize.cfg'
 
 bench: $(STAMP)

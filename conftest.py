@@ -1,5 +1,5 @@
 """Settings of every pytest run, the unit tests' (``tests/``) and the notebooks' under nbval (``notebooks/``):
-the quick profile, each notebook cell's time limit, and how ``pytest -n 2 --dist loadscope`` shares the
+the quick profile, each notebook cell's time limit, and how ``pytest -n 3 --dist loadscope`` shares the
 work between its workers."""
 
 import os
@@ -17,7 +17,7 @@ def _is_notebook_cell(item: pytest.Item) -> bool:
 
 #: Seconds each scope of ``make test`` keeps one pytest worker busy (quick profile, two workers side by side,
 #: measured on the faster of the two machines of the project's kind; the order is what counts). The scheduler
-#: hands the scopes out longest first, so the two workers end together instead of one running a long chapter
+#: hands the scopes out longest first, so the workers end together instead of one running a long chapter
 #: alone at the end; a scope not listed counts as a second.
 TYPICAL_SECONDS: dict[str, float] = {
     "chapter 11": 30.0,  # with the live JupyterLab test
