@@ -55,6 +55,22 @@ def test_set_threads():
         config.set_threads(1.5)
 
 
+def _blas_threads() -> set[int]:
+    """The thread counts of the BLAS libraries loaded in this process (NumPy's and SciPy's OpenBLAS)."""
+    from threadpoolctl import threadpool_info
+
+    return {pool["num_threads"] for pool in threadpool_info() if pool["user_api"] == "blas"}
+
+
+def test_the_blas_follows_torchs_thread_count():
+    np.ones((4, 4)) @ np.ones((4, 4))  # the BLAS is loaded
+    config.set_threads(1)
+    assert _blas_threads() == {1}
+    with config.threads(2):
+        assert _blas_threads() == {2}
+    assert _blas_threads() == {1}
+
+
 def test_threads_sets_the_count_for_a_block_and_restores_it():
     config.set_threads(1)
     with config.threads(2) as n:

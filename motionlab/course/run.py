@@ -80,8 +80,8 @@ APPENDIX_BUDGET: tuple[float, float] = (120, 40)
 #: (:func:`longest_first`). Budgets are ceilings, not estimates: ordered by them, chapter 11 and its
 #: appendix would start last and finish alone.
 TYPICAL_SECONDS: dict[str, float] = {
-    "01": 11, "01a": 5, "02": 18, "02a": 9, "03": 28, "03a": 17, "04": 58, "04a": 38, "05": 40, "05a": 7,
-    "06": 30, "06a": 32, "07": 47, "07a": 23, "08": 44, "08a": 54, "09": 57, "10": 94, "11": 80, "11a": 41,
+    "01": 7, "01a": 4, "02": 11, "02a": 7, "03": 28, "03a": 11, "04": 54, "04a": 31, "05": 42, "05a": 5,
+    "06": 32, "06a": 23, "07": 45, "07a": 17, "08": 47, "08a": 54, "09": 60, "10": 80, "11": 85, "11a": 41,
 }  # fmt: skip
 
 #: A cell may take at most this many times its chapter's budget. Some chapters spend most of their time in
