@@ -47,7 +47,7 @@ reference: $(STAMP)
 # log ends with the 25 slowest tests (--durations), so a test that grows slow shows itself. The notebooks train
 # and measure in their own process (MOTIONLAB_PROCESSES=1) instead of starting worker processes of their own;
 # three pytest workers keep both cores busy while one of them waits (for a kernel to start or to time out, a
-# browser, a subprocess): 158 s of pytest against 167 s with two, one run after the other.
+# browser, a subprocess): 150.9 and 149.9 s of pytest against 158.4 and 151.9 s with two, runs alternating.
 test: $(STAMP)
 	MOTIONLAB_PROFILE=quick MOTIONLAB_PROCESSES=1 $(BIN)/python -m motionlab.course.logs test -- sh -c '\
 		$(BIN)/ruff format --check . && $(BIN)/ruff check . && $(BIN)/lint-imports && \
