@@ -33,6 +33,11 @@ def _build(tmp_path: Path, seed: int, values: dict[str, float], profile: str = "
     return folder
 
 
+def _recorded(values: dict[str, float]) -> dict[str, object]:
+    """A claim of the recorded table with its values per seed."""
+    return {"op": "<", "threshold": 1.0, "expected": True, "text": "", "values": values}
+
+
 def test_claims_are_collected_per_seed_and_shown_per_chapter(tmp_path: Path) -> None:
     builds = {
         0: _build(tmp_path, 0, {"04.small": 0.5, "04.gap": 2.0, "04a.audit": 0.1}),
@@ -57,13 +62,7 @@ def test_builds_of_some_chapters_update_their_claims_and_keep_the_rest(tmp_path:
     """A model family retrained: builds of the chapters that use it replace those chapters' values (a claim
     the chapter no longer makes loses them) and leave the other chapters' as they were."""
     base = seeds.collect({0: _build(tmp_path, 0, {"04.small": 0.5, "04.dropped": 0.1})})
-    base["claims"]["05.other"] = {
-        "op": "<",
-        "threshold": 1.0,
-        "expected": True,
-        "text": "",
-        "values": {"0": 0.7},
-    }
+    base["claims"]["05.other"] = _recorded({"0": 0.7})
     again = _build(tmp_path / "again", 0, {"04.small": 0.25, "04.new": 0.3})
     record = seeds.collect({0: again}, base)
     assert record["claims"]["04.small"]["values"] == {"0": 0.25} and record["claims"]["04.new"]["values"] == {
@@ -71,6 +70,24 @@ def test_builds_of_some_chapters_update_their_claims_and_keep_the_rest(tmp_path:
     }
     assert "04.dropped" not in record["claims"] and record["claims"]["05.other"]["values"] == {"0": 0.7}
     assert base["claims"]["04.small"]["values"] == {"0": 0.5}  # the base record itself is left alone
+
+
+def test_an_update_can_take_some_chapters_of_a_build_folder(tmp_path: Path) -> None:
+    """A build folder keeps the results of every chapter it has built: ``chapters`` takes only those named
+    (with their appendices) and leaves the others' recorded values alone."""
+    base = seeds.collect({1: _build(tmp_path, 1, {"04.small": 0.5})})
+    base["claims"]["06.flow"] = _recorded({"1": 0.7})
+    folder = _build(tmp_path / "again", 1, {"04.small": 0.25})  # an earlier build of chapter 04 left it there
+    results = json.loads((folder / "course" / "results.json").read_text())
+    claim = results["notebooks"]["04_motion_cell"]["claims"]["04.small"]
+    results["notebooks"]["06_moglow"] = {"claims": {"06.flow": {**claim, "value": 0.1}}}
+    results["notebooks"]["06a_moglow_appendix"] = {"claims": {"06a.audit": {**claim, "value": 0.2}}}
+    (folder / "course" / "results.json").write_text(json.dumps(results))
+    values = {
+        name: c["values"] for name, c in seeds.collect({1: folder}, base, chapters=("06",))["claims"].items()
+    }
+    assert values == {"04.small": {"1": 0.5}, "06.flow": {"1": 0.1}, "06a.audit": {"1": 0.2}}
+    assert seeds.collect({1: folder}, base)["claims"]["04.small"]["values"] == {"1": 0.25}  # without: all
 
 
 def test_a_build_that_is_not_the_seed_given_is_refused(tmp_path: Path) -> None:
@@ -93,6 +110,15 @@ def test_the_command_records_the_table_and_refuses_bad_arguments(tmp_path, monke
     assert json.loads((tmp_path / "claims.json").read_text())["claims"]["04.small"]["values"] == {"0": 0.25}
     assert command.main(["seeds", f"1={build}"]) == 1
     assert "error: seed 1:" in capsys.readouterr().err
+    assert command.main(["seeds", "--update", "--chapters", "04", f"0={build}"]) == 0
+    assert json.loads((tmp_path / "claims.json").read_text())["claims"]["04.small"]["values"] == {"0": 0.5}
+    for argv, message in (
+        (["seeds", "--chapters", "04", f"0={build}"], "--chapters limits an --update"),
+        (["seeds", "--update", "--chapters", "04,6", f"0={build}"], "expected chapters' two-digit numbers"),
+    ):
+        with pytest.raises(SystemExit) as exit_info:
+            command.main(argv)
+        assert exit_info.value.code == 2 and message in capsys.readouterr().err
     with pytest.raises(SystemExit) as exit_info:
         command.main(["seeds", "one=/tmp"])
     assert exit_info.value.code == 2 and "expected SEED=BUILD" in capsys.readouterr().err

@@ -1,10 +1,11 @@
-"""``python -m motionlab.apps.reference export BUILD | verify | seeds [--update] 0=BUILD 1=BUILD 2=BUILD``:
-the shipped reference models' command.
+"""``python -m motionlab.apps.reference export BUILD | verify | seeds [--update [--chapters NN,NN]] SEED=BUILD
+...``: the shipped reference models' command.
 
 ``export`` copies the full-profile runs a course build trained into ``reference/`` with their manifests and
 keeps the reference models it loaded (what ``make reference`` runs after its build); ``verify`` checks every
 reference model against its manifest; ``seeds`` records the claims of course builds trained with other base
-seeds (:mod:`motionlab.course.seeds`; with ``--update``, of the chapters those builds ran, the rest kept).
+seeds (:mod:`motionlab.course.seeds`; with ``--update``, of the chapters those builds ran, or of those
+``--chapters`` names, the rest kept).
 Errors end the command with one line on stderr and exit code 1. The store itself is
 :mod:`motionlab.train.reference`.
 """
@@ -25,6 +26,14 @@ def _seed_build(text: str) -> tuple[int, Path]:
     if not sep or not seed.isdigit() or not folder:
         raise argparse.ArgumentTypeError(f"expected SEED=BUILD (e.g. 1=/tmp/seed1/build), got {text!r}")
     return int(seed), Path(folder)
+
+
+def _chapter_numbers(text: str) -> tuple[str, ...]:
+    """Chapters' two-digit numbers separated by commas, e.g. ``06,09``."""
+    numbers = tuple(text.split(","))
+    if not all(len(number) == 2 and number.isdigit() for number in numbers):
+        raise argparse.ArgumentTypeError(f"expected chapters' two-digit numbers (e.g. 06,09), got {text!r}")
+    return numbers
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -55,9 +64,19 @@ def main(argv: list[str] | None = None) -> int:
         action="store_true",
         help="replace only the claims of the notebooks these builds ran; keep the rest of the table",
     )
+    seeds.add_argument(
+        "--chapters",
+        default=(),
+        type=_chapter_numbers,
+        metavar="NN[,NN...]",
+        help="take only these chapters' claims (and their appendices') from the builds, e.g. 06,09: "
+        "a build folder keeps the results of every chapter it has built",
+    )
     args = parser.parse_args(argv)
     if args.command == "export" and args.replace and not args.partial:
         parser.error("export: --replace names runs of a --partial build (a whole build replaces every run)")
+    if args.command == "seeds" and args.chapters and not args.update:
+        parser.error("seeds: --chapters limits an --update (a table without --update holds every chapter)")
     try:
         if args.command == "export":
             manifests = reference.export(
@@ -66,7 +85,7 @@ def main(argv: list[str] | None = None) -> int:
             print(f"exported {len(manifests)} reference models to {reference.REFERENCE_DIR}")
         elif args.command == "seeds":
             base = seed_claims.load() if args.update else None
-            record = seed_claims.collect(dict(args.builds), base)
+            record = seed_claims.collect(dict(args.builds), base, args.chapters)
             path = seed_claims.save(record)
             print(f"{len(record['claims'])} claims over seeds {', '.join(record['seeds'])} written to {path}")
         else:

@@ -22,7 +22,9 @@ from motionlab.paths import REPO_ROOT
 SEED_CLAIMS_PATH = REPO_ROOT / "reference" / "seeds" / "claims.json"
 
 
-def collect(builds: dict[int, Path], base: dict[str, Any] | None = None) -> dict[str, Any]:
+def collect(
+    builds: dict[int, Path], base: dict[str, Any] | None = None, chapters: tuple[str, ...] = ()
+) -> dict[str, Any]:
     """The claims of the full-profile course builds ``{seed: build folder}``: ``{"seeds": {seed: the build's
     models, numerical path and torch}, "claims": {name: {"op", "threshold", "expected", "text", "values":
     {seed: value}}}}``.
@@ -30,7 +32,9 @@ def collect(builds: dict[int, Path], base: dict[str, Any] | None = None) -> dict
     With ``base`` (a record of this shape, e.g. the shipped table), the builds update it: each replaces its
     seed's values of the claims of the notebooks it ran (a claim such a notebook no longer makes loses that
     seed's value, and goes when no seed has one), and the other notebooks' claims stay as recorded. A model
-    family that changed is then measured again in the chapters that use it alone.
+    family that changed is then measured again in the chapters that use it alone. ``chapters`` (e.g.
+    ``("06",)``), when given, limits what the builds bring to those chapters and their appendices: a build
+    folder's ``results.json`` keeps every chapter it has ever built, also those an earlier build left there.
 
     Raises ``FileNotFoundError`` naming a build without ``course/results.json`` and ``ValueError`` for a
     build whose recorded base seed is not the one given, or that is not a full-profile build.
@@ -52,11 +56,16 @@ def collect(builds: dict[int, Path], base: dict[str, Any] | None = None) -> dict
                 f"seed {seed}: {path} is a {results.get('profile')!r} build, not a full-profile one"
             )
         seeds[str(seed)] = {key: results.get(key) for key in ("models", "numerics", "torch")}
-        ran = {stem.split("_", 1)[0] for stem in results.get("notebooks", {})}  # "04", "04a"
+        notebooks = {
+            stem: notebook
+            for stem, notebook in results.get("notebooks", {}).items()
+            if not chapters or stem[:2] in chapters
+        }
+        ran = {stem.split("_", 1)[0] for stem in notebooks}  # "04", "04a"
         for name, claim in claims.items():
             if name.split(".", 1)[0] in ran:  # measured again by this build (or no longer claimed)
                 claim["values"].pop(str(seed), None)
-        for notebook in results.get("notebooks", {}).values():
+        for notebook in notebooks.values():
             for name, claim in notebook.get("claims", {}).items():
                 entry = claims.setdefault(name, {"values": {}})
                 entry.update({key: claim.get(key) for key in ("op", "threshold", "expected", "text")})
