@@ -71,17 +71,21 @@ def test_the_key_is_the_same_in_another_process(tmp_path: Path) -> None:
     import subprocess
     import sys
 
+    from motionlab.train.measurements import measurement_key
+
+    statements = (
+        "torch.manual_seed(0)\ndata = {'clips': torch.randn(4, 3), 'judge': nn.Linear(3, 2)}\n"
+        "key = measurement_key(partial(print, data), 'run', nn.Linear(3, 2))"
+    )
+    here: dict = {"torch": torch, "nn": nn, "partial": partial, "measurement_key": measurement_key}
+    exec(statements, here)  # this process, whose torch has pickled other objects before
     program = (
         "import torch\nfrom functools import partial\nfrom torch import nn\n"
         "from motionlab.train.measurements import measurement_key\n"
-        "torch.manual_seed(0)\ndata = {'clips': torch.randn(4, 3), 'judge': nn.Linear(3, 2)}\n"
-        "print(measurement_key(partial(print, data), 'run', nn.Linear(3, 2)))"
+        f"torch.set_num_threads({torch.get_num_threads()})\n{statements}\nprint(key)"  # threads enter the key
     )
-    keys = {
-        subprocess.run([sys.executable, "-c", program], capture_output=True, text=True, check=True).stdout
-        for _ in range(2)
-    }
-    assert len(keys) == 1 and len(keys.pop().strip()) == 20
+    there = subprocess.run([sys.executable, "-c", program], capture_output=True, text=True, check=True).stdout
+    assert there.strip() == here["key"] and len(here["key"]) == 20
 
 
 def test_another_version_of_the_code_starts_afresh_and_drops_the_old_entries(

@@ -100,10 +100,6 @@ def test_the_shared_pool_is_reused_and_each_call_is_set_up_afresh(
     assert len({row[2] for row in rows}) == 1  # every call starts from seed 0, whatever ran before it
     again = run_in_workers(where_and_threads, [("g",), ("h",)], processes=2)
     assert len({pid for _, pid, _ in first + again}) <= 2  # the same two workers (a pool per call: four)
-    close_shared_pools()
-    assert (
-        run_in_workers(where_and_threads, [("i",), ("j",)], processes=2)[0][0] == "i"
-    )  # a new pool after closing
 
 
 @pytest.mark.parametrize("processes", [1, 2])
@@ -192,3 +188,16 @@ def test_workers_get_copies_of_tensors_and_return_copies():
     assert torch.equal(first, torch.zeros(5)) and torch.equal(second, torch.arange(5.0))
     assert torch.equal(results[0], torch.ones(5)) and torch.equal(results[1], torch.arange(1.0, 6.0))
     assert not results[0].is_shared()
+
+
+def test_closing_ends_the_shared_workers_and_the_next_use_starts_a_new_pool() -> None:
+    # Last in the module: every earlier test shares one pool (a worker costs seconds of a core to start).
+    workers = {pid for _, pid, _ in run_in_workers(where_and_threads, [("a",), ("b",)], processes=2)}
+    old = shared_pool(2)
+    close_shared_pools()
+    for pid in workers:  # shutdown waits for the workers: each has exited and been reaped
+        with pytest.raises(ProcessLookupError):
+            os.kill(pid, 0)
+    new = shared_pool(2)  # started lazily: no worker until the first call
+    assert new is not old and new is shared_pool(2)
+    close_shared_pools()
