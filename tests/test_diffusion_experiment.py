@@ -1,17 +1,22 @@
 """Chapter 11's experiment: its two runs, the ablation's zero weights, their validation on the val clips,
-the config's limits and ``with_steps`` (the training command's quick run of it: ``test_train_cli.py``)."""
+the config's limits, ``with_steps`` (the training command's quick run of it: ``test_train_cli.py``) and the
+joint speed per action."""
 
 from dataclasses import replace
 
+import numpy as np
 import pytest
 import torch
 
+from motionlab.data.synthetic import generate
+from motionlab.evaluation import joint_speed
 from motionlab.models.diffusion.data import MDMData
 from motionlab.models.diffusion.experiment import (
     DEFAULT_RUN,
     VARIANTS,
     ChapterData,
     ExperimentConfig,
+    action_speeds,
     runs,
     variant_runs,
     with_steps,
@@ -44,6 +49,7 @@ def toy_data(cfg: ExperimentConfig) -> ChapterData:
         train_features=torch.zeros(1),
         fps=30.0,
         real_skating=0.0,
+        real_speed={},
     )
 
 
@@ -138,3 +144,17 @@ def test_with_steps_changes_every_runs_steps_and_nothing_else():
     assert longer.steps == 17
     assert all(run.train_config.steps == 17 for run in runs(longer, toy_data(longer)).values())
     assert longer.model == cfg.model and longer.batch_size == cfg.batch_size
+
+
+def test_action_speeds_average_each_actions_clips_and_leave_out_an_action_without_clips():
+    clips = generate(seed=2, n_per_mode=2)
+    positions, action = clips.positions[:, :20], np.asarray(clips.action)
+    names = [*clips.action_names, "absent"]
+    speeds = action_speeds(positions, action, names, fps=30.0)
+    per_clip = joint_speed(positions, fps=30.0).mean(-1).numpy()
+    assert list(speeds) == list(clips.action_names)
+    for index, name in enumerate(clips.action_names):
+        assert speeds[name] == pytest.approx(per_clip[action == index].mean(), rel=1e-6)
+    assert speeds["walk"] > 4 * speeds["wave"]  # a walking body moves more than a waving one
+    with pytest.raises(ValueError, match="one action per clip"):
+        action_speeds(positions, action[:-1], names, fps=30.0)

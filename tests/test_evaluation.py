@@ -6,11 +6,18 @@ import torch
 
 from motionlab.data.representations import rotate_xy
 from motionlab.data.synthetic import generate
-from motionlab.evaluation import EVAL_FEATURES, body_frame_features, hip_heading
+from motionlab.evaluation import (
+    EVAL_FEATURES,
+    body_frame_features,
+    body_frame_poses,
+    hip_heading,
+    joint_speed,
+)
 from motionlab.evaluation.benchmark import Benchmark, labels_of, real_reference, sample_metrics
 from motionlab.evaluation.classifiers import ClassifierConfig, MotionClassifier
 from motionlab.evaluation.evaluator import EvaluatorConfig, evaluator_run, load_evaluator
 from motionlab.metrics import mean_ci
+from motionlab.skeleton import average_skeleton
 
 
 @pytest.fixture(scope="module")
@@ -57,6 +64,35 @@ def test_features_reject_bad_input():
         body_frame_features(bad)
     with pytest.raises(TypeError, match="body_frame_features: positions must have a floating-point dtype"):
         body_frame_features(torch.zeros(1, 2, 22, 3, dtype=torch.long))
+
+
+def test_body_frame_poses_of_a_rest_pose_are_the_rest_positions():
+    rest = torch.tensor(average_skeleton().rest_positions(), dtype=torch.float32)
+    placed = rest + torch.tensor([2.0, -1.0, 0.9])  # somewhere on the floor, facing +x
+    poses = body_frame_poses(placed.expand(1, 3, 22, 3))
+    torch.testing.assert_close(poses[0, 0], rest + torch.tensor([0.0, 0.0, 0.9]), atol=1e-5, rtol=0)
+
+
+def test_joint_speed_ignores_travel_and_turning_and_matches_a_hand_computation(clips):
+    rest = torch.tensor(average_skeleton().rest_positions(), dtype=torch.float32) + torch.tensor(
+        [0.0, 0.0, 0.9]
+    )
+    gliding = rest + torch.linspace(0, 3, 10)[:, None, None] * torch.tensor(
+        [1.0, 0.0, 0.0]
+    )  # a frozen pose sliding along x
+    turning = torch.stack([_turn(rest, angle) for angle in torch.linspace(0, 1.5, 10).tolist()])
+    for frozen in (gliding, turning):
+        torch.testing.assert_close(joint_speed(frozen[None]), torch.zeros(1, 10), atol=1e-4, rtol=0)
+    positions = torch.as_tensor(clips.positions[:2, :6])
+    poses = body_frame_poses(positions).numpy()
+    by_hand = np.linalg.norm(np.diff(poses, axis=1), axis=-1).mean(-1) * 15.0
+    speed = joint_speed(positions.numpy(), fps=15.0).numpy()  # NumPy in, torch out
+    np.testing.assert_allclose(speed[:, 1:], by_hand, rtol=1e-5)
+    np.testing.assert_allclose(speed[:, 0], speed[:, 1])
+    with pytest.raises(ValueError, match="2 frames"):
+        joint_speed(positions[:, :1])
+    with pytest.raises(ValueError, match="fps"):
+        joint_speed(positions, fps=0.0)
 
 
 @pytest.mark.parametrize("kind", ["conv", "gru"])

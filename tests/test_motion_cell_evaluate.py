@@ -30,13 +30,6 @@ def test_protocol_samples_have_140_frames_and_discard_20():
     torch.testing.assert_close(samples.evaluated, samples.positions[:, 20:])
 
 
-def test_body_frame_poses_of_a_rest_pose_are_the_rest_positions():
-    rest = torch.tensor(average_skeleton().rest_positions(), dtype=torch.float32)
-    placed = rest + torch.tensor([2.0, -1.0, 0.9])  # somewhere on the floor, facing +x
-    poses = E.body_frame_poses(placed.expand(1, 3, 22, 3))
-    torch.testing.assert_close(poses[0, 0], rest + torch.tensor([0.0, 0.0, 0.9]), atol=1e-5, rtol=0)
-
-
 def test_distance_to_pose_by_hand():
     positions = torch.as_tensor(clips().positions[:2, :5])
     poses = E.body_frame_poses(positions)
@@ -113,24 +106,6 @@ def test_tsne_embedding_shape_and_seed():
     np.testing.assert_allclose(a, E.tsne_embedding(x, seed=0))
     with pytest.raises(ValueError, match="features"):
         E.tsne_embedding(x[:3])
-
-
-def test_joint_speed_ignores_travel_and_matches_a_hand_computation():
-    rest = torch.tensor(average_skeleton().rest_positions(), dtype=torch.float32) + torch.tensor(
-        [0.0, 0.0, 0.9]
-    )
-    gliding = rest + torch.linspace(0, 3, 10)[:, None, None] * torch.tensor(
-        [1.0, 0.0, 0.0]
-    )  # a frozen pose sliding along x
-    torch.testing.assert_close(E.joint_speed(gliding[None]), torch.zeros(1, 10), atol=1e-4, rtol=0)
-    positions = torch.as_tensor(clips().positions[:2, :6])
-    poses = E.body_frame_poses(positions).numpy()
-    by_hand = np.linalg.norm(np.diff(poses, axis=1), axis=-1).mean(-1) * 30.0
-    speed = E.joint_speed(positions).numpy()
-    np.testing.assert_allclose(speed[:, 1:], by_hand, rtol=1e-5)
-    np.testing.assert_allclose(speed[:, 0], speed[:, 1])
-    with pytest.raises(ValueError, match="2 frames"):
-        E.joint_speed(positions[:, :1])
 
 
 def test_speed_curve_averages_the_non_periodic_samples_and_real_level_matches():

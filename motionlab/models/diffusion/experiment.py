@@ -10,12 +10,14 @@ split (prepared as the training clips) 40 times (its held-out curve), :func:`tra
 cores and :func:`measure` measures a trained model: sample sets drawn per action with the fast sampler
 (DDIM on a respaced schedule, with classifier-free guidance), turned into joint positions at 30 fps and
 measured with the benchmark's protocol (:func:`~motionlab.evaluation.benchmark.sample_metrics` with the
-GRU evaluator: accuracy, FID, Diversity, Multimodality, IS) and foot skating
-(:func:`~motionlab.metrics.physical.foot_skating`). Every sample set is seeded by the config alone.
+GRU evaluator: accuracy, FID, Diversity, Multimodality, IS), foot skating
+(:func:`~motionlab.metrics.physical.foot_skating`) and how much the body moves per action
+(:func:`action_speeds`, beside the real test clips'). Every sample set is seeded by the config alone.
 """
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass, replace
 from functools import partial
 from typing import Any
@@ -25,6 +27,7 @@ import torch
 from torch import Tensor, nn
 
 from motionlab import config
+from motionlab.evaluation import joint_speed
 from motionlab.evaluation.benchmark import benchmark_evaluator, load_benchmark, sample_metrics
 from motionlab.evaluation.evaluator import Evaluator, data_fingerprint
 from motionlab.metrics import Interval, repeat_metric
@@ -202,6 +205,8 @@ class ChapterData:
             ``(N, D)`` (FID's reference).
         fps: the benchmark's frame rate (30), of the positions the sample sets are measured in.
         real_skating: the foot skating (m/s) of the benchmark's test clips, the sample sets' target.
+        real_speed: ``{action name: mean body-frame joint speed (m/s)}`` of the benchmark's test clips of
+            each action (:func:`action_speeds`), what the samples of that action should move like.
     """
 
     train: MDMData
@@ -210,23 +215,45 @@ class ChapterData:
     train_features: Tensor
     fps: float
     real_skating: float
+    real_speed: dict[str, float]
+
+
+def action_speeds(
+    positions: Tensor | np.ndarray, action: Tensor | np.ndarray, action_names: Sequence[str], fps: float
+) -> dict[str, float]:
+    """``{action name: mean body-frame joint speed (m/s)}``: :func:`~motionlab.evaluation.joint_speed` of
+    clips ``(N, T, 22, 3)`` at ``fps``, averaged over the frames of each action's clips (actions ``(N,)``
+    indexing ``action_names``); how much the body itself moves, travel over the floor left out. An action
+    without clips is left out."""
+    speed = joint_speed(positions, fps=fps).mean(-1)  # (N,)
+    action = torch.as_tensor(np.asarray(action))
+    if action.shape != speed.shape:
+        raise ValueError(
+            f"action_speeds: need one action per clip ({speed.shape[0]}), got {tuple(action.shape)}"
+        )
+    return {
+        name: float(speed[action == index].mean())
+        for index, name in enumerate(action_names)
+        if bool((action == index).any())
+    }
 
 
 def load_data(cfg: ExperimentConfig) -> ChapterData:
     """The benchmark's training and val clips prepared at ``cfg.frame_stride``, the GRU evaluator and its
-    reference features, and the test clips' foot skating."""
+    reference features, and the test clips' foot skating and joint speed per action."""
     if not isinstance(cfg, ExperimentConfig):
         raise TypeError(f"load_data: cfg must be an ExperimentConfig, got {type(cfg).__name__}")
     benchmark = load_benchmark()
     evaluator = benchmark_evaluator("gru", progress=False)
-    fps = float(benchmark.train.fps)
+    fps, test = float(benchmark.train.fps), benchmark.test
     return ChapterData(
         prepare(benchmark.train, cfg.frame_stride),
         prepare(benchmark.val, cfg.frame_stride),
         evaluator,
         evaluator.features(benchmark.train.positions),
         fps,
-        foot_skating(benchmark.test.positions, fps=fps),
+        foot_skating(test.positions, fps=fps),
+        action_speeds(test.positions, test.action, test.action_names, fps),
     )
 
 
@@ -278,11 +305,14 @@ def sample_set(model: MDM, cfg: ExperimentConfig, generator: torch.Generator) ->
 def set_metrics(
     data: ChapterData, drawn: tuple[Tensor, np.ndarray], rng: np.random.Generator
 ) -> dict[str, float]:
-    """The benchmark's metric row of one sample set (positions ``(N, T, J, 3)``, actions ``(N,)``) and its
-    foot skating (m/s)."""
+    """The benchmark's metric row of one sample set (positions ``(N, T, J, 3)``, actions ``(N,)``), its
+    foot skating (m/s) and, as ``"speed.<action>"``, its clips' joint speed per action (m/s,
+    :func:`action_speeds`; the actions of ``data.real_speed``)."""
     positions, action = drawn
     row = sample_metrics(data.evaluator, positions, action, data.train_features, rng)
     row["skating"] = foot_skating(positions.numpy(), fps=data.fps)
+    speeds = action_speeds(positions, action, list(data.real_speed), data.fps)
+    row.update({f"speed.{name}": speed for name, speed in speeds.items()})
     return row
 
 

@@ -32,7 +32,7 @@ import torch
 from scipy.special import stdtrit
 from torch import Tensor
 
-from motionlab.evaluation import body_frame_features
+from motionlab.evaluation import body_frame_poses, joint_speed
 from motionlab.evaluation.benchmark import Benchmark, feature_metrics
 from motionlab.evaluation.evaluator import Evaluator
 from motionlab.geometry import quat_geodesic
@@ -235,14 +235,6 @@ def rotation_error_degrees(codec: PoseCodec, poses: Tensor, clean: Tensor) -> fl
     return float(torch.rad2deg(quat_geodesic(codec.split(poses)[0], codec.split(clean)[0]).mean()))
 
 
-def body_frame_poses(positions: Tensor) -> Tensor:
-    """Joint positions ``(..., T, 22, 3)`` in each frame's body frame (root on the z axis, facing +x)."""
-    features = body_frame_features(torch.as_tensor(positions, dtype=torch.float32))
-    height = features[..., :1]
-    root = torch.cat([torch.zeros_like(height), torch.zeros_like(height), height], dim=-1)
-    return torch.cat([root[..., None, :], features[..., 1:64].unflatten(-1, (21, 3))], dim=-2)
-
-
 def mean_pose(positions: Tensor | np.ndarray) -> Tensor:
     """The data set's mean pose ``(22, 3)``: body-frame positions averaged over all clips and frames."""
     return body_frame_poses(torch.as_tensor(np.asarray(positions))).flatten(0, -3).mean(0)
@@ -283,18 +275,6 @@ def real_collapse_level(
     if not bool(mask.any()):
         raise ValueError("real_collapse_level: no clip of a non-periodic action")
     return float(distance_to_pose(torch.as_tensor(np.asarray(positions))[mask], pose).mean())
-
-
-def joint_speed(positions: Tensor | np.ndarray, fps: float = 30.0) -> Tensor:
-    """Mean over joints of each frame's body-frame joint speed (m/s) ``(N, T)``; frame 0 repeats frame 1's.
-
-    The body frame removes travel over the floor, so a frozen pose scores 0 whether or not it glides.
-    """
-    poses = body_frame_poses(torch.as_tensor(np.asarray(positions)))
-    if poses.shape[-3] < 2:
-        raise ValueError(f"joint_speed: need at least 2 frames, got {poses.shape[-3]}")
-    speed = (poses[..., 1:, :, :] - poses[..., :-1, :, :]).norm(dim=-1).mean(-1) * fps
-    return torch.cat([speed[..., :1], speed], dim=-1)
 
 
 def speed_by_phase(
