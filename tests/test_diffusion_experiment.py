@@ -112,7 +112,7 @@ def test_runs_validate_on_the_val_clips_without_changing_the_weights(tmp_path, m
 def test_the_full_profile_is_the_course_model():
     cfg = ExperimentConfig.full()
     assert cfg.model == MDMConfig.course()
-    assert ExperimentConfig.long().steps == 20 * cfg.steps
+    assert ExperimentConfig.long().steps == 2 * cfg.steps
 
 
 @pytest.mark.parametrize(
