@@ -16,7 +16,10 @@ setup: $(STAMP)
 # from the local wheel directory pip is configured with (PIP_FIND_LINKS), when there is one. The package's own
 # sources (an editable install, which neither compiles) are compiled too: where PYTHONDONTWRITEBYTECODE is set,
 # every process would otherwise compile what it imports again (about 0.1 s of a notebook kernel's first
-# cell, 0.4 s of a pytest worker's collection); a source edited later is compiled afresh as usual.
+# cell, 0.4 s of a pytest worker's collection); a source edited later is compiled afresh as usual. For the
+# same reason pytest's rewritten test modules (its assert messages) are written once here, by collecting the
+# unit tests with bytecode writing on: each of `make test`'s three workers would otherwise rewrite all of them
+# (2.4 s of CPU per worker); pytest rewrites a test module edited since, in memory, as it would anyway.
 FIND_LINKS := $(firstword $(PIP_FIND_LINKS) $(wildcard /opt/wheels))
 
 $(STAMP): pyproject.toml
@@ -25,6 +28,8 @@ $(STAMP): pyproject.toml
 		--compile-bytecode $(if $(FIND_LINKS),--find-links $(FIND_LINKS)) -e . ) \
 		|| $(BIN)/python -m pip install --quiet -e .
 	$(BIN)/python -m compileall -q motionlab
+	env -u PYTHONDONTWRITEBYTECODE $(BIN)/python -m pytest --collect-only -q -p no:cacheprovider tests >/dev/null \
+		|| echo "setup: collecting the tests failed; make test will say why"
 	@touch $@
 
 # The full profile loads the shipped reference models (reference/); `make course RETRAIN=1` trains every model
