@@ -3,6 +3,7 @@ ODMO and MoGlow."""
 
 from __future__ import annotations
 
+import dataclasses
 from functools import partial
 
 import numpy as np
@@ -13,7 +14,7 @@ from motionlab.data import cmu_mocap as cm
 from motionlab.data.augment import mirror_positions
 from motionlab.evaluation import real
 from motionlab.models.moglow import data as moglow_data
-from motionlab.models.moglow import experiment as moglow_experiment
+from motionlab.models.moglow import real_experiment as moglow_real
 from motionlab.models.odmo import experiment as odmo_experiment
 from motionlab.models.odmo.data import prepare_real, to_positions
 
@@ -115,11 +116,22 @@ def test_moglow_real_features_mirror_consistently(bench: real.RealBenchmark) -> 
 
 
 def test_moglow_real_windows_and_runs(bench: real.RealBenchmark) -> None:
-    cfg = moglow_experiment.RealLocomotionConfig.quick()
-    data = moglow_data.prepare_real(bench.train, bench.test, cfg.data, cfg.window, cfg.stride)
-    assert data.train.pose.shape[1:] == (cfg.window, 58) and data.test.control.shape[1:] == (cfg.window, 3)
-    runs = moglow_experiment.real_runs(cfg, data, real.clips_fingerprint(bench.train))
-    assert set(runs) == {"MoGlow", moglow_experiment.BASELINE}
+    cfg = moglow_real.ExperimentConfig.quick()
+    data = moglow_real.prepare(cfg, bench)
+    windows = data.windows
+    assert windows.train.pose.shape[1:] == (cfg.window, 58) and windows.test.control.shape[1:] == (
+        cfg.window,
+        3,
+    )
+    # the validation windows come from training clips held out of the fit: none of them is a training window
+    assert windows.val is not None and windows.val.pose.shape[1:] == (cfg.window, 58)
+    train_rows = {tuple(w.flatten().tolist()) for w in windows.train.pose[:, :2]}
+    assert not any(tuple(w.flatten().tolist()) in train_rows for w in windows.val.pose[:, :2])
+    runs = moglow_real.runs(cfg, data)
+    assert set(runs) == {moglow_real.DEFAULT_RUN, moglow_real.BASELINE}
+    assert all(run.val_batches is not None and run.train_config.val_every for run in runs.values())
+    other_share = moglow_real.runs(dataclasses.replace(cfg, val_share=0.3), data)["MoGlow"]
+    assert other_share.data != runs["MoGlow"].data  # the validation share is part of the cache key
     with pytest.raises(ValueError, match="unknown actions"):
         moglow_data.real_clip_windows(
             bench.train, moglow_data.MoGlowDataConfig(actions=("Swim",)), 20, 20, False

@@ -13,8 +13,8 @@ the chapter does:
 * ``with_steps(cfg, name, steps)``: ``cfg`` with run ``name`` trained for ``steps`` optimiser steps.
 
 Modules are imported only when a family is used, so ``--help`` is quick. Adding a family (or a data set,
-as ``odmo_cmu`` and ``diffusion_cmu`` are ODMO and MDM on the CMU clips of chapter 10) is one entry here
-and a module of that shape.
+as ``moglow_cmu``, ``odmo_cmu`` and ``diffusion_cmu`` are MoGlow, ODMO and MDM on the CMU clips of chapter
+10) is one entry here and a module of that shape.
 """
 
 from __future__ import annotations
@@ -29,6 +29,7 @@ FAMILIES: dict[str, str] = {
     "vae": "motionlab.models.vae.experiment",
     "motion_cell": "motionlab.models.motion_cell.experiment",
     "moglow": "motionlab.models.moglow.experiment",
+    "moglow_cmu": "motionlab.models.moglow.real_experiment",
     "trajevae": "motionlab.models.trajevae.experiment",
     "odmo": "motionlab.models.odmo.experiment",
     "odmo_cmu": "motionlab.models.odmo.real_experiment",

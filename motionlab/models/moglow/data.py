@@ -247,11 +247,21 @@ def real_clip_windows(
 
 
 def prepare_real(
-    train: MocapClips, test: MocapClips, cfg: MoGlowDataConfig, length: int, stride: int
+    train: MocapClips,
+    test: MocapClips,
+    cfg: MoGlowDataConfig,
+    length: int,
+    stride: int,
+    val: MocapClips | None = None,
 ) -> PreparedData:
-    """Standardised windows of real clips: the training windows augmented, the test windows not, the scalers
-    fitted on the training windows' frames."""
+    """Standardised windows of real clips: the training windows augmented, the test windows (and the
+    validation windows of ``val``, when given) not, the scalers fitted on the training windows' frames."""
     raw = real_clip_windows(train, cfg, length, stride, augment=True)
     scalers = fit_scalers(raw)
-    test_windows = real_clip_windows(test, cfg, length, stride, augment=False)
-    return PreparedData(standardize(raw, scalers), standardize(test_windows, scalers), scalers)
+
+    def held_out(clips: MocapClips) -> MoGlowFeatures:
+        return standardize(real_clip_windows(clips, cfg, length, stride, augment=False), scalers)
+
+    return PreparedData(
+        standardize(raw, scalers), held_out(test), scalers, None if val is None else held_out(val)
+    )
