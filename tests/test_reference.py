@@ -302,3 +302,15 @@ def test_a_run_without_a_reference_is_trained_and_named_as_trained_here(
     reference.trained_log().unlink()
     run()
     assert reference.trained_here() == []
+
+
+def test_levelling_phrase_says_which_way_the_curve_went() -> None:
+    from motionlab.train.reference import levelling_phrase
+
+    assert levelling_phrase({"last_fifth_share": 0.035, "levelled": True}).endswith(
+        "3.5% of its fall over the last fifth: levelled off"
+    )
+    assert levelling_phrase({"last_fifth_share": 0.2, "levelled": False}).endswith("still falling")
+    assert levelling_phrase({"last_fifth_share": -0.1, "levelled": True}).startswith(
+        "rose over the last fifth by 10.0%"
+    )

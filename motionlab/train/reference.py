@@ -362,6 +362,16 @@ def levelling(history: dict[str, Any]) -> dict[str, Any] | None:
     }
 
 
+def levelling_phrase(verdict: dict[str, Any]) -> str:
+    """A :func:`levelling` verdict in words, to follow "it": "fell a further 3.5% of its fall over the last
+    fifth: levelled off", or for a held-out curve that went up at the end, "rose ... past its best"."""
+    share = verdict["last_fifth_share"]
+    if share < 0:  # the held-out measure went up at the end: training longer would not help
+        return f"rose over the last fifth by {-share:.1%} of its whole change: past its best"
+    state = "levelled off" if verdict["levelled"] else "still falling"
+    return f"fell a further {share:.1%} of its fall over the last fifth: {state}"
+
+
 def export(
     build: Path, out: Path = REFERENCE_DIR, partial: bool = False, replace: tuple[str, ...] = ()
 ) -> list[dict[str, Any]]:
