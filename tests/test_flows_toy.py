@@ -108,14 +108,14 @@ def test_the_toy_flow_validates_on_fresh_moons_without_changing_the_weights(monk
     training points nor the chapter's test points); its weights are those of the same training without
     validation, bit for bit."""
     monkeypatch.setenv("MOTIONLAB_BUILD", str(tmp_path))
-    flow, result = train_toy_flow(hidden=4, steps=3)
-    assert result.history.val_step == [1, 2, 3]
+    flow, result = train_toy_flow(hidden=4, steps=6)
+    assert result.history.val_step == [4, 6]
     val_points = two_moons(TOY_VAL_POINTS, seed=2)
     with torch.no_grad():
         final_nll = float(-flow.log_prob(val_points).mean())  # 4 full batches: their mean is the mean
     assert result.history.val_terms["nll"][-1] == pytest.approx(final_nll, rel=1e-5)
 
-    plain_cfg = TrainConfig(steps=3, batch_size=256, lr=5e-3, grad_clip=5.0)
+    plain_cfg = TrainConfig(steps=6, batch_size=256, lr=5e-3, grad_clip=5.0)
     plain = build_seeded(lambda: ToyFlow(ToyFlowConfig(steps=6, hidden=4)), plain_cfg.seed)
     plain_result = train(
         plain, toy_nll_loss, TensorBatches((two_moons(TOY_POINTS, seed=0),)), plain_cfg, progress=False

@@ -608,6 +608,8 @@ def test_unusable_resume_files_are_ignored_with_a_warning(tmp_path: Path) -> Non
 
 
 def test_validation_every_spreads_the_passes_over_the_run() -> None:
-    assert validation_every(20_000) == 500 and validation_every(6) == 1 and validation_every(100, 10) == 10
+    assert validation_every(20_000) == 500 and validation_every(240) == 6 and validation_every(100, 10) == 10
+    # a short run validates no closer than every 4 steps: 3 passes in 12 steps, one at the end of 3 steps
+    assert validation_every(12) == 4 and validation_every(160) == 4 and validation_every(3) == 3
     with pytest.raises(ValueError, match="validation_every: steps must be an integer >= 1, got 0"):
         validation_every(0)

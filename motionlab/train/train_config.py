@@ -28,14 +28,19 @@ def _check_schedule(name: str, schedule: Any) -> None:
 #: curve and for :func:`~motionlab.train.reference.levelling`'s tenths and fifths.
 VALIDATIONS = 40
 
+#: The fewest steps between two validation passes. A pass covers every validation window, a step one batch,
+#: so a run of a few dozen steps (the quick profile's) that validated at every step would spend most of its
+#: time validating; runs of 160 steps or more are not affected.
+MIN_VALIDATION_SPACING = 4
+
 
 def validation_every(steps: int, passes: int = VALIDATIONS) -> int:
-    """The ``val_every`` that spreads ``passes`` validation passes evenly over a run of ``steps`` (every step
-    for a run shorter than ``passes``)."""
+    """The ``val_every`` that spreads ``passes`` validation passes evenly over a run of ``steps``, but no
+    closer than :data:`MIN_VALIDATION_SPACING` steps apart (a shorter run validates once, at its end)."""
     for value, name in ((steps, "steps"), (passes, "passes")):
         if isinstance(value, bool) or not isinstance(value, int) or value < 1:
             raise ValueError(f"validation_every: {name} must be an integer >= 1, got {value!r}")
-    return max(steps // passes, 1)
+    return max(steps // passes, min(steps, MIN_VALIDATION_SPACING))
 
 
 def schedule_config(schedule: Schedule) -> dict[str, Any]:

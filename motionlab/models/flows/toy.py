@@ -105,10 +105,10 @@ def train_toy_flow(hidden: int | None = None, steps: int | None = None) -> tuple
     """Chapter 05's toy flow (6 Glow steps, coupling networks of ``hidden`` units) trained for ``steps``
     Adam steps on :data:`TOY_POINTS` two-moons points, or loaded from the cache. ``None`` takes the active
     profile's size (quick: 16 units, 40 steps; full: 64 units, 600 steps). The initial weights depend on the
-    training seed alone (:func:`~motionlab.train.build_seeded`), not on what ran before. It validates 40
-    times (:func:`~motionlab.train.validation_every`) on :data:`TOY_VAL_POINTS` other points, all of them in
-    their order (a pass leaves the weights as they are). Returns the model (in ``eval()`` mode) and its
-    training result."""
+    training seed alone (:func:`~motionlab.train.build_seeded`), not on what ran before. It validates
+    up to 40 times (:func:`~motionlab.train.validation_every`) on :data:`TOY_VAL_POINTS` other points, all of
+    them in their order (a pass leaves the weights as they are). Returns the model (in ``eval()`` mode) and
+    its training result."""
     hidden = config.choose(quick=16, full=64) if hidden is None else hidden
     steps = config.choose(quick=40, full=600) if steps is None else steps
     cfg = ToyFlowConfig(steps=6, hidden=hidden)
