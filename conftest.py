@@ -1,8 +1,10 @@
 """Settings of every pytest run, the unit tests' (``tests/``) and the notebooks' under nbval (``notebooks/``):
-the quick profile, each notebook cell's time limit, and how ``pytest -n 3 --dist loadscope`` shares the
-work between its workers."""
+the quick profile, each notebook cell's time limit, a second start for a notebook's kernel that dies before it
+answers, and how ``pytest -n 3 --dist loadscope`` shares the work between its workers."""
 
 import os
+import tempfile
+import warnings
 from pathlib import Path
 from typing import Any
 
@@ -93,3 +95,42 @@ def pytest_runtest_setup(item: pytest.Item) -> None:
         from motionlab.course.run import cell_limits
 
         item.config.option.nbval_cell_timeout = cell_limits(Path(str(item.fspath)).stem).cell_seconds
+
+
+def retried_kernel_class() -> type:
+    """nbval's ``RunningKernel``, started once more when its kernel dies before it answers (as one whose
+    randomly chosen ports another process took in the meantime would): nbval sends a kernel's stderr to
+    ``/dev/null``, so this keeps it while the kernel starts and puts it in the warning (one death) or the
+    error (two)."""
+    from nbval.kernel import RunningKernel, start_new_kernel
+
+    class RetriedKernel(RunningKernel):
+        def __init__(self, kernel_name: str, cwd: str | None = None, startup_timeout: float = 60) -> None:
+            deaths: list[str] = []
+            while True:
+                with tempfile.TemporaryFile("w+") as stderr:
+                    try:
+                        self.km, self.kc = start_new_kernel(
+                            startup_timeout=startup_timeout, kernel_name=kernel_name, stderr=stderr, cwd=cwd
+                        )
+                        break
+                    except RuntimeError as exc:
+                        stderr.seek(0)
+                        deaths.append(f"{exc}; its stderr ended with: {stderr.read()[-1500:]!r}")
+                if len(deaths) == 2:
+                    raise RuntimeError(f"the kernel in {cwd} died twice before it answered: {deaths}")
+            if deaths:
+                warnings.warn(
+                    f"the kernel in {cwd} died before it answered and was started again: {deaths[0]}",
+                    stacklevel=2,
+                )
+            self._ensure_iopub_up()
+
+    return RetriedKernel
+
+
+def pytest_configure(config: pytest.Config) -> None:
+    if config.pluginmanager.hasplugin("nbval"):
+        import nbval.plugin
+
+        nbval.plugin.RunningKernel = retried_kernel_class()

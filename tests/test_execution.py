@@ -1,9 +1,12 @@
 """Executing notebooks: a cell over its limit fails, a kernel that stops answering is caught within seconds,
-named and killed, and the course build executes such a chapter once more in a fresh kernel."""
+named and killed, and the course build executes such a chapter once more in a fresh kernel, as it does one
+whose kernel died before it answered."""
 
 from __future__ import annotations
 
+import importlib.util
 import json
+import sys
 from pathlib import Path
 
 import nbformat
@@ -163,3 +166,56 @@ def test_the_command_refuses_an_unknown_profile(tmp_path: Path, build, capsys, m
     with pytest.raises(SystemExit):
         course.main(["--notebooks", str(tmp_path / "notebooks")])
     assert "MOTIONLAB_PROFILE" in capsys.readouterr().err
+
+
+def _kernel_that_dies(tmp_path: Path, monkeypatch, times: int) -> None:
+    """Make the ``python3`` kernel die at start-up (as one that cannot bind its ports would) the first
+    ``times`` times it is started, then start as usual."""
+    count = tmp_path / "deaths"
+    start = (
+        f"import pathlib, sys\ncount = pathlib.Path({str(count)!r})\n"
+        "deaths = len(count.read_text()) if count.exists() else 0\n"
+        f"if deaths < {times}:\n    count.write_text('x' * (deaths + 1))\n    sys.exit('died at start-up')\n"
+        "from ipykernel import kernelapp\nkernelapp.launch_new_instance()\n"
+    )
+    spec = tmp_path / "jupyter" / "kernels" / "python3"
+    spec.mkdir(parents=True)
+    (spec / "kernel.json").write_text(
+        json.dumps(
+            {"argv": [sys.executable, "-c", start, "-f", "{connection_file}"], "display_name": "Python 3"}
+        )
+    )
+    monkeypatch.setenv("JUPYTER_PATH", str(tmp_path / "jupyter"))  # its "python3" before the installed one
+
+
+def test_a_chapter_whose_kernel_dies_before_it_answers_is_started_again(tmp_path: Path, build, monkeypatch):
+    """The chapter runs in a second kernel, and the report names the first attempt."""
+    _kernel_that_dies(tmp_path, monkeypatch, times=1)
+    _chapter(tmp_path, "01_late", "print('done')")
+    (late,) = course.build(tmp_path / "notebooks")
+    assert late.error is None
+    assert len(late.retries) == 1 and "Kernel died before replying" in late.retries[0], late.retries
+    assert "done" in (build / "01_late.html").read_text()
+
+
+@pytest.mark.parametrize("times", [1, 2])
+def test_nbvals_kernel_that_dies_before_it_answers_is_started_again_once(tmp_path: Path, monkeypatch, times):
+    """The notebooks' kernel under nbval (the root ``conftest.py``): a second start after a death, with the
+    first kernel's stderr in the warning; two deaths are an error that shows both."""
+    spec = importlib.util.spec_from_file_location("root_conftest", Path(__file__).parents[1] / "conftest.py")
+    root_conftest = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(root_conftest)
+    _kernel_that_dies(tmp_path, monkeypatch, times)
+    kernel_class = root_conftest.retried_kernel_class()
+    if times == 2:
+        with pytest.raises(
+            RuntimeError, match="died twice before it answered.*died at start-up.*died at start-up"
+        ):
+            kernel_class("python3", cwd=str(tmp_path))
+        return
+    with pytest.warns(UserWarning, match="died before it answered and was started again.*died at start-up"):
+        kernel = kernel_class("python3", cwd=str(tmp_path))
+    try:
+        assert kernel.is_alive()
+    finally:
+        kernel.stop()

@@ -13,6 +13,9 @@ and the stress harness (:mod:`motionlab.course.stress`) do. Two things can keep 
   a second, whether it still answers on its control and on its shell channel).
 
 In both cases the kernel is killed, not asked to shut down, and the executed part of the notebook is kept.
+A kernel can also die before it ever answers (its start-up output goes to the caller's stderr);
+:attr:`Execution.never_started` says so, and the course then starts the chapter again
+(:func:`motionlab.course.run.execute_chapter`).
 
 The client also polls its sockets in steps of :data:`POLL_SECONDS` rather than waiting once for a whole cell's
 limit. nbclient's own client waits in one poll, and in widget cells (where it also sends on the shell socket
@@ -24,6 +27,7 @@ steps turns that into a delay of at most a second (see :meth:`WatchedClient._asy
 from __future__ import annotations
 
 import asyncio
+import atexit
 import os
 import time
 from dataclasses import dataclass, field
@@ -84,11 +88,18 @@ class Execution:
     #: The index of the cell that failed (None when none did, or the failure was outside a cell).
     failed_cell: int | None = None
     notes: list[str] = field(default_factory=list)
+    #: Whether the kernel started and answered its first request.
+    kernel_answered: bool = True
 
     @property
     def hung(self) -> bool:
         """Whether the kernel stopped answering."""
         return isinstance(self.error, KernelNotAnswering)
+
+    @property
+    def never_started(self) -> bool:
+        """Whether the kernel died, or never answered, before the first cell."""
+        return self.error is not None and not self.kernel_answered
 
 
 def _process_cpu_seconds(pid: int) -> float | None:
@@ -112,6 +123,18 @@ class TimedClient(NotebookClient):
         self._idle_seen: dict[str, float] = {}
         self._current_cell = -1
         self.stalls: list[tuple[int, float, float]] = []
+        self.kernel_answered = False  # set once the new kernel has answered its first request
+
+    async def async_start_new_kernel_client(self) -> Any:
+        try:
+            client = await super().async_start_new_kernel_client()
+        except Exception:
+            # nbclient has cleaned the dead kernel up but left its clean-up registered for the interpreter's
+            # exit, where it would fail on the manager it has since dropped
+            atexit.unregister(self._cleanup_kernel)
+            raise
+        self.kernel_answered = True
+        return client
 
     def process_message(self, msg: dict[str, Any], cell: NotebookNode, cell_index: int) -> Any:
         parent = msg.get("parent_header", {}).get("msg_id")
@@ -281,7 +304,7 @@ def execute_notebook(
         error = exc
     seconds = time.perf_counter() - start
     failed = client._current_cell if error is not None and client._current_cell >= 0 else None
-    return Execution(notebook, seconds, error, failed, stall_notes(client))
+    return Execution(notebook, seconds, error, failed, stall_notes(client), client.kernel_answered)
 
 
 def stall_notes(client: TimedClient) -> list[str]:

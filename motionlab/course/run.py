@@ -102,8 +102,9 @@ TRAINING_CELL_SECONDS = 4 * 3600.0
 #: :class:`~motionlab.course.kernel.CellLimits`.
 ANSWER_SECONDS = 30.0
 
-#: How many times a chapter whose kernel stopped answering is executed again in a fresh kernel.
-HANG_RETRIES = 1
+#: How many times a chapter whose kernel stopped answering, or died before it answered, is executed again in a
+#: fresh kernel.
+KERNEL_RETRIES = 1
 
 #: Notebooks executed at once when the reference models are loaded (:func:`parallel`), each in its own kernel
 #: on one torch thread: on the course's 2-core machine two side by side take about half the time of one after
@@ -187,20 +188,22 @@ def export_html(notebook: nbformat.NotebookNode, assets: dict[str, str] | None =
 def execute_chapter(path: Path, out_dir: Path, assets: dict[str, str] | None = None) -> ChapterRun:
     """Execute one notebook; write ``<name>.ipynb`` and ``<name>.html`` to ``out_dir`` (even on failure).
 
-    A kernel that stops answering is killed and the chapter executed again (:data:`HANG_RETRIES` times);
-    the seconds reported are those of the last execution, the abandoned ones are listed in ``retries``.
+    A kernel that stops answering is killed and the chapter executed again (:data:`KERNEL_RETRIES` times), as
+    is one that died before it answered; the seconds reported are those of the last execution, the abandoned
+    ones are listed in ``retries``.
     """
     name = path.stem
     retries: list[str] = []
     while True:
         execution = execute_notebook(read_notebook(path), path.parent, cell_limits(name))
-        if not execution.hung or len(retries) >= HANG_RETRIES:
+        if not (execution.hung or execution.never_started) or len(retries) >= KERNEL_RETRIES:
             break
         retries.append(
             f"{_describe(execution.error, execution.failed_cell)} (after {execution.seconds:.0f} s)"
         )
+        what = "did not start" if execution.never_started else "stopped answering"
         print(
-            f"[course] {name}: the kernel stopped answering; executing the chapter again in a fresh kernel "
+            f"[course] {name}: the kernel {what}; executing the chapter again in a fresh kernel "
             f"({retries[-1]})",
             flush=True,
         )
