@@ -124,6 +124,22 @@ def test_live_summary_says_whether_the_steps_both_recorded_agree() -> None:
     assert "no step inside the live run" in live_summary(live, _reference(later))
 
 
+def test_live_summary_does_not_call_a_match_before_the_first_update_a_retraced_run() -> None:
+    run = line_run()
+    _, full = run.train(progress=False)
+    sparse = History.from_dict(full.history.to_dict())  # the reference's record keeps steps 0, 20 and 39 only
+    kept = [0, 20, 39]
+    for field in ("step", "epoch", "lr", "grad_norm"):
+        setattr(sparse, field, [getattr(sparse, field)[i] for i in kept])
+    sparse.terms = {name: [values[i] for i in kept] for name, values in sparse.terms.items()}
+    sparse.coeffs = {name: [values[i] for i in kept] for name, values in sparse.coeffs.items()}
+    summary = live_summary(live_run(run, 10), _reference(sparse))
+    assert "At step 0 " in summary and "before the first update" in summary and "retraced" not in summary
+    sparse.terms["loss"][0] += 0.25
+    differs = live_summary(live_run(run, 10), _reference(sparse))
+    assert "differ by 0.25" in differs and "grows as training goes on" not in differs
+
+
 def test_live_figure_draws_the_live_steps_over_the_reference_record() -> None:
     run = line_run()
     _, full = run.train(progress=False)

@@ -100,13 +100,21 @@ def live_summary(live: LiveRun, reference: TrainResult, term: str = "loss") -> s
         return text + " The reference's record has no step inside the live run to compare with."
     step = reference.history.step[shared]
     ours, theirs = values[step], reference.history.terms[term][shared]
-    if ours == theirs:
+    if ours == theirs and step == 0:  # before any update: it says nothing yet about the steps that follow
+        verdict = (
+            "the same value to the last bit, before the first update (the same initial weights and first "
+            "batch; the reference's record has no later step inside the live run to tell whether the updates "
+            "agree)"
+        )
+    elif ours == theirs:
         verdict = "the same value to the last bit: this machine retraced the reference run exactly"
     else:
         verdict = (
             f"they differ by {abs(ours - theirs):.2g}: the same computation rounded differently (another "
-            "CPU's kernels, or inputs that differ in their last bits), which grows as training goes on"
+            "CPU's kernels, or inputs that differ in their last bits)"
         )
+        if step > 0:
+            verdict += ", which grows as training goes on"
     compared = f"At step {step:,} the reference run's {term} was {theirs:.6g}, this run's {ours:.6g}"
     return f"{text} {compared}: {verdict}."
 
