@@ -1,11 +1,13 @@
 """The common benchmark's pieces: resampling in time and per-clip APD, against numpy and
 motionlab.metrics.apd."""
 
+from types import SimpleNamespace
+
 import numpy as np
 import pytest
 import torch
 
-from motionlab.apps.comparison import FRAMES, measured_part, per_clip_apd, resample
+from motionlab.apps.comparison import FRAMES, measure_sets, measured_part, per_clip_apd, resample
 from motionlab.metrics import apd
 
 
@@ -37,6 +39,28 @@ def test_measured_part_keeps_the_last_frames():
     assert torch.equal(part[:, -1], clips[:, -1].float())
     with pytest.raises(ValueError, match="at least"):
         measured_part(clips[:, :10])
+
+
+class _Evaluator:
+    """Features and action probabilities made from the clips' own numbers (enough for the metrics)."""
+
+    def features_and_probs(self, positions, head):
+        flat = torch.as_tensor(positions).flatten(1)[:, :8].double()
+        return flat, torch.softmax(flat[:, :2], dim=-1)
+
+
+def test_a_set_whose_feet_never_stand_still_leaves_skating_out_of_its_row():
+    """Samples that are noise plant no foot on two consecutive frames: their row has every other column and
+    no skating (undefined there), where walking-still clips have it."""
+    parents = np.array([-1] + [0] * 21)
+    test = SimpleNamespace(action=np.array([0, 0, 1, 1]), clips=SimpleNamespace(parents=parents))
+    still = torch.zeros(4, FRAMES, 22, 3)  # every joint on the floor and still: planted throughout
+    noise = torch.randn(4, FRAMES, 22, 3, generator=torch.Generator().manual_seed(0))  # fast everywhere
+    reference = torch.randn(6, 8, generator=torch.Generator().manual_seed(1)).double()
+    kept = measure_sets([still, still + 0.01], _Evaluator(), test, reference)
+    assert kept["skating"].mean == 0.0 and "fid" in kept
+    noisy = measure_sets([still, noise], _Evaluator(), test, reference)
+    assert "skating" not in noisy and {"accuracy", "fid", "jerk", "apd"} <= set(noisy)
 
 
 def test_mdm_is_a_method_of_the_comparison_given_each_test_clips_action():

@@ -110,6 +110,14 @@ def test_foot_skating_bad_inputs(kwargs, match):
         foot_skating(standing(10), **kwargs)
 
 
+def test_foot_skating_of_feet_never_planted_is_nan_when_asked():
+    never = np.zeros((10, 4))
+    assert np.isnan(foot_skating(standing(10), never, never_planted="nan"))
+    assert foot_skating(standing(10), np.ones((10, 4)), never_planted="nan") == 0.0  # defined: unchanged
+    with pytest.raises(ValueError, match="foot_skating: never_planted must be 'raise' or 'nan', got 'zero'"):
+        foot_skating(standing(10), never, never_planted="zero")
+
+
 def test_foot_skating_needs_two_frames_and_xyz():
     with pytest.raises(ValueError, match="foot_skating: positions needs at least 2 frames"):
         foot_skating(standing(1))

@@ -16,6 +16,7 @@ with their chapters' settings when the cache does not hold them: MDM's chapter, 
 
 from __future__ import annotations
 
+import math
 import time
 from collections.abc import Callable
 from dataclasses import dataclass, replace
@@ -366,11 +367,15 @@ def set_metrics(
     parents: np.ndarray,
     rng: np.random.Generator,
 ) -> dict[str, float]:
-    """The per-set columns of :data:`COLUMNS` (all but APD) for clips ``(N, FRAMES, J, 3)`` of ``action``."""
+    """The per-set columns of :data:`COLUMNS` (all but APD) for clips ``(N, FRAMES, J, 3)`` of ``action``;
+    ``"skating"`` is left out when no foot of the set is planted on two consecutive frames (the metric is
+    undefined: the samples' feet never stand still, as a generator's that samples noise)."""
     features, probs = evaluator.features_and_probs(positions, "action")
     row = feature_metrics(features, probs, action, reference, rng)
     row.pop("is")
-    row["skating"] = foot_skating(positions, fps=FPS)
+    skating = foot_skating(positions, fps=FPS, never_planted="nan")
+    if not math.isnan(skating):
+        row["skating"] = skating
     row["penetration"] = ground_penetration(positions)
     row["jerk"] = jerk(positions, fps=FPS)
     row["bone_drift"] = bone_length_drift(positions, parents)
@@ -406,13 +411,13 @@ def measure_sets(
     """``{column: Interval}`` over sample sets (each ``(N, FRAMES, J, 3)``, one sample per test clip); APD's
     interval is over test clips, the others over the sets. The real row passes the test clips once per
     repeat (the repeats redraw the Diversity and Multimodality pairs): it has no APD (one clip per
-    condition)."""
+    condition). A column that some set leaves undefined (skating, :func:`set_metrics`) is left out."""
     parents = test.clips.parents
     rows = [
         set_metrics(evaluator, s, test.action, reference, parents, np.random.default_rng([seed, r]))
         for r, s in enumerate(sets)
     ]
-    intervals = {key: _interval([row[key] for row in rows]) for key in rows[0]}
+    intervals = {key: _interval([row[key] for row in rows]) for key in rows[0] if all(key in r for r in rows)}
     if any(s is not sets[0] for s in sets[1:]):
         intervals["apd"] = _interval(per_clip_apd(sets))
     return {key: intervals[key] for key in COLUMNS if key in intervals}

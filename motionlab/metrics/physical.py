@@ -34,7 +34,9 @@ joint to its parent and the skeleton's reference bone lengths. Rigid bones give 
 
 from __future__ import annotations
 
+import math
 from collections.abc import Sequence
+from typing import Literal
 
 import numpy as np
 
@@ -105,6 +107,7 @@ def foot_skating(
     height_threshold: float = 0.05,
     speed_threshold: float = 1.0,
     feet: Sequence[int] = FOOT_JOINTS,
+    never_planted: Literal["raise", "nan"] = "raise",
 ) -> float:
     """Mean horizontal speed (m/s) of the foot joints over frame intervals where the foot is planted.
 
@@ -115,11 +118,16 @@ def foot_skating(
         fps: frame rate.
         height_threshold, speed_threshold: contact inference thresholds (m, m/s); unused with ``contacts``.
         feet: the foot joints (default :data:`FOOT_JOINTS`, the default skeleton's ankles and feet).
+        never_planted: when no foot is in contact on two consecutive frames the metric is undefined:
+            ``"raise"`` a ``ValueError`` (the default), or return ``nan``, for a caller that reports such
+            motion as such (a generator whose feet never stand still, e.g. one that samples noise).
 
     Raises:
-        ValueError: when no foot is in contact on two consecutive frames (the metric is undefined).
+        ValueError: when no foot is in contact on two consecutive frames and ``never_planted`` is ``"raise"``.
     """
     func = "foot_skating"
+    if never_planted not in ("raise", "nan"):
+        raise ValueError(f"{func}: never_planted must be 'raise' or 'nan', got {never_planted!r}")
     x = _positions(positions, func, min_frames=2)
     indices = _foot_indices(feet, x.shape[-2], func)
     rate = float(check_scalar(fps, "fps", func, minimum=0, include_minimum=False))
@@ -137,6 +145,8 @@ def foot_skating(
         planted = flags.astype(bool)
     both_ends = planted[..., 1:, :] & planted[..., :-1, :]
     if not both_ends.any():
+        if never_planted == "nan":
+            return math.nan
         raise ValueError(
             f"{func}: no foot is in contact on two consecutive frames, so there is nothing to measure"
         )
