@@ -72,7 +72,9 @@ def test_the_runs_are_mdm_and_its_ablation_without_the_geometric_losses():
         lambda_foot=0,
     )
     assert {run.name for run in built.values()} == set(VARIANTS)
-    assert built["mdm"].train_config.steps == cfg.steps == 4
+    assert (
+        built["mdm"].train_config.steps == cfg.steps == 12 and built["mdm"].train_config.lr == cfg.lr == 5e-3
+    )
 
 
 def test_runs_validate_on_the_val_clips_without_changing_the_weights(tmp_path, monkeypatch):
